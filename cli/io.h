@@ -1,0 +1,82 @@
+/* nprfx CLI — image file I/O behind a C header.
+ *
+ * The only C++ in the project lives behind this header (io_oiio.cpp: OpenImageIO for files,
+ * OpenColorIO for colour). Every writer writes to a temporary name in the target directory and
+ * renames it into place, so an interrupted or failed write never leaves a partial file and never
+ * touches an input. Errors name the file, and the layer or channel when one is at fault. */
+#ifndef NPRFX_CLI_IO_H
+#define NPRFX_CLI_IO_H
+
+#include "nprfx/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A decoded plate: every channel of every part of an image file, interleaved. */
+typedef struct nprfx_plate {
+    nprfx_rect bounds;  /* data window */
+    nprfx_rect display; /* display window */
+    int nchannels;
+    char **names; /* nchannels full channel names ("ViewLayer.Vector.X") */
+    float *pixels;  /* nchannels floats per pixel, rows of bounds' width, top row first */
+} nprfx_plate;
+
+void nprfx_plate_free(nprfx_plate *p);
+/* A view of channels [first, first+count) of the plate (shares pixels). */
+nprfx_image nprfx_plate_view(const nprfx_plate *p, int first, int count);
+/* Index of a channel by exact name, or -1. */
+int nprfx_plate_channel(const nprfx_plate *p, const char *name);
+
+/* Read all channels (all parts/subimages of the same size are concatenated). */
+nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *out);
+
+/* Header facts for `nprfx info`. */
+typedef struct nprfx_file_info {
+    char format[32];      /* "openexr" */
+    int subimages;
+    nprfx_rect bounds, display;
+    int nchannels;
+    char **names;         /* nchannels */
+    char **types;         /* nchannels: "half", "float", "uint8", ... */
+    char compression[32]; /* "" when not applicable */
+} nprfx_file_info;
+nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprfx_file_info *out);
+void nprfx_file_info_free(nprfx_file_info *info);
+
+typedef struct nprfx_write_options {
+    size_t size;             /* sizeof(nprfx_write_options) */
+    const char *compression; /* EXR: "zip" (default), "piz", "none", "dwaa", ... */
+    int half;                /* 1: store EXR channels as half floats */
+} nprfx_write_options;
+
+/* Write an EXR (or any format OIIO knows, by extension) with the given channel names
+ * (names may be NULL: default names by count). display: the display window (NULL = bounds). */
+nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
+                            const char *const *names, const nprfx_rect *display,
+                            const nprfx_write_options *opt);
+
+/* Write an 8-bit PNG preview of a scene-linear image. 1 channel: grey; 2: R,G (B = 0); 3: RGB;
+ * 4: RGBA. With an OCIO config (ocio_config path, or $OCIO when NULL) the image goes from
+ * `colorspace` (NULL: the config's scene_linear role) through display/view (NULL: the config's
+ * defaults); with no config, the plain sRGB transfer function is applied. */
+typedef struct nprfx_preview_options {
+    size_t size;
+    const char *ocio_config;
+    const char *colorspace;
+    const char *display;
+    const char *view;
+    int raw; /* 1: no transform at all (data passes: noise, masks), values clamped to [0,1] */
+} nprfx_preview_options;
+nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *path, const nprfx_image *im,
+                                    const nprfx_preview_options *opt);
+
+/* Convert the first three channels of im in place from colour space `from` to `to` (names from
+ * the OCIO config, or "linear"/"srgb" without one). Same names: no-op. */
+nprfx_result nprfx_io_convert_colorspace(nprfx_context *ctx, nprfx_image *im, const char *from,
+                                         const char *to, const char *ocio_config);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

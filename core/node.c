@@ -1,0 +1,2 @@
+/* Descriptor helpers: defaults, parsing and checking values, output description. */
+#include "nprfx/node.h"

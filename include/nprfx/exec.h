@@ -1,0 +1,41 @@
+/* nprfx — the parallel-for executor interface.
+ *
+ * Nodes never create threads: they split work into index ranges and hand them to the executor the
+ * caller supplies (the CLI a pthread pool, the OFX adapter the host's multithread suite). Each
+ * range writes disjoint output, so results are bit-identical for any thread count. */
+#ifndef NPRFX_EXEC_H
+#define NPRFX_EXEC_H
+
+#include "nprfx/result.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Process items [begin, end). `worker` is in [0, num_workers) and is unique among concurrently
+ * running calls, so it may index per-worker scratch memory. */
+typedef void (*nprfx_range_fn)(void *user, int begin, int end, int worker);
+
+typedef struct nprfx_executor {
+    size_t size; /* sizeof(nprfx_executor) */
+    void *impl;
+    int (*num_workers)(void *impl);
+    /* Run fn over [0, count) in chunks of about `grain` items; returns when all are done. */
+    void (*parallel_for)(void *impl, int count, int grain, nprfx_range_fn fn, void *user);
+} nprfx_executor;
+
+/* Convenience: ex may be NULL (serial). */
+void nprfx_parallel_for(const nprfx_executor *ex, int count, int grain, nprfx_range_fn fn,
+                        void *user);
+int nprfx_executor_workers(const nprfx_executor *ex);
+
+/* A pthread pool. threads <= 0 means the number of online CPUs. */
+typedef struct nprfx_pool nprfx_pool;
+nprfx_result nprfx_pool_create(int threads, nprfx_pool **out);
+void nprfx_pool_destroy(nprfx_pool *pool);
+const nprfx_executor *nprfx_pool_executor(nprfx_pool *pool);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

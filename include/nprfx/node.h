@@ -1,0 +1,167 @@
+/* nprfx — node descriptors: a node is declared once, here-shaped, and everything else is derived.
+ *
+ * The CLI's `list`/`help`, its parameter parsing and graph validation, the OpenFX adapter's clips
+ * and params, and the docs are all generated from an nprfx_node_desc. A param's name, default,
+ * range or help is written in exactly one place: the descriptor in plugins/. */
+#ifndef NPRFX_NODE_H
+#define NPRFX_NODE_H
+
+#include "nprfx/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum nprfx_param_type {
+    NPRFX_PARAM_DOUBLE = 0,
+    NPRFX_PARAM_INT = 1,
+    NPRFX_PARAM_BOOL = 2,
+    NPRFX_PARAM_CHOICE = 3,
+    NPRFX_PARAM_COLOR = 4, /* RGBA, four doubles */
+    NPRFX_PARAM_STRING = 5
+} nprfx_param_type;
+
+/* Param flags. */
+#define NPRFX_PARAM_PIXELS 0x1u /* a length in pixels: multiplied by the host's render scale */
+#define NPRFX_PARAM_AREA 0x2u   /* an area in pixels^2: multiplied by render scale squared */
+#define NPRFX_PARAM_PATH 0x4u   /* a STRING that names a file (sequence) path */
+
+typedef struct nprfx_param_desc {
+    const char *name;  /* identifier used in graphs, --set and OFX ("sigma") */
+    const char *label; /* shown in hosts ("Sigma") */
+    const char *help;
+    nprfx_param_type type;
+    double def[4];                  /* default; CHOICE: index; COLOR: RGBA */
+    double soft_min, soft_max;      /* slider range */
+    double hard_min, hard_max;      /* values outside are refused */
+    const char *const *choices;     /* CHOICE: NULL-terminated option names */
+    const char *const *choice_help; /* CHOICE: optional, one line per option (formula, meaning) */
+    const char *def_string;         /* STRING default */
+    unsigned flags;
+} nprfx_param_desc;
+
+/* Input flags. */
+#define NPRFX_INPUT_OPTIONAL 0x1u
+#define NPRFX_INPUT_MAIN 0x2u     /* the image the node modifies (OFX "Source") */
+#define NPRFX_INPUT_TEMPORAL 0x4u /* the node fetches this input at other frame times */
+
+#define NPRFX_FETCH_UNBOUNDED (-1) /* fetch_before/after: any number of frames */
+
+typedef struct nprfx_input_desc {
+    const char *name;  /* "depth" */
+    const char *label; /* "Depth" (OFX clip name is derived from it) */
+    const char *help;
+    /* Channel names looked for when a reference names no channels: alternatives separated by
+     * '|', each a comma-separated channel list or a layer form ("Z|depth.Z|Depth.Z",
+     * "Vector.XY"). NULL: take the source's channels as they are. */
+    const char *aov;
+    int channels; /* exact channel count required; 0: any count from 1 to 4 */
+    unsigned flags;
+    int fetch_before, fetch_after; /* TEMPORAL: how many frames back/forward it may fetch */
+} nprfx_input_desc;
+
+/* A parameter's value at one time. CHOICE holds the option index in v[0], BOOL 0/1, INT an
+ * integer, COLOR four components; STRING uses s (never NULL: "" when empty). */
+typedef struct nprfx_value {
+    double v[4];
+    const char *s;
+} nprfx_value;
+
+/* What a node outputs for given params and connected input channel counts. */
+typedef struct nprfx_output_info {
+    int channels;
+    const char *names[NPRFX_MAX_CHANNELS]; /* NULL entries get default names */
+} nprfx_output_info;
+
+/* Fetch input `input` at frame `time`. The view stays valid until the render call returns.
+ * An input that is not connected yields NPRFX_ERR_MISSING_INPUT. */
+typedef nprfx_result (*nprfx_fetch_fn)(void *fetch_user, int input, double time, nprfx_image *out);
+
+typedef struct nprfx_node_desc nprfx_node_desc;
+
+typedef struct nprfx_render_args {
+    size_t size; /* sizeof(nprfx_render_args) */
+    nprfx_context *ctx;
+    const nprfx_node_desc *node;
+    double time;         /* the frame being rendered */
+    double render_scale; /* 1 at full resolution; a host proxy gives e.g. 0.5 */
+    nprfx_rect frame;    /* the whole image domain at this scale */
+    nprfx_rect window;   /* the pixels to write now; inside output->bounds and frame */
+    int first_frame, last_frame; /* the shot's frame range, for temporal nodes */
+    const nprfx_image *inputs;   /* one view per declared input; data == NULL: not connected */
+    const nprfx_value *params;   /* one value per declared param, at `time`, scale applied */
+    nprfx_image *output;
+    nprfx_fetch_fn fetch; /* NULL when the caller cannot fetch other frames */
+    void *fetch_user;
+    void **state; /* per-instance slot, NULL at first; the node owns what it stores */
+} nprfx_render_args;
+
+typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args);
+
+/* Node flags. */
+#define NPRFX_NODE_TEMPORAL 0x1u /* fetches inputs at other frames */
+#define NPRFX_NODE_STATEFUL 0x2u /* keeps a cache in *state between calls (results never depend
+                                    on it: it only saves work) */
+
+struct nprfx_node_desc {
+    size_t size; /* sizeof(nprfx_node_desc) */
+    const char *id;    /* "threshold-map": graph files, CLI */
+    const char *label; /* "Threshold Map": hosts */
+    const char *group; /* "NPR" */
+    const char *help;  /* paragraphs separated by blank lines */
+    const nprfx_input_desc *inputs;
+    int num_inputs;
+    const nprfx_param_desc *params;
+    int num_params;
+    /* Output channel count when `output` is NULL; 0 means "as many as the first input". */
+    int output_channels;
+    /* Optional: compute output channels and names from params and input channel counts
+     * (input_channels[i] is 0 for an unconnected input). */
+    nprfx_result (*output)(const nprfx_value *params, const int *input_channels,
+                           nprfx_output_info *out);
+    unsigned flags;
+    nprfx_render_fn render;
+    void (*state_free)(void *state);
+};
+
+/* ---- descriptor helpers (core/node.c) ---- */
+
+int nprfx_node_param_index(const nprfx_node_desc *node, const char *name);
+int nprfx_node_input_index(const nprfx_node_desc *node, const char *name);
+
+/* Fill values[num_params] with the defaults. */
+void nprfx_node_defaults(const nprfx_node_desc *node, nprfx_value *values);
+
+/* Parse text into a value for param p of node, checking type, choice names and hard range.
+ * Errors name the node and param ("blend.opacity: 1.5 is outside [0, 1]"). STRING values point
+ * into `text`, which must outlive the value. Colours take 1, 3 or 4 numbers separated by ',' or
+ * spaces. */
+nprfx_result nprfx_param_parse(nprfx_context *ctx, const nprfx_node_desc *node,
+                               const nprfx_param_desc *p, const char *text, nprfx_value *out);
+/* Check a value (e.g. from a JSON number) against the param's type and hard range. */
+nprfx_result nprfx_param_check(nprfx_context *ctx, const nprfx_node_desc *node,
+                               const nprfx_param_desc *p, const nprfx_value *v);
+/* Format a value as nprfx_param_parse reads it. Returns buf. */
+char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value *v, char *buf, size_t n);
+const char *nprfx_param_type_name(nprfx_param_type t);
+
+/* Output description for params/inputs, applying the output_channels rule and default names
+ * (1: Y; 2: R,G; 3: R,G,B; 4: R,G,B,A). */
+nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *node,
+                                    const nprfx_value *params, const int *input_channels,
+                                    nprfx_output_info *out);
+
+/* Scale pixel/area params by the render scale (OFX proxies). In-place on values. */
+void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *values,
+                                   double render_scale);
+
+/* ---- the registry (plugins/, generated list) ---- */
+
+int nprfx_node_count(void);
+const nprfx_node_desc *nprfx_node_at(int index);
+const nprfx_node_desc *nprfx_node_find(const char *id);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
