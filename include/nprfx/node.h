@@ -73,8 +73,11 @@ typedef struct nprfx_output_info {
     const char *names[NPRFX_MAX_CHANNELS]; /* NULL entries get default names */
 } nprfx_output_info;
 
-/* Fetch input `input` at frame `time`. The view stays valid until the render call returns.
- * An input that is not connected yields NPRFX_ERR_MISSING_INPUT. */
+/* Fetch input `input` at frame `time`. The view stays valid until the render call returns or
+ * until NPRFX_FETCH_KEEP further fetches have been made, whichever comes first (so a recursion
+ * over many frames needs only bounded memory). An input that is not connected yields
+ * NPRFX_ERR_MISSING_INPUT. */
+#define NPRFX_FETCH_KEEP 16
 typedef nprfx_result (*nprfx_fetch_fn)(void *fetch_user, int input, double time, nprfx_image *out);
 
 typedef struct nprfx_node_desc nprfx_node_desc;

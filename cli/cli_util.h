@@ -1,0 +1,22 @@
+/* nprfx CLI — small shared helpers: the context every command runs with, thread count. */
+#ifndef NPRFX_CLI_UTIL_H
+#define NPRFX_CLI_UTIL_H
+
+#include "nprfx/nprfx.h"
+
+/* Threads from --threads (when > 0), else $NPRFX_THREADS, else all cores. */
+int nprfx_cli_threads(int requested);
+
+/* A context whose executor is a pthread pool of `threads` threads. Errors are not printed as they
+ * are raised (layers wrap them with more context); commands print nprfx_last_error once. */
+typedef struct nprfx_cli_env {
+    nprfx_context *ctx;
+    nprfx_pool *pool;
+} nprfx_cli_env;
+int nprfx_cli_env_init(nprfx_cli_env *env, int threads);
+void nprfx_cli_env_free(nprfx_cli_env *env);
+
+/* Peak resident memory of this process in MiB. */
+double nprfx_cli_peak_mib(void);
+
+#endif

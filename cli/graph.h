@@ -1,0 +1,46 @@
+/* nprfx CLI — node graphs: load a JSON graph file, validate it against the node descriptors,
+ * and evaluate it frame by frame with a memory-bounded cache of node results. */
+#ifndef NPRFX_CLI_GRAPH_H
+#define NPRFX_CLI_GRAPH_H
+
+#include <stddef.h>
+
+#include "nprfx/node.h"
+#include "seq.h"
+
+typedef struct nprfx_graph nprfx_graph;
+
+typedef struct nprfx_graph_options {
+    size_t size;             /* sizeof(nprfx_graph_options) */
+    size_t cache_bytes;      /* bound on cached node results (0: 2 GiB) */
+    int tile;                /* > 0: render nodes in tiles of this size (tests invariance) */
+    const char *output_dir;  /* prefix for relative write paths (NULL: current directory) */
+} nprfx_graph_options;
+
+/* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
+ * paths relative to the current directory (or output_dir). */
+nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path,
+                              const nprfx_graph_options *opt, nprfx_graph **out);
+/* Parse a graph from JSON text (base_dir resolves relative read paths). */
+nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char *base_dir,
+                               const nprfx_graph_options *opt, nprfx_graph **out);
+void nprfx_graph_free(nprfx_graph *g);
+
+/* Override a value: "node.param=value" (params of processing nodes, or path/preview/... of read
+ * and write nodes). */
+nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment);
+
+/* The shot's frames from the graph's "frames" entry (or `override`, e.g. from --frames, which
+ * must lie inside the shot when the graph declares one). Free with nprfx_seq_frames_free. */
+nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_frame_list *out);
+
+/* Evaluate every write node at `frame`; *written receives the number of files written. */
+nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written);
+
+/* Describe the write nodes' outputs ("out/x.####.exr (preview out/x.####.png)"), one per line. */
+void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
+
+/* Seconds spent inside node render functions since the last call (for bench); resets. */
+double nprfx_graph_take_render_seconds(nprfx_graph *g);
+
+#endif
