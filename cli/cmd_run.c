@@ -97,6 +97,12 @@ int nprfx_cmd_run(int argc, char **argv)
         status = 2;
         goto done;
     }
+    if (!nprfx_graph_write_count(g)) {
+        fprintf(stderr, "nprfx run: %s: the graph has no write node, so it would produce nothing\n",
+                graph_path);
+        status = 2;
+        goto done;
+    }
     for (int i = 0; i < nsets; i++)
         if (nprfx_graph_set(g, sets[i])) {
             fprintf(stderr, "nprfx run: %s\n", nprfx_last_error(env.ctx));

@@ -1,3 +1,4 @@
+#define _DEFAULT_SOURCE /* realpath */
 /* nprfx CLI — node graphs: parsing (cJSON), validation against the descriptors, evaluation.
  *
  * A graph is {"frames": "1-24", "nodes": {NAME: {...}, ...}}. Processing nodes are
@@ -13,6 +14,7 @@
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -362,11 +364,6 @@ static nprfx_result link_graph(nprfx_graph *g)
             }
         }
     }
-    int writes = 0;
-    for (int i = 0; i < g->count; i++) writes += g->nodes[i].kind == GK_WRITE;
-    if (!writes)
-        return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
-                           "the graph has no write node, so it would produce nothing");
     return NPRFX_OK;
 }
 
@@ -842,6 +839,9 @@ static nprfx_result select_input(nprfx_graph *g, const gnode *n, int k, const ce
                                n->name, iname, src, ref->sel ? ":" : "", ref->sel ? ref->sel : "",
                                count);
     }
+    if (count < 1)
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "node '%s': input '%s' selects no channels",
+                           n->name, iname);
     int contiguous = 1;
     for (int c = 1; c < count; c++) contiguous &= idx[c] == idx[0] + c;
     if (contiguous) {
@@ -1053,6 +1053,23 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
     return NPRFX_OK;
 }
 
+/* Refuse to write over a file some read node of the graph takes as input at this frame: inputs
+ * are never overwritten, even by a graph that names the same sequence twice. */
+static nprfx_result check_not_input(nprfx_graph *g, const gnode *w, const char *out, int frame)
+{
+    char in[4096], rin[PATH_MAX], rout[PATH_MAX];
+    if (!realpath(out, rout)) return NPRFX_OK; /* does not exist yet: cannot be an input */
+    for (int i = 0; i < g->count; i++) {
+        if (g->nodes[i].kind != GK_READ) continue;
+        resolve_path(g, g->base_dir, g->nodes[i].path, frame, in, sizeof in);
+        if (realpath(in, rin) && !strcmp(rin, rout))
+            return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "node '%s': refusing to overwrite '%s', the input of read node '%s'",
+                               w->name, out, g->nodes[i].name);
+    }
+    return NPRFX_OK;
+}
+
 static nprfx_result write_node(nprfx_graph *g, int node, int frame)
 {
     gnode *n = &g->nodes[node];
@@ -1078,6 +1095,9 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
     char path[4096];
     if (!r) {
         resolve_path(g, g->out_dir, n->path, frame, path, sizeof path);
+        r = check_not_input(g, n, path, frame);
+    }
+    if (!r) {
         nprfx_write_options wo = {sizeof wo, n->compression ? n->compression : "zip", n->half};
         r = nprfx_io_write(g->ctx, path, &view, (const char *const *)names, NULL, &wo);
         if (r) nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
@@ -1086,7 +1106,8 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
         nprfx_image pv;
         float *pscratch = NULL;
         resolve_path(g, g->out_dir, n->preview, frame, path, sizeof path);
-        r = preview_view(g, &view, names, &pv, &pscratch);
+        r = check_not_input(g, n, path, frame);
+        if (!r) r = preview_view(g, &view, names, &pv, &pscratch);
         if (!r) {
             nprfx_preview_options po = {sizeof po, g->ocio, n->colorspace, n->display, n->view,
                                         n->raw};
@@ -1132,4 +1153,23 @@ double nprfx_graph_take_render_seconds(nprfx_graph *g)
     double s = g->render_seconds;
     g->render_seconds = 0;
     return s;
+}
+
+int nprfx_graph_write_count(const nprfx_graph *g)
+{
+    int writes = 0;
+    for (int i = 0; i < g->count; i++) writes += g->nodes[i].kind == GK_WRITE;
+    return writes;
+}
+
+nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out)
+{
+    int i = find_node(g, name);
+    if (i < 0 || g->nodes[i].kind == GK_WRITE)
+        return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to evaluate",
+                           name);
+    centry *e;
+    nprfx_result r = eval(g, i, frame, &e);
+    if (!r) *out = e->im;
+    return r;
 }

@@ -40,6 +40,13 @@ nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written);
 /* Describe the write nodes' outputs ("out/x.####.exr (preview out/x.####.png)"), one per line. */
 void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
 
+/* Number of write nodes (a graph to run needs at least one). */
+int nprfx_graph_write_count(const nprfx_graph *g);
+
+/* Evaluate node `name` at `frame` without writing; the view stays valid until the next call
+ * into the graph. */
+nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out);
+
 /* Seconds spent inside node render functions since the last call (for bench); resets. */
 double nprfx_graph_take_render_seconds(nprfx_graph *g);
 

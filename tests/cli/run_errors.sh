@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# Bad input gets one clear message naming the file, node, input, channel or param, a non-zero
+# exit, and nothing partially written.
+set -u
+NPRFX=$1; SRC=$2; W=$3
+rm -rf "$W"; mkdir -p "$W"; cd "$W"
+fails=0; passes=0
+
+# expect CODE PATTERN -- command...: exit status must be CODE (or non-zero for "nz"),
+# stderr must contain PATTERN.
+expect() {
+  local code=$1 pattern=$2; shift 3
+  "$@" >out.txt 2>err.txt; local st=$?
+  if { [ "$code" = nz ] && [ $st -ne 0 ]; } || [ "$st" = "$code" ]; then
+    if grep -qF -- "$pattern" err.txt; then passes=$((passes+1)); return; fi
+  fi
+  fails=$((fails+1))
+  echo "FAIL: '$*' exited $st (want $code), stderr:"; cat err.txt; echo "(wanted: $pattern)"
+}
+
+graph() { # graph NAME BODY: write NAME.json with a synth plate and BODY nodes
+  printf '{"frames": "1-3", "nodes": {"plate": {"node": "synth", "scene": "orbit", "size": "32x24"}, %s}}\n' "$2" > "$1.json"
+}
+
+graph missing_file '"r": {"node": "read", "path": "nowhere/plate.####.exr"}, "w": {"node": "write", "inputs": {"image": "r"}, "path": "o/x.####.exr"}'
+expect nz "nowhere/plate.0001.exr" -- "$NPRFX" run missing_file.json
+
+graph missing_channel '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate:Nope.Z"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect nz "'Nope.Z' is not a channel in 'plate'" -- "$NPRFX" run missing_channel.json
+
+graph wrong_count '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate", "alpha": "plate:UV"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect nz "input 'alpha' needs 1 channel, 'plate:UV' gives 2" -- "$NPRFX" run wrong_count.json
+
+graph wrong_size '"small": {"node": "synth", "scene": "orbit", "size": "16x12"}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "small"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect nz "input 'layer' is 16x12 but input 'base' is 32x24" -- "$NPRFX" run wrong_size.json
+
+graph unknown_node '"b": {"node": "blurp", "inputs": {}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect 2 "unknown node type 'blurp'" -- "$NPRFX" run unknown_node.json
+
+graph unknown_param '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate"}, "params": {"bogus": 1}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect 2 "blend has no param 'bogus'" -- "$NPRFX" run unknown_param.json
+
+graph ok '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate:diffuse"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/ok.####.exr"}'
+expect 2 "blend.opacity: 7 is outside the range" -- "$NPRFX" run ok.json --set b.opacity=7
+expect 2 "'sideways' is not one of: alphablend" -- "$NPRFX" run ok.json --set b.mode=sideways
+expect 2 "the graph has no node 'nob'" -- "$NPRFX" run ok.json --set nob.opacity=1
+expect 2 "frame 9 is outside the graph's frames 1-3" -- "$NPRFX" run ok.json --frames 9
+expect 2 "cannot open graph file 'absent.json'" -- "$NPRFX" run absent.json
+
+graph unconnected '"b": {"node": "blend", "inputs": {"base": "plate"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect 2 "node 'b': required input 'layer' is not connected" -- "$NPRFX" run unconnected.json
+
+graph dangling '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "ghost"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect 2 "refers to 'ghost', which is not a node" -- "$NPRFX" run dangling.json
+
+printf '{"nodes": {"a": {"node": "synth",\n "scene": }}}\n' > malformed.json
+expect 2 "malformed JSON near line 2" -- "$NPRFX" run malformed.json
+
+graph cycle '"a": {"node": "blend", "inputs": {"base": "plate", "layer": "b"}}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "a"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect 2 "cycle" -- "$NPRFX" run cycle.json
+
+# A failed frame leaves the frames before it whole and no temporary file behind.
+mkdir -p seq
+"$NPRFX" synth orbit --frames 1-2 --size 32x24 -o seq/p.####.exr >/dev/null 2>&1
+cat > partial.json <<'G'
+{"frames": "1-3", "nodes": {"r": {"node": "read", "path": "seq/p.####.exr"},
+ "w": {"node": "write", "inputs": {"image": "r:R,G,B,A"}, "path": "o/p.####.exr"}}}
+G
+expect 1 "seq/p.0003.exr" -- "$NPRFX" run partial.json
+if [ -f o/p.0001.exr ] && [ -f o/p.0002.exr ] && [ ! -e o/p.0003.exr ] &&
+   [ -z "$(find o -name '*.tmp*' -o -name '.*' -type f)" ]; then passes=$((passes+1))
+else fails=$((fails+1)); echo "FAIL: partial sequence state:"; ls -la o; fi
+
+# Inputs are never overwritten, even by a graph that writes onto its own plates.
+cat > overwrite.json <<'G'
+{"frames": "1", "nodes": {"r": {"node": "read", "path": "seq/p.####.exr"},
+ "w": {"node": "write", "inputs": {"image": "r"}, "path": "seq/p.####.exr"}}}
+G
+sum=$(md5sum seq/p.0001.exr)
+expect nz "refusing to overwrite" -- "$NPRFX" run overwrite.json
+[ "$(md5sum seq/p.0001.exr)" = "$sum" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: input changed"; }
+
+echo "$passes passed, $fails failed"
+[ $fails -eq 0 ]
