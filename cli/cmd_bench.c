@@ -96,7 +96,7 @@ int nprfx_cmd_bench(int argc, char **argv)
     if (nprfx_cli_env_init(&env, threads)) return 1;
     int status = 0;
     nprfx_graph *g = NULL;
-    nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL}; /* plates are big */
+    nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL, NULL}; /* plates are big */
     if (nprfx_graph_parse(env.ctx, json, ".", &opt, &g)) {
         fprintf(stderr, "nprfx bench: %s\n", nprfx_last_error(env.ctx));
         status = 2;

@@ -88,7 +88,7 @@ int nprfx_cmd_run(int argc, char **argv)
     if (cache_mb < 16) cache_mb = 16;
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return 1;
-    nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir};
+    nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
     int status = 0;

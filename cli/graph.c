@@ -43,6 +43,7 @@ typedef struct gnode {
     nprfx_value *params;
     char **param_text; /* owned copies of STRING values */
     void *state;
+    void *instance; /* the render hook's per-node slot */
     /* read / write / synth */
     char *path, *preview, *colorspace, *vectors, *compression, *scene;
     char *display, *view;
@@ -71,6 +72,8 @@ struct nprfx_graph {
     size_t cache_bytes, cache_limit;
     int tile;
     double render_seconds;
+    nprfx_render_hook hook;
+    int has_hook;
 };
 
 static char *xstrdup(const char *s)
@@ -387,6 +390,10 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     g->base_dir = xstrdup(base_dir ? base_dir : ".");
     g->cache_limit = (opt && opt->cache_bytes) ? opt->cache_bytes : (size_t)2 << 30;
     g->tile = opt ? opt->tile : 0;
+    if (opt && opt->size >= sizeof *opt && opt->hook) {
+        g->hook = *opt->hook;
+        g->has_hook = 1;
+    }
     g->out_dir = opt && opt->output_dir ? xstrdup(opt->output_dir) : NULL;
     g->first_frame = 1;
     g->last_frame = 1;
@@ -499,6 +506,8 @@ void nprfx_graph_free(nprfx_graph *g)
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
+        if (n->instance && g->has_hook && g->hook.release)
+            g->hook.release(g->hook.user, n->desc, n->instance);
         for (int k = 0; k < n->ninputs; k++) {
             free(n->inputs[k].sel);
             free(n->inputs[k].text);
@@ -991,7 +1000,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             a.window = nprfx_rect_intersect(
                 frame_rect, nprfx_rect_make(tx, ty, tx + (tile < (1 << 29) ? tile : frame_rect.x1),
                                             ty + (tile < (1 << 29) ? tile : frame_rect.y1)));
-            r = d->render(&a);
+            r = g->has_hook ? g->hook.render(g->hook.user, &a, &n->instance) : d->render(&a);
         }
     g->render_seconds += now_seconds() - t0;
     if (r) {

@@ -10,11 +10,21 @@
 
 typedef struct nprfx_graph nprfx_graph;
 
+/* Renders one window of one node instead of calling desc->render directly: the OpenFX test
+ * host uses it to drive the nodes through the plugin bundle. `instance` is a per-graph-node slot
+ * (NULL at first) the hook may keep a plugin instance in; it is released with `release`. */
+typedef struct nprfx_render_hook {
+    nprfx_result (*render)(void *user, const nprfx_render_args *args, void **instance);
+    void (*release)(void *user, const nprfx_node_desc *node, void *instance);
+    void *user;
+} nprfx_render_hook;
+
 typedef struct nprfx_graph_options {
     size_t size;             /* sizeof(nprfx_graph_options) */
     size_t cache_bytes;      /* bound on cached node results (0: 2 GiB) */
     int tile;                /* > 0: render nodes in tiles of this size (tests invariance) */
     const char *output_dir;  /* prefix for relative write paths (NULL: current directory) */
+    const nprfx_render_hook *hook; /* NULL: call the node's render function */
 } nprfx_graph_options;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
