@@ -45,6 +45,25 @@ static void print_wrapped(FILE *f, const char *text, int indent, int width)
     }
 }
 
+/* Markdown: paragraphs as they are, runs of verbatim lines (two leading spaces) fenced. */
+static void print_markdown(FILE *f, const char *text)
+{
+    int in_code = 0;
+    for (const char *s = text; *s;) {
+        const char *eol = strchr(s, '\n');
+        size_t len = eol ? (size_t)(eol - s) : strlen(s);
+        int verbatim = len >= 2 && s[0] == ' ' && s[1] == ' ';
+        if (verbatim != in_code) {
+            fprintf(f, in_code ? "```\n" : "\n```\n");
+            in_code = verbatim;
+        }
+        fprintf(f, "%.*s\n", (int)len, s);
+        s += len;
+        if (*s == '\n') s++;
+    }
+    if (in_code) fprintf(f, "```\n");
+}
+
 static void range_text(const nprfx_param_desc *p, char *buf, size_t n)
 {
     buf[0] = 0;
@@ -76,7 +95,10 @@ static void print_node(FILE *f, const nprfx_node_desc *d, int md)
         fprintf(f, "## %s — %s\n\n", d->id, d->label);
     else
         fprintf(f, "%s — %s (group %s)\n\n", d->id, d->label, d->group);
-    print_wrapped(f, d->help, md ? 0 : 2, md ? 100000 : 96);
+    if (md)
+        print_markdown(f, d->help);
+    else
+        print_wrapped(f, d->help, 2, 96);
     fprintf(f, md ? "\n### Inputs\n\n| input | channels | looks for | |\n|---|---|---|---|\n"
                   : "\nInputs:\n");
     for (int i = 0; i < d->num_inputs; i++) {

@@ -1,0 +1,482 @@
+/* The analytic scene generator: plates with exact AOVs (see nprfx/synth.h).
+ *
+ * World space is right-handed with +y up. A camera is a pinhole looking from `eye` at `target`
+ * with a 45 degree horizontal field of view over the image width, so the composition is the same
+ * at any size and every motion in pixels scales with the width (figures below are for 256 wide).
+ * Pixel (x, y) is the sample at its centre, the principal point is the image centre
+ * ((W-1)/2, (H-1)/2), and image y grows downward.
+ *
+ * Each object is a rest shape (object space = Pref) placed by a pose that depends on time
+ * (time = frame number): world = pos + scale * rot * Pref. Motion vectors come from pushing the
+ * visited Pref through the poses and cameras of frames i-1 and i+1 and projecting, so they are
+ * exact (double precision, stored as float). A point that lies behind the camera at the other
+ * frame gets the offscreen motion k_offscreen, which every reader treats as "left the frame".
+ *
+ * Beauty: a soft checker from UV (continuous, so it is not a 1-spp aliasing mess) times a colour
+ * per object, lit by 0.15 ambient + 0.85 diffuse from the fixed light light_dir() (from the upper
+ * left, in front); RGB is scene-linear and premultiplied by coverage (background RGBA = 0). */
+#include <math.h>
+#include <string.h>
+
+#include "nprfx/synth.h"
+#include "synth_geom.h"
+
+static const double k_pi = 3.14159265358979323846;
+static const double k_background_z = 1e10;
+static const double k_offscreen = 1e6; /* motion for a point behind the camera at frame i+-1 */
+static const double k_ambient = 0.15;
+
+static double deg(double d)
+{
+    return d * (k_pi / 180.0);
+}
+
+/* Focal length in pixels per pixel of image width: 45 degree horizontal field of view. */
+static double focal_per_width(void)
+{
+    return 0.5 / tan(deg(22.5));
+}
+
+static sg_vec3 light_dir(void)
+{
+    return sg_normalize(sg_v(-0.45, 0.7, 0.55));
+}
+
+/* ---- channels ------------------------------------------------------------------------------ */
+
+enum {
+    CH_R,
+    CH_G,
+    CH_B,
+    CH_A,
+    CH_Z,
+    CH_MPX,
+    CH_MPY,
+    CH_MNX,
+    CH_MNY,
+    CH_PX,
+    CH_PY,
+    CH_PZ,
+    CH_PREFX,
+    CH_PREFY,
+    CH_PREFZ,
+    CH_NX,
+    CH_NY,
+    CH_NZ,
+    CH_U,
+    CH_V,
+    CH_ID,
+    CH_DIFFUSE,
+    CH_COVERAGE,
+    CH_COUNT
+};
+
+static const char *const channel_names[CH_COUNT + 1] = {"R",
+                                                        "G",
+                                                        "B",
+                                                        "A",
+                                                        "Z",
+                                                        "motion_prev.X",
+                                                        "motion_prev.Y",
+                                                        "motion_next.X",
+                                                        "motion_next.Y",
+                                                        "P.X",
+                                                        "P.Y",
+                                                        "P.Z",
+                                                        "Pref.X",
+                                                        "Pref.Y",
+                                                        "Pref.Z",
+                                                        "N.X",
+                                                        "N.Y",
+                                                        "N.Z",
+                                                        "UV.U",
+                                                        "UV.V",
+                                                        "id",
+                                                        "diffuse",
+                                                        "coverage",
+                                                        NULL};
+
+int nprfx_synth_channel_count(void)
+{
+    return CH_COUNT;
+}
+const char *const *nprfx_synth_channel_names(void)
+{
+    return channel_names;
+}
+
+/* ---- scenes -------------------------------------------------------------------------------- */
+
+typedef enum shape_kind { SHAPE_PLANE, SHAPE_SPHERE, SHAPE_BOX, SHAPE_TORUS } shape_kind;
+
+typedef struct object_desc {
+    shape_kind kind;
+    double a, b;           /* sphere radius | box half-size | torus major, minor radius */
+    double freq_u, freq_v; /* checker periods per UV unit (two cells per period) */
+    double colour[3];
+} object_desc;
+
+typedef struct pose {
+    sg_mat3 rot;
+    double scale;
+    sg_vec3 pos;
+} pose;
+
+#define MAX_OBJECTS 4
+
+typedef struct scene_def {
+    nprfx_synth_scene_info info;
+    int nobjects;
+    object_desc objects[MAX_OBJECTS]; /* object k has id k+1 */
+    void (*camera)(double t, sg_vec3 *eye, sg_vec3 *target);
+    pose (*pose_at)(int object, double t);
+} scene_def;
+
+static pose make_pose(sg_mat3 rot, double scale, sg_vec3 pos)
+{
+    pose p = {rot, scale, pos};
+    return p;
+}
+
+/* orbit: a backdrop plane at z = -3.5 filling the frame (id 1), a static tilted box (id 2) and a
+ * sphere (id 3) spinning 1 degree/frame about a tilted axis while it orbits the box on a circle
+ * of radius 2 at 1.5 degrees/frame (period 240 frames): in front of the box at frame 24 moving
+ * left to right (it overlaps the box in the image from frame -6 to 56), behind it at frame 144. At
+ * 256 wide the sphere's centre moves up to ~3.5 px/frame, its surface up to ~4.8 px/frame. */
+static const double orbit_deg_per_frame = 1.5;
+static void orbit_camera(double t, sg_vec3 *eye, sg_vec3 *target)
+{
+    (void)t;
+    *eye = sg_v(0, 1.5, 6.5);
+    *target = sg_v(0, 0, 0);
+}
+static pose orbit_pose(int object, double t)
+{
+    switch (object) {
+    case 0:
+        return make_pose(sg_identity(), 1, sg_v(0, 0, -3.5));
+    case 1:
+        return make_pose(sg_mul(sg_rot_x(deg(25)), sg_rot_y(deg(35))), 1, sg_v(0, 0, 0));
+    default: {
+        double theta = deg(orbit_deg_per_frame * (t - 24));
+        sg_mat3 spin = sg_mul(sg_rot_z(deg(20)), sg_rot_y(deg(1.0 * t)));
+        return make_pose(spin, 1, sg_v(2.0 * sin(theta), 0, 2.0 * cos(theta)));
+    }
+    }
+}
+
+/* dolly: the camera moves along the z axis toward a torus (major radius 1, tube 0.35, tilted 40
+ * degrees; id 1) over empty background. The distance falls geometrically, 16 at frame 1 to 4 at
+ * frame 48 (image scale x4, about 3%/frame), and keeps falling the same way before and after;
+ * past frame ~100 the camera nears the ring and then passes through its hole, and the frame
+ * empties. At 256 wide the torus is 52 px wide at frame 1 and 216 px at frame 48, and its edges
+ * move 0.8 px/frame at frame 1, 3.8 px/frame at frame 48. */
+static double dolly_distance(double t)
+{
+    return 16.0 * pow(4.0, -(t - 1) / 47.0);
+}
+static void dolly_camera(double t, sg_vec3 *eye, sg_vec3 *target)
+{
+    *eye = sg_v(0, 0, dolly_distance(t));
+    *target = sg_v(0, 0, 0);
+}
+static pose dolly_pose(int object, double t)
+{
+    (void)object;
+    (void)t;
+    return make_pose(sg_rot_x(deg(-40)), 1, sg_v(0, 0, 0));
+}
+
+/* translate / rotate / zoom: an infinite textured plane facing the camera at distance 5, filling
+ * the frame, moved by an exact image-space affine map per frame (identity at frame 0). */
+static const double plane_distance = 5.0;
+static const double translate_px[2] = {0.37, 0.23}; /* pixels per frame at 256 wide, y down */
+static const double rotate_deg_per_frame = 0.3;
+static const double zoom_per_frame = 1.005;
+
+static void plane_camera(double t, sg_vec3 *eye, sg_vec3 *target)
+{
+    (void)t;
+    *eye = sg_v(0, 0, plane_distance);
+    *target = sg_v(0, 0, 0);
+}
+static pose translate_pose(int object, double t)
+{
+    (void)object;
+    /* World units per pixel at the plane, times 256 pixels: image motion is exactly
+     * translate_px * width / 256 per frame (image y is world -y). */
+    double k = plane_distance / (256.0 * focal_per_width());
+    return make_pose(sg_identity(), 1, sg_v(translate_px[0] * k * t, -translate_px[1] * k * t, 0));
+}
+static pose rotate_pose(int object, double t)
+{
+    (void)object;
+    /* About the view axis; counter-clockwise as seen in the image. */
+    return make_pose(sg_rot_z(deg(rotate_deg_per_frame * t)), 1, sg_v(0, 0, 0));
+}
+static pose zoom_pose(int object, double t)
+{
+    (void)object;
+    return make_pose(sg_identity(), pow(zoom_per_frame, t), sg_v(0, 0, 0));
+}
+
+/* clang-format off */
+#define PLANE_OBJECT {SHAPE_PLANE, 0, 0, 2, 2, {0.85, 0.62, 0.30}}
+/* clang-format on */
+
+static const scene_def scenes[] = {
+    {{"orbit", "spinning sphere orbiting a box before a backdrop: occlusion and disocclusion; up "
+               "to ~4.8 px/frame at 256 wide, in front at frame 24, period 240"},
+     3,
+     {{SHAPE_PLANE, 0, 0, 1, 1, {0.55, 0.60, 0.70}},
+      {SHAPE_BOX, 0.75, 0, 1.5, 1.5, {0.80, 0.30, 0.25}},
+      {SHAPE_SPHERE, 0.65, 0, 6, 3, {0.30, 0.65, 0.35}}},
+     orbit_camera,
+     orbit_pose},
+    {{"dolly", "camera dollies toward a torus on empty background: x4 scale from frame 1 to 48 "
+               "(~3%/frame)"},
+     1,
+     {{SHAPE_TORUS, 1.0, 0.35, 8, 3, {0.35, 0.45, 0.85}}},
+     dolly_camera,
+     dolly_pose},
+    {{"translate", "frame-filling plane translating (0.37, 0.23) px/frame at 256 wide (exact)"},
+     1,
+     {PLANE_OBJECT},
+     plane_camera,
+     translate_pose},
+    {{"rotate", "frame-filling plane rotating 0.3 deg/frame counter-clockwise about the image "
+                "centre (exact)"},
+     1,
+     {PLANE_OBJECT},
+     plane_camera,
+     rotate_pose},
+    {{"zoom", "frame-filling plane scaling x1.005/frame about the image centre (exact)"},
+     1,
+     {PLANE_OBJECT},
+     plane_camera,
+     zoom_pose},
+};
+
+#define NSCENES ((int)(sizeof scenes / sizeof scenes[0]))
+
+int nprfx_synth_scene_count(void)
+{
+    return NSCENES;
+}
+
+const nprfx_synth_scene_info *nprfx_synth_scene_at(int i)
+{
+    return i >= 0 && i < NSCENES ? &scenes[i].info : NULL;
+}
+
+/* ---- rendering ----------------------------------------------------------------------------- */
+
+typedef struct camera {
+    sg_vec3 eye, right, up, fwd;
+    double f, cx, cy;
+} camera;
+
+static camera make_camera(const scene_def *sc, double t, int width, int height)
+{
+    camera c;
+    sg_vec3 target;
+    sc->camera(t, &c.eye, &target);
+    c.fwd = sg_normalize(sg_sub(target, c.eye));
+    c.right = sg_normalize(sg_cross(c.fwd, sg_v(0, 1, 0)));
+    c.up = sg_cross(c.right, c.fwd);
+    c.f = focal_per_width() * width;
+    c.cx = 0.5 * (width - 1);
+    c.cy = 0.5 * (height - 1);
+    return c;
+}
+
+/* Image position of world point X; 0 when it is not in front of the camera. */
+static int project(const camera *c, sg_vec3 X, double *px, double *py)
+{
+    sg_vec3 v = sg_sub(X, c->eye);
+    double z = sg_dot(v, c->fwd);
+    if (!(z > 1e-9)) return 0;
+    *px = c->cx + c->f * sg_dot(v, c->right) / z;
+    *py = c->cy - c->f * sg_dot(v, c->up) / z;
+    return 1;
+}
+
+static sg_vec3 to_world(const pose *p, sg_vec3 rest)
+{
+    return sg_add(p->pos, sg_scale(sg_apply(p->rot, rest), p->scale));
+}
+
+static double texture(const object_desc *o, double u, double v)
+{
+    /* A checker whose edges are a clamped product of sines: continuous, so one sample per
+     * pixel does not alias as badly as a hard checker. */
+    double s = 4 * sin(2 * k_pi * o->freq_u * u) * sin(2 * k_pi * o->freq_v * v);
+    s = s < -1 ? -1 : s > 1 ? 1 : s;
+    /* A slow, non-periodic brightness swell, so the planes' checker is not a pure lattice that
+     * a wrong motion field could match by whole periods. */
+    double swell = 0.85 + 0.15 * sin(2 * k_pi * 0.11 * u + 1.7 * sin(2 * k_pi * 0.077 * v));
+    return swell * (0.25 + 0.75 * (0.5 + 0.5 * s));
+}
+
+typedef struct render_job {
+    const scene_def *scene;
+    camera cam[3];              /* frames i-1, i, i+1 */
+    pose poses[3][MAX_OBJECTS]; /* likewise */
+    int width;
+    nprfx_image *out;
+} render_job;
+
+static int intersect(const object_desc *o, const pose *p, sg_vec3 eye, sg_vec3 dir, double tmax,
+                     sg_hit *hit)
+{
+    /* The ray in object space; the parameter t (= view depth) is unchanged by the similarity. */
+    double inv = 1.0 / p->scale;
+    sg_vec3 oo = sg_scale(sg_apply_transpose(p->rot, sg_sub(eye, p->pos)), inv);
+    sg_vec3 od = sg_scale(sg_apply_transpose(p->rot, dir), inv);
+    const double tmin = 1e-6;
+    switch (o->kind) {
+    case SHAPE_PLANE:
+        return nprfx_sg_hit_plane(oo, od, tmin, tmax, hit);
+    case SHAPE_SPHERE:
+        return nprfx_sg_hit_sphere(oo, od, o->a, tmin, tmax, hit);
+    case SHAPE_BOX:
+        return nprfx_sg_hit_box(oo, od, o->a, tmin, tmax, hit);
+    case SHAPE_TORUS:
+        return nprfx_sg_hit_torus(oo, od, o->a, o->b, tmin, tmax, hit);
+    }
+    return 0;
+}
+
+/* Screen offset of the surface point `rest` from where it projects now (cam/pose `now`) to where
+ * it projects at the other frame. Differencing two projections (rather than subtracting the
+ * pixel centre) makes static points under a static camera move by exactly 0. */
+static void motion_to(const camera *c_now, const pose *p_now, const camera *c, const pose *p,
+                      sg_vec3 rest, float *mx, float *my)
+{
+    double x0, y0, x1, y1;
+    if (project(c_now, to_world(p_now, rest), &x0, &y0) &&
+        project(c, to_world(p, rest), &x1, &y1)) {
+        *mx = (float)(x1 - x0);
+        *my = (float)(y1 - y0);
+    } else {
+        *mx = *my = (float)k_offscreen;
+    }
+}
+
+static void shade_pixel(const render_job *job, int x, int y, float *px)
+{
+    const scene_def *sc = job->scene;
+    const camera *c = &job->cam[1];
+    /* Unnormalised direction with unit component along the view axis: t is the view depth. */
+    double sx = (x - c->cx) / c->f, sy = -(y - c->cy) / c->f;
+    sg_vec3 dir = sg_add(c->fwd, sg_add(sg_scale(c->right, sx), sg_scale(c->up, sy)));
+
+    sg_hit best = {0}, hit;
+    int best_obj = -1;
+    double tmax = INFINITY;
+    for (int k = 0; k < sc->nobjects; k++)
+        if (intersect(&sc->objects[k], &job->poses[1][k], c->eye, dir, tmax, &hit)) {
+            best = hit;
+            best_obj = k;
+            tmax = hit.t;
+        }
+
+    for (int ch = 0; ch < CH_COUNT; ch++)
+        px[ch] = 0.0f;
+    if (best_obj < 0) {
+        /* Background: infinitely far, so no motion under a translating camera (the only moving
+         * camera here is the dolly's). */
+        px[CH_Z] = (float)k_background_z;
+        return;
+    }
+    const object_desc *o = &sc->objects[best_obj];
+    const pose *p = &job->poses[1][best_obj];
+    sg_vec3 P = to_world(p, best.p);
+    sg_vec3 N = sg_normalize(sg_apply(p->rot, best.n));
+    double diffuse = sg_dot(N, light_dir());
+    if (diffuse < 0) diffuse = 0;
+    double shade = texture(o, best.u, best.v) * (k_ambient + (1 - k_ambient) * diffuse);
+
+    px[CH_R] = (float)(o->colour[0] * shade);
+    px[CH_G] = (float)(o->colour[1] * shade);
+    px[CH_B] = (float)(o->colour[2] * shade);
+    px[CH_A] = 1.0f;
+    px[CH_Z] = (float)sg_dot(sg_sub(P, c->eye), c->fwd);
+    motion_to(c, p, &job->cam[0], &job->poses[0][best_obj], best.p, &px[CH_MPX], &px[CH_MPY]);
+    motion_to(c, p, &job->cam[2], &job->poses[2][best_obj], best.p, &px[CH_MNX], &px[CH_MNY]);
+    px[CH_PX] = (float)P.x;
+    px[CH_PY] = (float)P.y;
+    px[CH_PZ] = (float)P.z;
+    px[CH_PREFX] = (float)best.p.x;
+    px[CH_PREFY] = (float)best.p.y;
+    px[CH_PREFZ] = (float)best.p.z;
+    px[CH_NX] = (float)N.x;
+    px[CH_NY] = (float)N.y;
+    px[CH_NZ] = (float)N.z;
+    px[CH_U] = (float)best.u;
+    px[CH_V] = (float)best.v;
+    px[CH_ID] = (float)(best_obj + 1);
+    px[CH_DIFFUSE] = (float)diffuse;
+    px[CH_COVERAGE] = 1.0f;
+}
+
+static void render_rows(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const render_job *job = user;
+    float tmp[CH_COUNT];
+    for (int y = begin; y < end; y++)
+        for (int x = 0; x < job->width; x++) {
+            shade_pixel(job, x, y, tmp);
+            float *dst = nprfx_image_at(job->out, x, y);
+            for (int ch = 0; ch < CH_COUNT; ch++)
+                dst[ch] = tmp[ch];
+        }
+}
+
+static const scene_def *find_scene(const char *name)
+{
+    for (int i = 0; i < NSCENES; i++)
+        if (!strcmp(scenes[i].info.name, name)) return &scenes[i];
+    return NULL;
+}
+
+nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame, nprfx_image *out)
+{
+    if (!name || !out || !out->data)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "synth: scene name and output image are required");
+    const scene_def *sc = find_scene(name);
+    if (!sc) {
+        char list[256] = "";
+        for (int i = 0; i < NSCENES; i++) {
+            if (i) strncat(list, ", ", sizeof list - strlen(list) - 1);
+            strncat(list, scenes[i].info.name, sizeof list - strlen(list) - 1);
+        }
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "synth: unknown scene '%s' (known: %s)",
+                           name, list);
+    }
+    if (out->channels != CH_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "synth: the output needs %d channels, it has %d", CH_COUNT,
+                           out->channels);
+    if (out->bounds.x0 != 0 || out->bounds.y0 != 0 || nprfx_rect_empty(out->bounds))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "synth: the output must be a non-empty image with bounds from (0,0), "
+                           "not (%d,%d)-(%d,%d)",
+                           out->bounds.x0, out->bounds.y0, out->bounds.x1, out->bounds.y1);
+
+    render_job job;
+    memset(&job, 0, sizeof job);
+    job.scene = sc;
+    job.width = out->bounds.x1;
+    job.out = out;
+    for (int i = 0; i < 3; i++) {
+        double t = (double)frame + (i - 1);
+        job.cam[i] = make_camera(sc, t, out->bounds.x1, out->bounds.y1);
+        for (int k = 0; k < sc->nobjects; k++)
+            job.poses[i][k] = sc->pose_at(k, t);
+    }
+    nprfx_parallel_for(nprfx_context_executor(ctx), out->bounds.y1, 4, render_rows, &job);
+    return NPRFX_OK;
+}
