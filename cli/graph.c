@@ -947,6 +947,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
         if (n->inputs[k].src < 0) continue;
         if ((r = fetch_input(&rf, k, frame, 1, &inputs[k]))) goto done;
         in_ch[k] = inputs[k].channels;
+        if (d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) continue; /* e.g. a lookup map */
         if (!have_rect) {
             frame_rect = inputs[k].bounds;
             have_rect = 1;

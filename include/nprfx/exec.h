@@ -12,8 +12,10 @@
 extern "C" {
 #endif
 
-/* Process items [begin, end). `worker` is in [0, num_workers) and is unique among concurrently
- * running calls, so it may index per-worker scratch memory. */
+/* Process items [begin, end). `worker` is in [0, num_workers) and unique among the chunks of one
+ * parallel_for call running at the same time, so it may index scratch memory allocated for that
+ * call; it is not unique across calls (nested or inline calls report 0), so do not keep
+ * per-worker scratch between calls. */
 typedef void (*nprfx_range_fn)(void *user, int begin, int end, int worker);
 
 typedef struct nprfx_executor {

@@ -9,10 +9,11 @@ extern "C" {
 #endif
 
 /* Separable Gaussian blur of src into dst over dst->bounds (src read with `border` outside its
- * bounds). Any sigma >= 0 (0 copies). Small sigmas use an exact sampled kernel; large ones a
- * recursive (IIR) approximation whose cost does not grow with sigma. src and dst must not alias
- * and must have the same channel count. Work is spread over the context's executor; the result
- * does not depend on the thread count. */
+ * bounds). Any sigma in [0, 1e4] (0 copies). Small sigmas (< 3) use an exact sampled kernel;
+ * large ones a recursive (IIR) approximation whose cost does not grow with sigma. src and dst
+ * must not alias and must have the same channel count; a source with empty bounds gives zeros.
+ * Work is spread over the context's executor; the result does not depend on the thread count,
+ * nor on how dst tiles the output. */
 nprfx_result nprfx_gaussian_blur(nprfx_context *ctx, const nprfx_image *src, nprfx_image *dst,
                                  double sigma, nprfx_border border);
 

@@ -44,6 +44,9 @@ typedef struct nprfx_param_desc {
 #define NPRFX_INPUT_OPTIONAL 0x1u
 #define NPRFX_INPUT_MAIN 0x2u     /* the image the node modifies (OFX "Source") */
 #define NPRFX_INPUT_TEMPORAL 0x4u /* the node fetches this input at other frame times */
+/* Not pixel-aligned with the frame (a threshold map, a palette): any size, exempt from the
+ * same-bounds check of frame inputs, passed whole (its own data window) to render. */
+#define NPRFX_INPUT_UNALIGNED 0x8u
 
 #define NPRFX_FETCH_UNBOUNDED (-1) /* fetch_before/after: any number of frames */
 

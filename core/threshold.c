@@ -1,0 +1,134 @@
+/* Threshold functions and X-toon map lookup (style cookbook §3). See nprfx/threshold.h. */
+#include <math.h>
+
+#include "nprfx/threshold.h"
+
+#define NPRFX_INV_SQRT_PI 0.56418958354775628695
+
+double nprfx_threshold_erf(double p, double sigma, double mu)
+{
+    return (erf(sigma * (p - mu)) + 1.0) / 2.0;
+}
+
+/* K(y) = integral from y to +inf of erfc(t) dt = exp(-y^2)/sqrt(pi) - y erfc(y). Positive and
+ * decreasing; for large y the two terms nearly cancel (K ~ exp(-y^2) / (2 sqrt(pi) y^2)), which
+ * costs about log10(2 y^2) digits: under 3 for the y < 27 this file evaluates it at. */
+static double erfc_tail_integral(double y)
+{
+    return exp(-y * y) * NPRFX_INV_SQRT_PI - y * erfc(y);
+}
+
+/* Mean of the threshold over p in [0,1] for mu >= 0.5, where both K arguments make the
+ * difference well conditioned: threshold = erfc(sigma (mu - p)) / 2, and substituting
+ * y = sigma (mu - p) gives (K(sigma (mu - 1)) - K(sigma mu)) / (2 sigma). */
+static double mean_upper(double sigma, double mu)
+{
+    return (erfc_tail_integral(sigma * (mu - 1.0)) - erfc_tail_integral(sigma * mu)) /
+           (2.0 * sigma);
+}
+
+double nprfx_threshold_erf_mean(double sigma, double mu)
+{
+    /* The threshold satisfies t(p, mu) = 1 - t(1 - p, 1 - mu), so the mean over [0,1] does too;
+     * evaluating on the mu >= 0.5 side keeps the tail small numbers accurate. */
+    if (mu >= 0.5) return mean_upper(sigma, mu);
+    return 1.0 - mean_upper(sigma, 1.0 - mu);
+}
+
+/* Solve mean_upper(sigma, mu) = t for t in (0, 0.5], mu >= 0.5. mean_upper decreases in mu and
+ * is log-concave (the mean is the survival function of uniform + Gaussian), so Newton on its
+ * logarithm converges fast even deep in the Gaussian tail, where Newton on the mean itself
+ * would crawl. A bracket [lo, hi] keeps each step safe; steps leaving it fall back to
+ * bisection. */
+static double solve_upper(double t, double sigma)
+{
+    /* mean(1 - t) >= t for mu >= 0.5 (the mean falls slower than 1 - mu there), so 1 - t is
+     * at or left of the root; in the middle of [0,1] it is the root to double precision. */
+    double mu = 1.0 - t;
+    /* mean(mu) = (1 - mu) + (K(sigma (1 - mu)) - K(sigma mu)) / (2 sigma) since K(y) = -2y +
+     * K(-y); with sigma t >= 6 both K terms are below K(6) ~ 4e-18: mu = 1 - t is exact. */
+    if (sigma * t >= 6.0) return mu;
+    double lo = mu;
+    double hi = 1.0 + 26.0 / sigma; /* mean there is ~1e-297: below any tone worth showing */
+    if (mean_upper(sigma, hi) >= t) return hi;
+    const double log_t = log(t);
+    for (int it = 0; it < 200; it++) {
+        double m = mean_upper(sigma, mu);
+        if (fabs(m - t) <= 1e-15 * t) break;
+        if (m > t)
+            lo = mu;
+        else
+            hi = mu;
+        /* d mean / d mu = (erfc(sigma mu) - erfc(sigma (mu - 1))) / 2 < 0 */
+        double dm = 0.5 * (erfc(sigma * mu) - erfc(sigma * (mu - 1.0)));
+        double next = mu;
+        if (m > 0.0 && dm < 0.0) next = mu - (log(m) - log_t) * m / dm;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (next == mu || hi - lo <= 1e-15 * hi) break;
+        mu = next;
+    }
+    return mu;
+}
+
+double nprfx_threshold_builtin_mu(double tone, double sigma)
+{
+    /* tone 0 / 1 must give exactly 0 / 1: put the step 40 / sigma beyond the end, where
+     * erf(40) rounds to 1 in double precision. */
+    if (!(tone > 0.0)) return 1.0 + 40.0 / sigma;
+    if (tone >= 1.0) return -40.0 / sigma;
+    if (tone <= 0.5) return solve_upper(tone, sigma);
+    return 1.0 - solve_upper(1.0 - tone, sigma);
+}
+
+double nprfx_threshold_builtin(double p, double tone, double sigma)
+{
+    return nprfx_threshold_erf(p, sigma, nprfx_threshold_builtin_mu(tone, sigma));
+}
+
+double nprfx_threshold_quantize(double tone, int steps)
+{
+    double t = tone > 0.0 ? (tone < 1.0 ? tone : 1.0) : 0.0; /* NaN -> 0 */
+    if (steps < 2) return t;
+    return floor(t * (steps - 1) + 0.5) / (steps - 1);
+}
+
+/* Clamp to [0,1]; NaN goes to 0 so a bad pattern value cannot index outside the map. */
+static double clamp01(double x)
+{
+    return x > 0.0 ? (x < 1.0 ? x : 1.0) : 0.0;
+}
+
+/* Integer cell and fraction of a position in [0, n-1]. */
+static void cell(double x, int n, int *i, double *f)
+{
+    if (n < 2) {
+        *i = 0;
+        *f = 0.0;
+        return;
+    }
+    int k = (int)floor(x);
+    if (k >= n - 1) k = n - 2;
+    if (k < 0) k = 0;
+    *i = k;
+    *f = x - k;
+}
+
+void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, float *out)
+{
+    int w = nprfx_rect_width(map->bounds), h = nprfx_rect_height(map->bounds);
+    int ix, iy;
+    double fx, fy;
+    cell(clamp01(u) * (w - 1), w, &ix, &fx);
+    /* v = 0 is the bottom row: distance from the bottom in rows, then flip to core's
+     * top-down y. Row iy counts from the bottom; iy + 1 is the row above. */
+    cell(clamp01(v) * (h - 1), h, &iy, &fy);
+    int x0 = map->bounds.x0 + ix, x1 = w > 1 ? x0 + 1 : x0;
+    int yb = map->bounds.y1 - 1 - iy, yt = h > 1 ? yb - 1 : yb;
+    const float *p00 = nprfx_image_at(map, x0, yb), *p10 = nprfx_image_at(map, x1, yb);
+    const float *p01 = nprfx_image_at(map, x0, yt), *p11 = nprfx_image_at(map, x1, yt);
+    for (int c = 0; c < map->channels; c++) {
+        double bottom = (1.0 - fx) * p00[c] + fx * p10[c];
+        double top = (1.0 - fx) * p01[c] + fx * p11[c];
+        out[c] = (float)((1.0 - fy) * bottom + fy * top);
+    }
+}

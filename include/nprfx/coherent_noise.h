@@ -1,0 +1,128 @@
+/* nprfx — coherent noise (Kass & Pesare 2011), the core of the `coherent-noise` node.
+ *
+ * A recursion over frames, per pixel x of frame i (DESIGN.md §3.1):
+ *   p = x + motion(x)                              (where the surface point was in the pass's
+ *                                                   previous frame: i-1 forward, i+1 backward)
+ *   fresh if p leaves the frame, the depth at x is background, or the predicted depth
+ *   z(x) -/+ zvel(x) is farther than depth_prev(p) * (1 + epsilon)
+ *   u_i(x) = w_i(x)                                        if fresh
+ *          = alpha * R[u_{i-1}](p) + sqrt(1 - alpha^2) * w_i(x)   otherwise
+ * in unit-variance form: u = c / k(alpha) with k = sqrt((1-alpha)/(1+alpha)) (the paper's Eq. 6-7
+ * divided by k, which keeps alpha = 1 well defined: frozen noise).
+ *
+ * R is the resampler. The paper's bilinear lookup lowers variance and removes high frequencies at
+ * every fractional step, so a long shot fades and blurs. The default resampler here is Catmull-Rom
+ * plus *spectral compensation*: fresh noise, shaped by a small filter G(f) with
+ * |H_f(w)|^2 + |G_f(w)|^2 = 1 for the interpolation filter H_f of the pixel's fractional offset f,
+ * replaces exactly the power the interpolation removed. For locally uniform motion a field with the
+ * innovation's spectrum keeps that spectrum, hence its variance, frame after frame.
+ *
+ * Input mode filters a clip instead: u_i = alpha * R[u_{i-1}](p) + (1 - alpha) s_i, fresh: s_i, and
+ * no compensation (it is not noise). */
+#ifndef NPRFX_COHERENT_NOISE_H
+#define NPRFX_COHERENT_NOISE_H
+
+#include <stdint.h>
+
+#include "nprfx/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum nprfx_cn_noise {
+    NPRFX_CN_NOISE_WHITE = 0,
+    NPRFX_CN_NOISE_BANDPASS = 1,
+    NPRFX_CN_NOISE_INPUT = 2
+} nprfx_cn_noise;
+
+typedef enum nprfx_cn_resample {
+    NPRFX_CN_RESAMPLE_STATIONARY = 0, /* Catmull-Rom + spectral compensation (default) */
+    NPRFX_CN_RESAMPLE_BILINEAR = 1    /* the paper's bilinear lookup (fades on sub-pixel motion) */
+} nprfx_cn_resample;
+
+#define NPRFX_CN_FORWARD 1   /* causal pass, motion to the previous frame */
+#define NPRFX_CN_BACKWARD -1 /* time-reversed pass, motion to the next frame */
+
+/* Depth at or beyond this (or not finite) is background. */
+#define NPRFX_CN_BACKGROUND_DEPTH 1e9
+
+typedef struct nprfx_cn_params {
+    size_t size;     /* sizeof(nprfx_cn_params) */
+    double alpha;    /* [0, 1] */
+    double epsilon;  /* relative depth tolerance of the occlusion test, >= 0 */
+    int noise;       /* nprfx_cn_noise */
+    double sigma_lo; /* band-pass: the smaller Gaussian sigma (pixels; 0: no high cut) */
+    double sigma_hi; /* band-pass: the larger Gaussian sigma (pixels; 0: no low cut) */
+    int channels;    /* channels of the state: 1..4 for noise, the source's for input mode */
+    uint64_t seed;
+    int resample;        /* nprfx_cn_resample */
+    double motion_scale; /* motion vectors are multiplied by this (render scale); 1 normally */
+} nprfx_cn_params;
+
+void nprfx_cn_params_default(nprfx_cn_params *p);
+/* Range checks; the message names the offending field. */
+nprfx_result nprfx_cn_params_check(nprfx_context *ctx, const nprfx_cn_params *p);
+
+/* k(alpha) = sqrt((1 - alpha) / (1 + alpha)) (Eq. 6). */
+double nprfx_cn_k(double alpha);
+
+/* One pass's state at one frame, covering the whole frame rectangle. */
+typedef struct nprfx_cn_state {
+    nprfx_image value;    /* `channels` floats per pixel: unit-variance noise or filtered input */
+    unsigned char *fresh; /* per pixel (row-major over value.bounds): 1 where the pass restarted */
+} nprfx_cn_state;
+
+nprfx_result nprfx_cn_state_alloc(nprfx_context *ctx, nprfx_rect frame, int channels,
+                                  nprfx_cn_state *out);
+void nprfx_cn_state_free(nprfx_cn_state *s);
+nprfx_result nprfx_cn_state_copy(nprfx_context *ctx, const nprfx_cn_state *src,
+                                 nprfx_cn_state *dst);
+size_t nprfx_cn_state_bytes(nprfx_rect frame, int channels);
+
+/* What one step reads (views may have any bounds; reads outside them clamp to the edge). */
+typedef struct nprfx_cn_inputs {
+    const nprfx_image *depth;      /* frame i, channel 0 */
+    const nprfx_image *motion;     /* frame i, channels 0-1: to the pass's previous frame */
+    const nprfx_image *zvel;       /* frame i, channel 0, depth units per frame; may be NULL */
+    const nprfx_image *depth_prev; /* depth at the pass's previous frame */
+    const nprfx_image *source;     /* input mode: the clip at frame i */
+} nprfx_cn_inputs;
+
+/* Unit-variance innovation noise of frame `frame` (white, or band-pass renormalised analytically)
+ * for every pixel of out->bounds, which may reach outside the frame (the noise is an unbounded
+ * counter-based field). out->channels channels; channel c is independent of the others. Stream 0 is
+ * the paper's w_i; other streams give independent fields. */
+nprfx_result nprfx_cn_noise_fill(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
+                                 uint32_t stream, nprfx_image *out);
+
+/* The first frame of a pass: u = w (noise) or the source (input mode); fresh everywhere.
+ * out must be allocated over the frame with p->channels. */
+nprfx_result nprfx_cn_begin(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
+                            const nprfx_image *source, nprfx_cn_state *out);
+
+/* One recursion step of a pass in `direction` from prev (frame - direction) to `frame`.
+ * out and prev must be distinct states over the same frame. */
+nprfx_result nprfx_cn_step(nprfx_context *ctx, const nprfx_cn_params *p, int direction,
+                           int64_t frame, const nprfx_cn_inputs *in, const nprfx_cn_state *prev,
+                           nprfx_cn_state *out);
+
+/* The node's value at `frame` from the passes' states (bwd NULL: causal). Noise: unit variance,
+ * C = (u_f + u_b - g w) / sqrt(1 + alpha^2) with g = sqrt(1 - alpha^2), or 2 - sqrt(1 + alpha^2)
+ * where both passes restarted (Eq. 11 in unit form, keeping the variance 1 there too).
+ * Input mode: (c_f + c_b - (1 - alpha) s) / (1 + alpha), unit gain. out: over the frame. */
+nprfx_result nprfx_cn_combine(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
+                              const nprfx_cn_state *fwd, const nprfx_cn_state *bwd,
+                              const nprfx_image *source, nprfx_image *out);
+
+/* Post-smoothing: Gaussian blur of sigma (edge pixels repeated), and for noise the analytic gain
+ * that brings a field with the innovation's spectrum back to unit variance. In place. */
+nprfx_result nprfx_cn_smooth(nprfx_context *ctx, const nprfx_cn_params *p, double sigma,
+                             nprfx_image *img);
+/* The variance of a unit innovation field after a Gaussian blur of sigma (1 when sigma is 0). */
+double nprfx_cn_smoothed_variance(const nprfx_cn_params *p, double sigma);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

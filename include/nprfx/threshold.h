@@ -1,0 +1,58 @@
+/* nprfx — threshold functions and X-toon threshold maps (style cookbook §3).
+ *
+ * A threshold turns a pattern value p (noise mapped to [0,1]) into a stroke value. Three forms:
+ *
+ *   erf      threshold(p, sigma, mu) = (erf(sigma * (p - mu)) + 1) / 2
+ *            a sigmoid centred on mu; sigma sets its sharpness (the cookbook uses 25, 0.5).
+ *   map      an X-toon map T(u, v) (Barla, Thollot, Markosian, NPAR 2006): a 2D image looked up
+ *            bilinearly at u = pattern, v = tone (e.g. diffuse intensity).
+ *   builtin  the erf threshold with its position following the tone:
+ *            builtin(p, tone, sigma) = threshold(p, sigma, mu(tone, sigma)), where mu is the
+ *            position that makes the mean over a uniform pattern equal the tone:
+ *                integral over p in [0,1] of threshold(p, sigma, mu) dp = tone.
+ *            Away from the ends (tone in [6 / sigma, 1 - 6 / sigma]) that is simply mu = 1 - tone
+ *            (to double precision); near the ends mu moves outside [0,1] so that tone 0 gives 0
+ *            and tone 1 gives 1 everywhere. So with pattern = uniform noise the picture keeps its
+ * tone on average, dark tones getting more ink (output near 0), light tones more paper (1).
+ *
+ * Map orientation (X-toon, OpenGL texture convention): u runs left to right along the map's
+ * columns, v bottom to top along its rows. u = 0 is the centre of the leftmost column, u = 1 of
+ * the rightmost; v = 0 the centre of the bottom row, v = 1 of the top row (core images store
+ * the top row first, y growing downward, so v = 0 is the row y = bounds.y1 - 1). Coordinates
+ * outside [0,1] are clamped to the edge. */
+#ifndef NPRFX_THRESHOLD_H
+#define NPRFX_THRESHOLD_H
+
+#include "nprfx/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The cookbook's threshold: (erf(sigma * (p - mu)) + 1) / 2. */
+double nprfx_threshold_erf(double p, double sigma, double mu);
+
+/* Mean of nprfx_threshold_erf(p, sigma, mu) over p uniform in [0,1] (closed form). */
+double nprfx_threshold_erf_mean(double sigma, double mu);
+
+/* The position mu for which nprfx_threshold_erf_mean(sigma, mu) == tone (tone clamped to [0,1];
+ * sigma > 0). Exact to about 1e-12 in the mean; tones at or beyond 0 / 1 give a position far
+ * enough outside [0,1] that the threshold is 0 / 1 in single precision. */
+double nprfx_threshold_builtin_mu(double tone, double sigma);
+
+/* builtin(p, tone, sigma) = nprfx_threshold_erf(p, sigma, nprfx_threshold_builtin_mu(tone,
+ * sigma)). */
+double nprfx_threshold_builtin(double p, double tone, double sigma);
+
+/* Quantise a tone in [0,1] to `steps` levels 0, 1/(steps-1), ..., 1 (nearest level); steps < 2
+ * returns the tone unchanged (clamped to [0,1]). */
+double nprfx_threshold_quantize(double tone, int steps);
+
+/* Bilinear lookup of every channel of the map at (u, v) with the orientation above. out
+ * receives map->channels floats. The map must be non-empty. */
+void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, float *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
