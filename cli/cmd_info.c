@@ -1,12 +1,222 @@
-/* nprfx info — placeholder until implemented. */
+/* nprfx info — a plate's format, size, windows, subimages, compression and channels by layer.
+ *
+ * Compact like `iinfo -v`: one header line per file, then one line per layer, so a Blender
+ * multilayer EXR with fifty channels still fits on a screen. */
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "commands.h"
+#include "io.h"
+
+/* Exit codes follow idiff: a file that cannot be read is 4. */
+enum { INFO_OK = 0, INFO_USAGE = 2, INFO_FILE_ERROR = 4 };
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: nprfx info FILE...\n\n"
+               "Print each image's format, size, data and display windows, subimages,\n"
+               "compression and channels grouped by layer with their pixel types, e.g.\n"
+               "  ViewLayer.Vector: X Y Z W (half)\n\n"
+               "Exit status: 0 all files read, 2 usage error, 4 a file could not be read.\n");
+}
+
+static void print_error(void *user, nprfx_result code, const char *message)
+{
+    (void)code;
+    fprintf(stderr, "nprfx %s: %s\n", (const char *)user, message);
+}
+
+/* Length of the layer part of a channel name ("ViewLayer.Vector.X" -> 16; "R" -> 0). */
+static size_t layer_len(const char *name)
+{
+    const char *dot = strrchr(name, '.');
+    return dot ? (size_t)(dot - name) : 0;
+}
+
+static int same_layer(const char *a, const char *b)
+{
+    size_t la = layer_len(a), lb = layer_len(b);
+    return la == lb && !strncmp(a, b, la);
+}
+
+static void print_rect(const char *label, nprfx_rect r)
+{
+    /* oiiotool's geometry notation: WxH+X+Y (the origin signed, as it may be negative). */
+    printf("%s %dx%d%+d%+d", label, nprfx_rect_width(r), nprfx_rect_height(r), r.x0, r.y0);
+}
+
+/* Channels grouped by layer in order of first appearance; a layer's channels need not be
+ * adjacent in the file (multi-part files can split a layer). */
+static void print_channels(const nprfx_file_info *fi)
+{
+    char *done = calloc((size_t)fi->nchannels + 1, 1);
+    if (!done) return;
+    for (int i = 0; i < fi->nchannels; i++) {
+        if (done[i]) continue;
+        size_t ll = layer_len(fi->names[i]);
+        int uniform = 1;
+        for (int j = i; j < fi->nchannels; j++)
+            if (!done[j] && same_layer(fi->names[i], fi->names[j]) &&
+                strcmp(fi->types[i], fi->types[j]))
+                uniform = 0;
+        printf("    ");
+        if (ll) printf("%.*s:", (int)ll, fi->names[i]);
+        for (int j = i; j < fi->nchannels; j++) {
+            if (done[j] || !same_layer(fi->names[i], fi->names[j])) continue;
+            done[j] = 1;
+            const char *short_name = fi->names[j] + (ll ? ll + 1 : 0);
+            if (j != i || ll) printf(" ");
+            if (uniform)
+                printf("%s", short_name);
+            else
+                printf("%s:%s", short_name, fi->types[j]);
+        }
+        if (uniform) printf(" (%s)", fi->types[i]);
+        printf("\n");
+    }
+    free(done);
+}
+
+static int info_file(nprfx_context *ctx, const char *path)
+{
+    nprfx_file_info fi;
+    if (nprfx_io_info(ctx, path, &fi)) return INFO_FILE_ERROR;
+    printf("%s: %s %dx%d, %d channel%s, %d subimage%s", path, fi.format,
+           nprfx_rect_width(fi.bounds), nprfx_rect_height(fi.bounds), fi.nchannels,
+           fi.nchannels == 1 ? "" : "s", fi.subimages, fi.subimages == 1 ? "" : "s");
+    if (fi.compression[0]) printf(", compression %s", fi.compression);
+    printf("\n");
+    print_rect("    data window", fi.bounds);
+    print_rect(", display window", fi.display);
+    printf("\n");
+    print_channels(&fi);
+    nprfx_file_info_free(&fi);
+    return INFO_OK;
+}
+
+/* ---- test mode -----------------------------------------------------------------------------
+ * `nprfx info --io-test OP ...` drives the io.h functions that no other command reaches yet, for
+ * tests/cli/io.sh, which then checks the files with oiiotool as an independent reader. Not part
+ * of the documented interface.
+ *   write IN OUT [--half] [--compression C]          read IN, write all its channels to OUT
+ *   preview IN OUT [--raw] [--ocio CFG] [--colorspace CS] [--display D] [--view V]
+ *   convert IN OUT FROM TO [--ocio CFG]               convert the first 3 channels, write EXR
+ *   channel IN NAME                                   print the channel's index (-1: absent)
+ *   view IN FIRST COUNT                               print a plate view's shape, or "absent" */
+static int io_test(nprfx_context *ctx, int argc, char **argv)
+{
+    if (argc < 3) return INFO_USAGE;
+    const char *op = argv[1], *in = argv[2];
+    nprfx_plate plate;
+    if (nprfx_io_read(ctx, in, &plate)) return INFO_FILE_ERROR;
+    /* The whole plate as one view (may exceed NPRFX_MAX_CHANNELS, which the writer allows). */
+    nprfx_image all = {plate.pixels, plate.nchannels,
+                       (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels, plate.nchannels,
+                       plate.bounds};
+    int rc = INFO_USAGE;
+    if (!strcmp(op, "write") && argc >= 4) {
+        nprfx_write_options wo = {sizeof wo, NULL, 0};
+        for (int i = 4; i < argc; i++) {
+            if (!strcmp(argv[i], "--half"))
+                wo.half = 1;
+            else if (!strcmp(argv[i], "--compression") && i + 1 < argc)
+                wo.compression = argv[++i];
+        }
+        rc = nprfx_io_write(ctx, argv[3], &all, (const char *const *)plate.names, &plate.display,
+                            &wo)
+                 ? INFO_FILE_ERROR
+                 : INFO_OK;
+    } else if (!strcmp(op, "preview") && argc >= 4) {
+        nprfx_preview_options po;
+        memset(&po, 0, sizeof po);
+        po.size = sizeof po;
+        for (int i = 4; i < argc; i++) {
+            const char *next = i + 1 < argc ? argv[i + 1] : NULL;
+            if (!strcmp(argv[i], "--raw"))
+                po.raw = 1;
+            else if (!strcmp(argv[i], "--ocio") && next)
+                po.ocio_config = argv[++i];
+            else if (!strcmp(argv[i], "--colorspace") && next)
+                po.colorspace = argv[++i];
+            else if (!strcmp(argv[i], "--display") && next)
+                po.display = argv[++i];
+            else if (!strcmp(argv[i], "--view") && next)
+                po.view = argv[++i];
+        }
+        rc = nprfx_io_write_preview(ctx, argv[3], &all, &po) ? INFO_FILE_ERROR : INFO_OK;
+    } else if (!strcmp(op, "convert") && argc >= 6) {
+        const char *cfg = argc >= 8 && !strcmp(argv[6], "--ocio") ? argv[7] : NULL;
+        rc = INFO_FILE_ERROR;
+        if (!nprfx_io_convert_colorspace(ctx, &all, argv[4], argv[5], cfg) &&
+            !nprfx_io_write(ctx, argv[3], &all, (const char *const *)plate.names, &plate.display,
+                            NULL))
+            rc = INFO_OK;
+    } else if (!strcmp(op, "channel") && argc >= 4) {
+        printf("%d\n", nprfx_plate_channel(&plate, argv[3]));
+        rc = INFO_OK;
+    } else if (!strcmp(op, "view") && argc >= 5) {
+        nprfx_image v = nprfx_plate_view(&plate, atoi(argv[3]), atoi(argv[4]));
+        if (!v.data)
+            printf("absent\n");
+        else
+            printf("channels %d pixel_stride %td row_stride %td first %g\n", v.channels,
+                   v.pixel_stride, v.row_stride, v.data[0]);
+        rc = INFO_OK;
+    }
+    nprfx_plate_free(&plate);
+    return rc;
+}
 
 int nprfx_cmd_info(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "nprfx info: not implemented yet\n");
-    return 2;
+    nprfx_context *ctx = NULL;
+    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
+    init.error_handler = print_error;
+    init.error_user = (void *)"info";
+    if (nprfx_context_create(&init, &ctx)) {
+        fprintf(stderr, "nprfx info: cannot create a context\n");
+        return INFO_USAGE;
+    }
+    int rc = INFO_OK, nfiles = 0, opts_done = 0;
+    if (argc >= 2 && !strcmp(argv[1], "--io-test")) {
+        rc = io_test(ctx, argc - 1, argv + 1);
+        if (rc == INFO_USAGE) fprintf(stderr, "nprfx info: bad --io-test arguments\n");
+        nprfx_context_destroy(ctx);
+        return rc;
+    }
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!opts_done && (!strcmp(a, "--help") || !strcmp(a, "-h"))) {
+            usage(stdout);
+            nprfx_context_destroy(ctx);
+            return INFO_OK;
+        }
+        if (!opts_done && !strcmp(a, "--")) {
+            opts_done = 1;
+            continue;
+        }
+        if (!opts_done && a[0] == '-' && a[1]) {
+            fprintf(stderr, "nprfx info: unknown option '%s'\n", a);
+            usage(stderr);
+            nprfx_context_destroy(ctx);
+            return INFO_USAGE;
+        }
+    }
+    opts_done = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!opts_done && !strcmp(argv[i], "--")) {
+            opts_done = 1;
+            continue;
+        }
+        nfiles++;
+        /* Keep going after a bad file so one run reports on every file given. */
+        if (info_file(ctx, argv[i]) != INFO_OK) rc = INFO_FILE_ERROR;
+    }
+    if (!nfiles) {
+        usage(stderr);
+        rc = INFO_USAGE;
+    }
+    nprfx_context_destroy(ctx);
+    return rc;
 }
