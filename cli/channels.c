@@ -85,8 +85,8 @@ static int layer_channels(const char *const *names, int n, const char *layer, in
     return count;
 }
 
-int nprfx_channels_select(const char *const *names, int n, const char *selection, int *idx,
-                          int max, char *bad, size_t bad_size, int *ambiguous)
+int nprfx_channels_select(const char *const *names, int n, const char *selection, int *idx, int max,
+                          char *bad, size_t bad_size, int *ambiguous)
 {
     char buf[1024];
     int count = 0;
@@ -94,7 +94,8 @@ int nprfx_channels_select(const char *const *names, int n, const char *selection
     snprintf(buf, sizeof buf, "%s", selection);
     for (char *save = NULL, *item = strtok_r(buf, ",", &save); item;
          item = strtok_r(NULL, ",", &save)) {
-        while (*item == ' ') item++;
+        while (*item == ' ')
+            item++;
         int i = find_one(names, n, item);
         if (i >= 0) {
             if (count < max) idx[count++] = i;
@@ -121,7 +122,8 @@ int nprfx_channels_select(const char *const *names, int n, const char *selection
                     tmp[k++] = j;
             }
             if (ok && k > 1)
-                for (int t = 0; t < k && count < max; t++) idx[count++] = tmp[t];
+                for (int t = 0; t < k && count < max; t++)
+                    idx[count++] = tmp[t];
             else
                 ok = 0;
         }

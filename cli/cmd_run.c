@@ -11,31 +11,32 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: nprfx run GRAPH.json [options]\n\n"
-            "Renders a node graph: every write node's sequence over the frames.\n\n"
-            "options:\n"
-            "  --frames SPEC       frames to render: 12, 1-24, 1-24x2, 24-1, 1,5,9-12 (default:\n"
-            "                      the graph's \"frames\"; temporal nodes still see the whole shot)\n"
-            "  --set N.P=VALUE     override param P of node N (repeatable), e.g. --set "
-            "blend.opacity=0.5\n"
-            "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
-            "  --output-dir DIR    put relative write paths under DIR\n"
-            "  --cache-mb N        memory for cached node results (default 2048)\n"
-            "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
-            "  --keep-going        render the remaining frames after a failed one, exit 1\n"
-            "  --quiet             no progress output\n\n"
-            "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
-            "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
-            "  read:  {\"node\": \"read\", \"path\": \"plates/shot.####.exr\", \"colorspace\": "
-            "\"linear\", \"vectors\": \"blender\"}\n"
-            "  synth: {\"node\": \"synth\", \"scene\": \"orbit\", \"size\": \"256x256\"}\n"
-            "  write: {\"node\": \"write\", \"inputs\": {\"image\": REF}, \"path\": "
-            "\"out/x.####.exr\", \"preview\": \"out/x.####.png\"}\n"
-            "  REF:   \"node\" or \"node:channels\", e.g. \"plate:Depth.Z\", \"plate:Vector.XY\"\n"
-            "Read paths are relative to the graph file, write paths to the current directory.\n"
-            "Files are written under a temporary name and renamed, so a failed frame never leaves\n"
-            "a partial file. See 'nprfx list' and 'nprfx help NODE' for the node types.\n");
+    fprintf(
+        f,
+        "usage: nprfx run GRAPH.json [options]\n\n"
+        "Renders a node graph: every write node's sequence over the frames.\n\n"
+        "options:\n"
+        "  --frames SPEC       frames to render: 12, 1-24, 1-24x2, 24-1, 1,5,9-12 (default:\n"
+        "                      the graph's \"frames\"; temporal nodes still see the whole shot)\n"
+        "  --set N.P=VALUE     override param P of node N (repeatable), e.g. --set "
+        "blend.opacity=0.5\n"
+        "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
+        "  --output-dir DIR    put relative write paths under DIR\n"
+        "  --cache-mb N        memory for cached node results (default 2048)\n"
+        "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
+        "  --keep-going        render the remaining frames after a failed one, exit 1\n"
+        "  --quiet             no progress output\n\n"
+        "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
+        "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
+        "  read:  {\"node\": \"read\", \"path\": \"plates/shot.####.exr\", \"colorspace\": "
+        "\"linear\", \"vectors\": \"blender\"}\n"
+        "  synth: {\"node\": \"synth\", \"scene\": \"orbit\", \"size\": \"256x256\"}\n"
+        "  write: {\"node\": \"write\", \"inputs\": {\"image\": REF}, \"path\": "
+        "\"out/x.####.exr\", \"preview\": \"out/x.####.png\"}\n"
+        "  REF:   \"node\" or \"node:channels\", e.g. \"plate:Depth.Z\", \"plate:Vector.XY\"\n"
+        "Read paths are relative to the graph file, write paths to the current directory.\n"
+        "Files are written under a temporary name and renamed, so a failed frame never leaves\n"
+        "a partial file. See 'nprfx list' and 'nprfx help NODE' for the node types.\n");
 }
 
 static double now_seconds(void)

@@ -101,8 +101,8 @@ static int find_node(const nprfx_graph *g, const char *name)
 
 /* ---------------------------------------------------------------- parsing ---- */
 
-static nprfx_result parse_ref(nprfx_graph *g, const char *node, const char *input,
-                              const cJSON *j, gref *ref)
+static nprfx_result parse_ref(nprfx_graph *g, const char *node, const char *input, const cJSON *j,
+                              gref *ref)
 {
     if (!cJSON_IsString(j))
         return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
@@ -138,15 +138,15 @@ static nprfx_result set_value_json(nprfx_graph *g, gnode *n, int pi, const cJSON
         int k = cJSON_GetArraySize(j);
         if (k != 3 && k != 4)
             return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
-                               "node '%s': %s.%s: a colour is an array of 3 or 4 numbers",
-                               n->name, n->desc->id, p->name);
+                               "node '%s': %s.%s: a colour is an array of 3 or 4 numbers", n->name,
+                               n->desc->id, p->name);
         v.v[3] = 1;
         for (int c = 0; c < k; c++) {
             const cJSON *e = cJSON_GetArrayItem(j, c);
             if (!cJSON_IsNumber(e))
                 return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
-                                   "node '%s': %s.%s: colour components must be numbers",
-                                   n->name, n->desc->id, p->name);
+                                   "node '%s': %s.%s: colour components must be numbers", n->name,
+                                   n->desc->id, p->name);
             v.v[c] = e->valuedouble;
         }
     } else {
@@ -254,7 +254,8 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
     if (n->ninputs) {
         n->inputs = calloc((size_t)n->ninputs, sizeof *n->inputs);
         if (!n->inputs) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-        for (int i = 0; i < n->ninputs; i++) n->inputs[i].src = -1;
+        for (int i = 0; i < n->ninputs; i++)
+            n->inputs[i].src = -1;
     }
     if (n->kind == GK_NODE) {
         n->params = calloc((size_t)n->desc->num_params + 1, sizeof *n->params);
@@ -269,8 +270,8 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
         if (!strcmp(e->string, "node") || !strcmp(e->string, "comment")) continue;
         if (!strcmp(e->string, "inputs")) {
             if (!cJSON_IsObject(e))
-                return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': \"inputs\" must be an object",
-                                   n->name);
+                return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                                   "node '%s': \"inputs\" must be an object", n->name);
             for (const cJSON *in = e->child; in; in = in->next) {
                 int idx = -1;
                 if (n->kind == GK_NODE)
@@ -291,8 +292,8 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
             }
         } else if (!strcmp(e->string, "params") && n->kind == GK_NODE) {
             if (!cJSON_IsObject(e))
-                return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': \"params\" must be an object",
-                                   n->name);
+                return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                                   "node '%s': \"params\" must be an object", n->name);
             for (const cJSON *pv = e->child; pv; pv = pv->next) {
                 int pi = nprfx_node_param_index(n->desc, pv->string);
                 if (pi < 0)
@@ -338,8 +339,7 @@ static nprfx_result link_graph(nprfx_graph *g)
                     return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
                                        "node '%s': input '%s' refers to write node '%s'", n->name,
                                        iname, r->text);
-            } else if (n->kind == GK_WRITE ||
-                       !(n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) {
+            } else if (n->kind == GK_WRITE || !(n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) {
                 return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                                    "node '%s': required input '%s' is not connected", n->name,
                                    iname);
@@ -347,7 +347,8 @@ static nprfx_result link_graph(nprfx_graph *g)
         }
     }
     /* cycles: iterative marking by depth-first search */
-    for (int i = 0; i < g->count; i++) g->nodes[i].mark = 0;
+    for (int i = 0; i < g->count; i++)
+        g->nodes[i].mark = 0;
     for (int i = 0; i < g->count; i++) {
         /* walk every path from i; with small graphs a simple bounded DFS per node suffices */
         int stack[256], depth = 0;
@@ -378,7 +379,8 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     if (!root) {
         const char *at = cJSON_GetErrorPtr();
         int line = 1;
-        for (const char *c = json; at && c < at; c++) line += *c == '\n';
+        for (const char *c = json; at && c < at; c++)
+            line += *c == '\n';
         return nprfx_error(ctx, NPRFX_ERR_PARSE, "malformed JSON near line %d", line);
     }
     nprfx_graph *g = calloc(1, sizeof *g);
@@ -455,8 +457,8 @@ done:
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path,
-                              const nprfx_graph_options *opt, nprfx_graph **out)
+nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_graph_options *opt,
+                              nprfx_graph **out)
 {
     *out = NULL;
     FILE *f = fopen(path, "rb");
@@ -490,7 +492,8 @@ nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path,
 static void centry_free(centry *e)
 {
     if (!e) return;
-    for (int c = 0; e->names && c < e->im.channels; c++) free(e->names[c]);
+    for (int c = 0; e->names && c < e->im.channels; c++)
+        free(e->names[c]);
     free(e->names);
     nprfx_image_free(&e->im);
     free(e);
@@ -513,7 +516,8 @@ void nprfx_graph_free(nprfx_graph *g)
             free(n->inputs[k].text);
         }
         free(n->inputs);
-        for (int k = 0; n->param_text && k < n->desc->num_params; k++) free(n->param_text[k]);
+        for (int k = 0; n->param_text && k < n->desc->num_params; k++)
+            free(n->param_text[k]);
         free(n->param_text);
         free(n->params);
         free(n->name);
@@ -578,8 +582,7 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
                 int f = out->frames[k];
                 nprfx_seq_frames_free(out);
                 return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
-                                   "frame %d is outside the graph's frames %s", f,
-                                   g->frames_text);
+                                   "frame %d is outside the graph's frames %s", f, g->frames_text);
             }
     return NPRFX_OK;
 }
@@ -588,8 +591,10 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
 
 static void cache_unlink(nprfx_graph *g, centry *e)
 {
-    if (e->prev) e->prev->next = e->next;
-    else g->head = e->next;
+    if (e->prev)
+        e->prev->next = e->next;
+    else
+        g->head = e->next;
     if (e->next) e->next->prev = e->prev;
     e->prev = e->next = NULL;
 }
@@ -616,7 +621,8 @@ static centry *cache_find(nprfx_graph *g, int node, int frame)
 static void cache_evict(nprfx_graph *g)
 {
     centry *e = g->head;
-    while (e && e->next) e = e->next; /* least recently used is last */
+    while (e && e->next)
+        e = e->next; /* least recently used is last */
     while (e && g->cache_bytes > g->cache_limit) {
         centry *prev = e->prev;
         if (e->pins == 0 && e != g->head) {
@@ -653,7 +659,8 @@ static nprfx_result eval(nprfx_graph *g, int node, int frame, centry **out);
 static char **names_dup(const char *const *names, int n)
 {
     char **d = calloc((size_t)n, sizeof *d);
-    for (int i = 0; d && i < n; i++) d[i] = xstrdup(names[i] ? names[i] : "C");
+    for (int i = 0; d && i < n; i++)
+        d[i] = xstrdup(names[i] ? names[i] : "C");
     return d;
 }
 
@@ -674,8 +681,8 @@ static void resolve_path(const nprfx_graph *g, const char *dir, const char *patt
  * motion_prev points to where the surface point was at frame-1). */
 typedef struct vec_convention {
     const char *name;
-    const char *layer;  /* channels to look for: prev.x, prev.y, next.x, next.y */
-    double sign[4];     /* multipliers applied to those channels */
+    const char *layer; /* channels to look for: prev.x, prev.y, next.x, next.y */
+    double sign[4];    /* multipliers applied to those channels */
 } vec_convention;
 /* Blender's Vector pass (measured on the sample renders, see samples/plates/README.md):
  * X,Y hold the motion towards the previous frame and Z,W towards the next one, in pixels with
@@ -703,7 +710,8 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
                            "node '%s': %s has no %s channel '%s' for vectors=%s", n->name, file,
                            amb ? "unique" : "", bad, n->vectors);
     int nc = plate->nchannels, nn = nc + 4;
-    size_t npix = (size_t)nprfx_rect_width(plate->bounds) * (size_t)nprfx_rect_height(plate->bounds);
+    size_t npix =
+        (size_t)nprfx_rect_width(plate->bounds) * (size_t)nprfx_rect_height(plate->bounds);
     float *px = malloc(npix * (size_t)nn * sizeof(float));
     char **names = realloc(plate->names, (size_t)nn * sizeof *names);
     if (!px || !names) {
@@ -714,7 +722,8 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
     plate->names = names;
     static const char *const mnames[4] = {"motion_prev.X", "motion_prev.Y", "motion_next.X",
                                           "motion_next.Y"};
-    for (int k = 0; k < 4; k++) names[nc + k] = xstrdup(mnames[k]);
+    for (int k = 0; k < 4; k++)
+        names[nc + k] = xstrdup(mnames[k]);
     for (size_t p = 0; p < npix; p++) {
         const float *s = plate->pixels + p * (size_t)nc;
         float *d = px + p * (size_t)nn;
@@ -739,16 +748,15 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     memset(&plate, 0, sizeof plate);
     nprfx_result r = nprfx_io_read(g->ctx, file, &plate);
     if (r) return nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
-    if (n->vectors && strcmp(n->vectors, "none") &&
-        (r = add_motion_channels(g, n, file, &plate))) {
+    if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, &plate))) {
         nprfx_plate_free(&plate);
         return r;
     }
     if (n->colorspace) {
         int idx[3], amb;
         char bad[64];
-        if (nprfx_channels_select((const char *const *)plate.names, plate.nchannels,
-                                  "R,G,B", idx, 3, bad, sizeof bad, &amb) == 3 &&
+        if (nprfx_channels_select((const char *const *)plate.names, plate.nchannels, "R,G,B", idx,
+                                  3, bad, sizeof bad, &amb) == 3 &&
             idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
             nprfx_image rgb = nprfx_plate_view(&plate, idx[0], 3);
             r = nprfx_io_convert_colorspace(g->ctx, &rgb, n->colorspace, "scene_linear", g->ocio);
@@ -800,8 +808,7 @@ static nprfx_result select_input(nprfx_graph *g, const gnode *n, int k, const ce
     char bad[256];
     int amb = 0;
     if (ref->sel) {
-        count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad,
-                                      sizeof bad, &amb);
+        count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
         if (count < 0) {
             char list[1024] = "";
             for (int c = 0; c < nc && strlen(list) < 900; c++) {
@@ -817,7 +824,8 @@ static nprfx_result select_input(nprfx_graph *g, const gnode *n, int k, const ce
         count = nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
         if (count < 0 && nc <= 4 && (in->channels == 0 || in->channels == nc)) {
             count = nc;
-            for (int c = 0; c < nc; c++) idx[c] = c;
+            for (int c = 0; c < nc; c++)
+                idx[c] = c;
         }
         if (count < 0)
             return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
@@ -826,10 +834,11 @@ static nprfx_result select_input(nprfx_graph *g, const gnode *n, int k, const ce
                                n->name, iname, src, in->aov, src);
     } else if (nc <= 4 || !in) {
         count = nc < 256 ? nc : 256; /* a write takes everything */
-        for (int c = 0; c < count; c++) idx[c] = c;
+        for (int c = 0; c < count; c++)
+            idx[c] = c;
     } else {
-        count = nprfx_channels_from_hint(names, nc, "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB",
-                                         idx, NPRFX_MAX_CHANNELS + 1);
+        count = nprfx_channels_from_hint(names, nc, "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx,
+                                         NPRFX_MAX_CHANNELS + 1);
         if (count < 0)
             return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                                "node '%s': input '%s': '%s' has %d channels and no R,G,B; name "
@@ -849,11 +858,14 @@ static nprfx_result select_input(nprfx_graph *g, const gnode *n, int k, const ce
                                count);
     }
     if (count < 1)
-        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "node '%s': input '%s' selects no channels",
-                           n->name, iname);
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "node '%s': input '%s' selects no channels", n->name, iname);
     int contiguous = 1;
-    for (int c = 1; c < count; c++) contiguous &= idx[c] == idx[0] + c;
-    if (contiguous) {
+    for (int c = 1; c < count; c++)
+        contiguous &= idx[c] == idx[0] + c;
+    /* A few channels out of a wide plate are packed anyway: nodes then stream through memory
+     * instead of striding over the channels they do not use. */
+    if (contiguous && nc <= 2 * count) {
         *view = nprfx_image_channels(&e->im, idx[0], count);
         return NPRFX_OK;
     }
@@ -864,7 +876,8 @@ static nprfx_result select_input(nprfx_graph *g, const gnode *n, int k, const ce
         for (int x = tmp.bounds.x0; x < tmp.bounds.x1; x++) {
             const float *s = nprfx_image_at(&e->im, x, y);
             float *d = nprfx_image_at(&tmp, x, y);
-            for (int c = 0; c < count; c++) d[c] = s[idx[c]];
+            for (int c = 0; c < count; c++)
+                d[c] = s[idx[c]];
         }
     *scratch = tmp.data;
     *view = tmp;
@@ -898,8 +911,10 @@ static void slot_release(pin_slot *s)
 
 static void render_frame_release(render_frame *rf)
 {
-    for (int i = 0; i < rf->nbase; i++) slot_release(&rf->base[i]);
-    for (int i = 0; i < RING; i++) slot_release(&rf->ring[i]);
+    for (int i = 0; i < rf->nbase; i++)
+        slot_release(&rf->base[i]);
+    for (int i = 0; i < RING; i++)
+        slot_release(&rf->ring[i]);
     rf->nbase = 0;
     cache_evict(rf->g);
 }
@@ -1028,10 +1043,18 @@ static nprfx_result eval(nprfx_graph *g, int node, int frame, centry **out)
     char **names = NULL;
     nprfx_result r;
     switch (g->nodes[node].kind) {
-    case GK_READ: r = eval_read(g, node, frame, &im, &names); break;
-    case GK_SYNTH: r = eval_synth(g, node, frame, &im, &names); break;
-    case GK_NODE: r = eval_node(g, node, frame, &im, &names); break;
-    default: r = nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "write nodes have no output"); break;
+    case GK_READ:
+        r = eval_read(g, node, frame, &im, &names);
+        break;
+    case GK_SYNTH:
+        r = eval_synth(g, node, frame, &im, &names);
+        break;
+    case GK_NODE:
+        r = eval_node(g, node, frame, &im, &names);
+        break;
+    default:
+        r = nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "write nodes have no output");
+        break;
     }
     if (r) return r;
     e = cache_insert(g, node, frame, &im, names);
@@ -1049,7 +1072,8 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
                                      "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx, 4);
     if (k < 0) {
         k = im->channels < 4 ? im->channels : 3;
-        for (int c = 0; c < k; c++) idx[c] = c;
+        for (int c = 0; c < k; c++)
+            idx[c] = c;
     }
     nprfx_result r = nprfx_image_alloc(g->ctx, im->bounds, k, view);
     if (r) return r;
@@ -1057,7 +1081,8 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
         for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
             const float *s = nprfx_image_at(im, x, y);
             float *d = nprfx_image_at(view, x, y);
-            for (int c = 0; c < k; c++) d[c] = s[idx[c]];
+            for (int c = 0; c < k; c++)
+                d[c] = s[idx[c]];
         }
     *scratch = view->data;
     return NPRFX_OK;
@@ -1099,7 +1124,8 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
         int k = nprfx_channels_select((const char *const *)e->names, e->im.channels,
                                       n->inputs[0].sel, idx, 256, bad, sizeof bad, &amb);
         sel_names = calloc((size_t)(k > 0 ? k : 1), sizeof *sel_names);
-        for (int c = 0; sel_names && c < k; c++) sel_names[c] = e->names[idx[c]];
+        for (int c = 0; sel_names && c < k; c++)
+            sel_names[c] = e->names[idx[c]];
         names = sel_names;
     }
     char path[4096];
@@ -1119,8 +1145,8 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
         r = check_not_input(g, n, path, frame);
         if (!r) r = preview_view(g, &view, names, &pv, &pscratch);
         if (!r) {
-            nprfx_preview_options po = {sizeof po, g->ocio, n->colorspace, n->display, n->view,
-                                        n->raw};
+            nprfx_preview_options po = {sizeof po,  g->ocio, n->colorspace,
+                                        n->display, n->view, n->raw};
             r = nprfx_io_write_preview(g->ctx, path, &pv, &po);
             if (r) nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
         }
@@ -1168,7 +1194,8 @@ double nprfx_graph_take_render_seconds(nprfx_graph *g)
 int nprfx_graph_write_count(const nprfx_graph *g)
 {
     int writes = 0;
-    for (int i = 0; i < g->count; i++) writes += g->nodes[i].kind == GK_WRITE;
+    for (int i = 0; i < g->count; i++)
+        writes += g->nodes[i].kind == GK_WRITE;
     return writes;
 }
 

@@ -20,17 +20,17 @@ typedef struct nprfx_render_hook {
 } nprfx_render_hook;
 
 typedef struct nprfx_graph_options {
-    size_t size;             /* sizeof(nprfx_graph_options) */
-    size_t cache_bytes;      /* bound on cached node results (0: 2 GiB) */
-    int tile;                /* > 0: render nodes in tiles of this size (tests invariance) */
-    const char *output_dir;  /* prefix for relative write paths (NULL: current directory) */
+    size_t size;                   /* sizeof(nprfx_graph_options) */
+    size_t cache_bytes;            /* bound on cached node results (0: 2 GiB) */
+    int tile;                      /* > 0: render nodes in tiles of this size (tests invariance) */
+    const char *output_dir;        /* prefix for relative write paths (NULL: current directory) */
     const nprfx_render_hook *hook; /* NULL: call the node's render function */
 } nprfx_graph_options;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
  * paths relative to the current directory (or output_dir). */
-nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path,
-                              const nprfx_graph_options *opt, nprfx_graph **out);
+nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_graph_options *opt,
+                              nprfx_graph **out);
 /* Parse a graph from JSON text (base_dir resolves relative read paths). */
 nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char *base_dir,
                                const nprfx_graph_options *opt, nprfx_graph **out);

@@ -18,8 +18,8 @@ typedef struct nprfx_plate {
     nprfx_rect bounds;  /* data window */
     nprfx_rect display; /* display window */
     int nchannels;
-    char **names; /* nchannels full channel names ("ViewLayer.Vector.X") */
-    float *pixels;  /* nchannels floats per pixel, rows of bounds' width, top row first */
+    char **names;  /* nchannels full channel names ("ViewLayer.Vector.X") */
+    float *pixels; /* nchannels floats per pixel, rows of bounds' width, top row first */
 } nprfx_plate;
 
 void nprfx_plate_free(nprfx_plate *p);
@@ -33,7 +33,7 @@ nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *ou
 
 /* Header facts for `nprfx info`. */
 typedef struct nprfx_file_info {
-    char format[32];      /* "openexr" */
+    char format[32]; /* "openexr" */
     int subimages;
     nprfx_rect bounds, display;
     int nchannels;

@@ -50,7 +50,10 @@ static void serial_for(void *impl, int count, int grain, nprfx_range_fn fn, void
     (void)grain;
     if (count > 0) fn(user, 0, count, 0);
 }
-static int serial_workers(void *impl) { return (void)impl, 1; }
+static int serial_workers(void *impl)
+{
+    return (void)impl, 1;
+}
 static const nprfx_executor serial_executor = {sizeof(nprfx_executor), NULL, serial_workers,
                                                serial_for};
 
@@ -80,4 +83,7 @@ nprfx_result nprfx_error(nprfx_context *ctx, nprfx_result code, const char *fmt,
     return r;
 }
 
-const char *nprfx_last_error(const nprfx_context *ctx) { return ctx ? ctx->last_error : ""; }
+const char *nprfx_last_error(const nprfx_context *ctx)
+{
+    return ctx ? ctx->last_error : "";
+}

@@ -24,7 +24,7 @@ struct nprfx_pool {
     void *user;
     int count, chunk;
     atomic_int next;
-    int active;         /* pool threads still working on the current job */
+    int active;          /* pool threads still working on the current job */
     unsigned long epoch; /* bumped per job so sleeping threads know there is new work */
     int quit;
 };
@@ -57,7 +57,8 @@ static void *worker_main(void *arg)
     unsigned long seen = 0;
     pthread_mutex_lock(&p->lock);
     for (;;) {
-        while (!p->quit && p->epoch == seen) pthread_cond_wait(&p->wake, &p->lock);
+        while (!p->quit && p->epoch == seen)
+            pthread_cond_wait(&p->wake, &p->lock);
         if (p->quit) break;
         seen = p->epoch;
         pthread_mutex_unlock(&p->lock);
@@ -69,7 +70,10 @@ static void *worker_main(void *arg)
     return NULL;
 }
 
-static int pool_workers(void *impl) { return ((struct nprfx_pool *)impl)->nthreads; }
+static int pool_workers(void *impl)
+{
+    return ((struct nprfx_pool *)impl)->nthreads;
+}
 
 static void pool_for(void *impl, int count, int grain, nprfx_range_fn fn, void *user)
 {
@@ -93,7 +97,8 @@ static void pool_for(void *impl, int count, int grain, nprfx_range_fn fn, void *
     pthread_mutex_unlock(&p->lock);
     run_chunks(p, 0);
     pthread_mutex_lock(&p->lock);
-    while (p->active > 0) pthread_cond_wait(&p->done, &p->lock);
+    while (p->active > 0)
+        pthread_cond_wait(&p->done, &p->lock);
     pthread_mutex_unlock(&p->lock);
     pthread_mutex_unlock(&p->job_lock);
 }
@@ -144,7 +149,8 @@ void nprfx_pool_destroy(nprfx_pool *p)
     p->quit = 1;
     pthread_cond_broadcast(&p->wake);
     pthread_mutex_unlock(&p->lock);
-    for (int i = 1; p->threads && i < p->nthreads; i++) pthread_join(p->threads[i], NULL);
+    for (int i = 1; p->threads && i < p->nthreads; i++)
+        pthread_join(p->threads[i], NULL);
     free(p->threads);
     pthread_cond_destroy(&p->wake);
     pthread_cond_destroy(&p->done);
@@ -153,7 +159,10 @@ void nprfx_pool_destroy(nprfx_pool *p)
     free(p);
 }
 
-const nprfx_executor *nprfx_pool_executor(nprfx_pool *pool) { return pool ? &pool->exec : NULL; }
+const nprfx_executor *nprfx_pool_executor(nprfx_pool *pool)
+{
+    return pool ? &pool->exec : NULL;
+}
 
 void nprfx_parallel_for(const nprfx_executor *ex, int count, int grain, nprfx_range_fn fn,
                         void *user)

@@ -79,7 +79,8 @@ nprfx_result nprfx_image_copy(nprfx_context *ctx, const nprfx_image *src, nprfx_
         for (int x = r.x0; x < r.x1; x++) {
             const float *s = nprfx_image_at(src, x, y);
             float *d = nprfx_image_at(dst, x, y);
-            for (int c = 0; c < src->channels; c++) d[c] = s[c];
+            for (int c = 0; c < src->channels; c++)
+                d[c] = s[c];
         }
     return NPRFX_OK;
 }
@@ -89,6 +90,7 @@ void nprfx_image_fill(nprfx_image *im, const float *value)
     for (int y = im->bounds.y0; y < im->bounds.y1; y++)
         for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
             float *d = nprfx_image_at(im, x, y);
-            for (int c = 0; c < im->channels; c++) d[c] = value[c];
+            for (int c = 0; c < im->channels; c++)
+                d[c] = value[c];
         }
 }

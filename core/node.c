@@ -35,12 +35,18 @@ void nprfx_node_defaults(const nprfx_node_desc *node, nprfx_value *values)
 const char *nprfx_param_type_name(nprfx_param_type t)
 {
     switch (t) {
-    case NPRFX_PARAM_DOUBLE: return "double";
-    case NPRFX_PARAM_INT: return "int";
-    case NPRFX_PARAM_BOOL: return "bool";
-    case NPRFX_PARAM_CHOICE: return "choice";
-    case NPRFX_PARAM_COLOR: return "colour";
-    case NPRFX_PARAM_STRING: return "string";
+    case NPRFX_PARAM_DOUBLE:
+        return "double";
+    case NPRFX_PARAM_INT:
+        return "int";
+    case NPRFX_PARAM_BOOL:
+        return "bool";
+    case NPRFX_PARAM_CHOICE:
+        return "choice";
+    case NPRFX_PARAM_COLOR:
+        return "colour";
+    case NPRFX_PARAM_STRING:
+        return "string";
     }
     return "?";
 }
@@ -54,7 +60,8 @@ static void fmt_number(char *buf, size_t n, double v)
 static int choice_count(const nprfx_param_desc *p)
 {
     int n = 0;
-    while (p->choices && p->choices[n]) n++;
+    while (p->choices && p->choices[n])
+        n++;
     return n;
 }
 
@@ -72,8 +79,8 @@ nprfx_result nprfx_param_check(nprfx_context *ctx, const nprfx_node_desc *node,
         if ((p->type == NPRFX_PARAM_INT || p->type == NPRFX_PARAM_CHOICE ||
              p->type == NPRFX_PARAM_BOOL) &&
             x != floor(x))
-            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "%s.%s: %g is not a whole number",
-                               nid, p->name, x);
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "%s.%s: %g is not a whole number", nid,
+                               p->name, x);
         if (p->type == NPRFX_PARAM_CHOICE) {
             if (x < 0 || x >= choice_count(p))
                 return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
@@ -82,8 +89,8 @@ nprfx_result nprfx_param_check(nprfx_context *ctx, const nprfx_node_desc *node,
         }
         if (p->type == NPRFX_PARAM_BOOL) {
             if (x != 0 && x != 1)
-                return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "%s.%s: %g is not a boolean",
-                                   nid, p->name, x);
+                return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "%s.%s: %g is not a boolean", nid,
+                                   p->name, x);
             continue;
         }
         if (x < p->hard_min || x > p->hard_max) {
@@ -91,8 +98,9 @@ nprfx_result nprfx_param_check(nprfx_context *ctx, const nprfx_node_desc *node,
             fmt_number(lo, sizeof lo, p->hard_min);
             fmt_number(hi, sizeof hi, p->hard_max);
             fmt_number(val, sizeof val, x);
-            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "%s.%s: %s is outside the range [%s, %s]",
-                               nid, p->name, val, lo, hi);
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
+                               "%s.%s: %s is outside the range [%s, %s]", nid, p->name, val, lo,
+                               hi);
         }
     }
     return NPRFX_OK;
@@ -102,10 +110,12 @@ static int parse_double(const char *s, double *out)
 {
     char *end;
     errno = 0;
-    while (isspace((unsigned char)*s)) s++;
+    while (isspace((unsigned char)*s))
+        s++;
     if (!*s) return 0;
     double v = strtod(s, &end);
-    while (isspace((unsigned char)*end)) end++;
+    while (isspace((unsigned char)*end))
+        end++;
     if (*end || errno == ERANGE) return 0;
     *out = v;
     return 1;
@@ -119,7 +129,9 @@ nprfx_result nprfx_param_parse(nprfx_context *ctx, const nprfx_node_desc *node,
     out->s = p->def_string ? p->def_string : "";
     if (!text) return nprfx_error(ctx, NPRFX_ERR_PARSE, "%s.%s: no value given", nid, p->name);
     switch (p->type) {
-    case NPRFX_PARAM_STRING: out->s = text; return NPRFX_OK;
+    case NPRFX_PARAM_STRING:
+        out->s = text;
+        return NPRFX_OK;
     case NPRFX_PARAM_BOOL:
         if (!strcmp(text, "1") || !strcmp(text, "true") || !strcmp(text, "on") ||
             !strcmp(text, "yes"))
@@ -155,12 +167,14 @@ nprfx_result nprfx_param_parse(nprfx_context *ctx, const nprfx_node_desc *node,
         for (char *tok = strtok(buf, ", \t"); tok; tok = strtok(NULL, ", \t")) {
             if (n == 4 || !parse_double(tok, &c[n]))
                 return nprfx_error(ctx, NPRFX_ERR_PARSE,
-                                   "%s.%s: '%s' is not a colour (1, 3 or 4 numbers)", nid,
-                                   p->name, text);
+                                   "%s.%s: '%s' is not a colour (1, 3 or 4 numbers)", nid, p->name,
+                                   text);
             n++;
         }
-        if (n == 1) c[1] = c[2] = c[0], c[3] = 1;
-        else if (n == 3) c[3] = 1;
+        if (n == 1)
+            c[1] = c[2] = c[0], c[3] = 1;
+        else if (n == 3)
+            c[3] = 1;
         else if (n != 4)
             return nprfx_error(ctx, NPRFX_ERR_PARSE,
                                "%s.%s: '%s' is not a colour (1, 3 or 4 numbers)", nid, p->name,
@@ -182,8 +196,12 @@ char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value *v, char *
 {
     char a[32], b[32], c[32], d[32];
     switch (p->type) {
-    case NPRFX_PARAM_STRING: snprintf(buf, n, "%s", v->s ? v->s : ""); break;
-    case NPRFX_PARAM_BOOL: snprintf(buf, n, "%s", v->v[0] != 0 ? "true" : "false"); break;
+    case NPRFX_PARAM_STRING:
+        snprintf(buf, n, "%s", v->s ? v->s : "");
+        break;
+    case NPRFX_PARAM_BOOL:
+        snprintf(buf, n, "%s", v->v[0] != 0 ? "true" : "false");
+        break;
     case NPRFX_PARAM_CHOICE: {
         int i = (int)v->v[0];
         snprintf(buf, n, "%s", i >= 0 && i < choice_count(p) ? p->choices[i] : "?");
@@ -196,7 +214,9 @@ char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value *v, char *
         fmt_number(d, sizeof d, v->v[3]);
         snprintf(buf, n, "%s,%s,%s,%s", a, b, c, d);
         break;
-    default: fmt_number(buf, n, v->v[0]); break;
+    default:
+        fmt_number(buf, n, v->v[0]);
+        break;
     }
     return buf;
 }
@@ -233,7 +253,6 @@ void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *val
 {
     for (int i = 0; i < node->num_params; i++) {
         if (node->params[i].flags & NPRFX_PARAM_PIXELS) values[i].v[0] *= render_scale;
-        if (node->params[i].flags & NPRFX_PARAM_AREA)
-            values[i].v[0] *= render_scale * render_scale;
+        if (node->params[i].flags & NPRFX_PARAM_AREA) values[i].v[0] *= render_scale * render_scale;
     }
 }

@@ -21,7 +21,10 @@ typedef struct nprfx_context_init {
     const nprfx_executor *executor; /* NULL: run serially on the calling thread */
 } nprfx_context_init;
 
-#define NPRFX_CONTEXT_INIT_DEFAULT {sizeof(nprfx_context_init), NULL, NULL, NULL}
+#define NPRFX_CONTEXT_INIT_DEFAULT                                                                 \
+    {                                                                                              \
+        sizeof(nprfx_context_init), NULL, NULL, NULL                                               \
+    }
 
 nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context **out);
 void nprfx_context_destroy(nprfx_context *ctx);

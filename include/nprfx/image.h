@@ -22,7 +22,7 @@ typedef struct nprfx_rect {
 } nprfx_rect;
 
 typedef struct nprfx_image {
-    float *data;            /* channel 0 of pixel (bounds.x0, bounds.y0); NULL for an absent input */
+    float *data; /* channel 0 of pixel (bounds.x0, bounds.y0); NULL for an absent input */
     ptrdiff_t pixel_stride; /* floats between horizontally adjacent pixels */
     ptrdiff_t row_stride;   /* floats between vertically adjacent pixels; may be negative */
     int channels;           /* 1..NPRFX_MAX_CHANNELS */
@@ -31,9 +31,18 @@ typedef struct nprfx_image {
 
 #define NPRFX_MAX_CHANNELS 16
 
-static inline int nprfx_rect_width(nprfx_rect r) { return r.x1 > r.x0 ? r.x1 - r.x0 : 0; }
-static inline int nprfx_rect_height(nprfx_rect r) { return r.y1 > r.y0 ? r.y1 - r.y0 : 0; }
-static inline int nprfx_rect_empty(nprfx_rect r) { return r.x1 <= r.x0 || r.y1 <= r.y0; }
+static inline int nprfx_rect_width(nprfx_rect r)
+{
+    return r.x1 > r.x0 ? r.x1 - r.x0 : 0;
+}
+static inline int nprfx_rect_height(nprfx_rect r)
+{
+    return r.y1 > r.y0 ? r.y1 - r.y0 : 0;
+}
+static inline int nprfx_rect_empty(nprfx_rect r)
+{
+    return r.x1 <= r.x0 || r.y1 <= r.y0;
+}
 static inline int nprfx_rect_contains(nprfx_rect r, int x, int y)
 {
     return x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1;

@@ -34,8 +34,7 @@ extern "C" {
  * k >= ~16, radius[k] * sqrt(k + 1) stays within about [0.75, 0.9].
  *
  * Cost: O(n log n) time, about 150 bytes per point of transient memory. */
-nprfx_result nprfx_ivs_generate(nprfx_context *ctx, uint64_t seed, int n, float *xy,
-                                float *radius);
+nprfx_result nprfx_ivs_generate(nprfx_context *ctx, uint64_t seed, int n, float *xy, float *radius);
 
 /* ---- the encoded form (a shipped data file) ----
  *

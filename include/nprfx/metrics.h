@@ -11,7 +11,7 @@ extern "C" {
 typedef struct nprfx_stats {
     double mean, variance; /* population variance */
     double min, max;
-    long long count;       /* pixels that entered the statistics */
+    long long count; /* pixels that entered the statistics */
 } nprfx_stats;
 
 /* Statistics of channel `channel` of im over its bounds; pixels where mask (1 channel, may be

@@ -89,10 +89,10 @@ typedef struct nprfx_render_args {
     size_t size; /* sizeof(nprfx_render_args) */
     nprfx_context *ctx;
     const nprfx_node_desc *node;
-    double time;         /* the frame being rendered */
-    double render_scale; /* 1 at full resolution; a host proxy gives e.g. 0.5 */
-    nprfx_rect frame;    /* the whole image domain at this scale */
-    nprfx_rect window;   /* the pixels to write now; inside output->bounds and frame */
+    double time;                 /* the frame being rendered */
+    double render_scale;         /* 1 at full resolution; a host proxy gives e.g. 0.5 */
+    nprfx_rect frame;            /* the whole image domain at this scale */
+    nprfx_rect window;           /* the pixels to write now; inside output->bounds and frame */
     int first_frame, last_frame; /* the shot's frame range, for temporal nodes */
     const nprfx_image *inputs;   /* one view per declared input; data == NULL: not connected */
     const nprfx_value *params;   /* one value per declared param, at `time`, scale applied */
@@ -106,11 +106,12 @@ typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args);
 
 /* Node flags. */
 #define NPRFX_NODE_TEMPORAL 0x1u /* fetches inputs at other frames */
-#define NPRFX_NODE_STATEFUL 0x2u /* keeps a cache in *state between calls (results never depend
-                                    on it: it only saves work) */
+#define NPRFX_NODE_STATEFUL                                                                        \
+    0x2u /* keeps a cache in *state between calls (results never depend                            \
+            on it: it only saves work) */
 
 struct nprfx_node_desc {
-    size_t size; /* sizeof(nprfx_node_desc) */
+    size_t size;       /* sizeof(nprfx_node_desc) */
     const char *id;    /* "threshold-map": graph files, CLI */
     const char *label; /* "Threshold Map": hosts */
     const char *group; /* "NPR" */

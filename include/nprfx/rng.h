@@ -34,7 +34,10 @@ static inline uint64_t nprfx_hash(uint64_t seed, int64_t frame, int32_t x, int32
 }
 
 /* Uniform in [0, 1) with 53 random bits. */
-static inline double nprfx_u01(uint64_t h) { return (double)(h >> 11) * (1.0 / 9007199254740992.0); }
+static inline double nprfx_u01(uint64_t h)
+{
+    return (double)(h >> 11) * (1.0 / 9007199254740992.0);
+}
 
 /* Uniform in [0, 1) from the counter. */
 static inline double nprfx_rand_u01(uint64_t seed, int64_t frame, int32_t x, int32_t y,
