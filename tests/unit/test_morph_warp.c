@@ -1,0 +1,220 @@
+/* morphology and warp: the two small nodes of Kass & Pesare's Figure 3a graph, checked against
+ * hand-computed results (footprints, open/close identities, exact displacement of linear ramps). */
+#include <math.h>
+#include <string.h>
+
+#include "check.h"
+#include "nprfx/context.h"
+#include "nprfx/node.h"
+
+extern const nprfx_node_desc nprfx_node_morphology, nprfx_node_warp;
+
+static nprfx_result run(nprfx_context *ctx, const nprfx_node_desc *node, const nprfx_image *ins,
+                        const nprfx_value *pv, nprfx_image *out, nprfx_rect window)
+{
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = ctx;
+    a.node = node;
+    a.render_scale = 1.0;
+    a.frame = out->bounds;
+    a.window = window;
+    a.inputs = ins;
+    a.params = pv;
+    a.output = out;
+    return node->render(&a);
+}
+
+static void defaults(const nprfx_node_desc *node, nprfx_value *pv)
+{
+    nprfx_node_defaults(node, pv);
+    for (int i = 0; i < node->num_params; i++)
+        if (!pv[i].s) pv[i].s = "";
+}
+
+static void set(const nprfx_node_desc *node, nprfx_value *pv, const char *name, double v)
+{
+    pv[nprfx_node_param_index(node, name)].v[0] = v;
+}
+
+static float px(const nprfx_image *im, int x, int y)
+{
+    return nprfx_image_at(im, x, y)[0];
+}
+
+static void test_morphology(nprfx_context *ctx)
+{
+    const nprfx_node_desc *n = &nprfx_node_morphology;
+    nprfx_rect r = nprfx_rect_make(0, 0, 12, 10);
+    nprfx_image in, out, tiled;
+    nprfx_image_alloc(ctx, r, 1, &in);
+    nprfx_image_alloc(ctx, r, 1, &out);
+    nprfx_image_alloc(ctx, r, 1, &tiled);
+    nprfx_value pv[8];
+    defaults(n, pv);
+    nprfx_image_at(&in, 5, 5)[0] = 1.0f;
+
+    /* dilate, disc radius 1: the 5-pixel cross */
+    set(n, pv, "operation", 0);
+    set(n, pv, "radius", 1);
+    set(n, pv, "footprint", 0);
+    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    int cross = 0, total = 0;
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++) {
+            total += px(&out, x, y) == 1.0f;
+            cross += px(&out, x, y) == 1.0f && abs(x - 5) + abs(y - 5) <= 1;
+        }
+    CHECK(total == 5 && cross == 5);
+    /* square radius 1: 3x3; disc radius 1.5: 3x3 too (corners at distance sqrt 2) */
+    set(n, pv, "footprint", 1);
+    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    total = 0;
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++)
+            total += px(&out, x, y) == 1.0f;
+    CHECK(total == 9);
+    set(n, pv, "footprint", 0);
+    set(n, pv, "radius", 2);
+    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    total = 0;
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++)
+            total += px(&out, x, y) == 1.0f;
+    CHECK(total == 13); /* offsets with dx^2 + dy^2 <= 4 */
+
+    /* erode a 3x3 block with a square of radius 1: its centre only */
+    for (int y = 4; y <= 6; y++)
+        for (int x = 4; x <= 6; x++)
+            nprfx_image_at(&in, x, y)[0] = 1.0f;
+    set(n, pv, "operation", 1);
+    set(n, pv, "footprint", 1);
+    set(n, pv, "radius", 1);
+    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    total = 0;
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++)
+            total += px(&out, x, y) == 1.0f;
+    CHECK(total == 1 && px(&out, 5, 5) == 1.0f);
+
+    /* open keeps the 3x3 block and removes an isolated speck; close fills a one-pixel hole */
+    nprfx_image_at(&in, 10, 1)[0] = 1.0f;
+    set(n, pv, "operation", 2);
+    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    CHECK(px(&out, 10, 1) == 0.0f && px(&out, 4, 4) == 1.0f && px(&out, 6, 6) == 1.0f);
+    total = 0;
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++)
+            total += px(&out, x, y) == 1.0f;
+    CHECK(total == 9);
+    float one = 1.0f;
+    nprfx_image_fill(&in, &one);
+    nprfx_image_at(&in, 3, 3)[0] = 0.25f;
+    set(n, pv, "operation", 3);
+    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    CHECK(px(&out, 3, 3) == 1.0f);
+
+    /* tiles agree with the whole frame (open/close compute their first pass on a grown area) */
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++)
+            nprfx_image_at(&in, x, y)[0] = (float)((x * 7 + y * 13) % 5);
+    for (int op = 0; op < 4; op++) {
+        set(n, pv, "operation", op);
+        set(n, pv, "footprint", 0);
+        set(n, pv, "radius", 1.5);
+        CHECK_OK(run(ctx, n, &in, pv, &out, r));
+        nprfx_rect tiles[3] = {nprfx_rect_make(0, 0, 5, 10), nprfx_rect_make(5, 0, 12, 4),
+                               nprfx_rect_make(5, 4, 12, 10)};
+        for (int t = 0; t < 3; t++)
+            CHECK_OK(run(ctx, n, &in, pv, &tiled, tiles[t]));
+        CHECK(memcmp(out.data, tiled.data, sizeof(float) * 120) == 0);
+    }
+    /* erode <= image <= dilate; open <= image <= close */
+    nprfx_image lo, hi;
+    nprfx_image_alloc(ctx, r, 1, &lo);
+    nprfx_image_alloc(ctx, r, 1, &hi);
+    set(n, pv, "operation", 2);
+    run(ctx, n, &in, pv, &lo, r);
+    set(n, pv, "operation", 3);
+    run(ctx, n, &in, pv, &hi, r);
+    int order_ok = 1;
+    for (int y = 0; y < 10; y++)
+        for (int x = 0; x < 12; x++)
+            order_ok &= px(&lo, x, y) <= px(&in, x, y) && px(&in, x, y) <= px(&hi, x, y);
+    CHECK(order_ok);
+    nprfx_image_free(&lo);
+    nprfx_image_free(&hi);
+    nprfx_image_free(&in);
+    nprfx_image_free(&out);
+    nprfx_image_free(&tiled);
+}
+
+static void test_warp(nprfx_context *ctx)
+{
+    const nprfx_node_desc *n = &nprfx_node_warp;
+    nprfx_rect r = nprfx_rect_make(0, 0, 16, 12);
+    nprfx_image ins[2], out;
+    nprfx_image_alloc(ctx, r, 2, &ins[0]);
+    nprfx_image_alloc(ctx, r, 2, &ins[1]);
+    nprfx_image_alloc(ctx, r, 2, &out);
+    for (int y = 0; y < 12; y++)
+        for (int x = 0; x < 16; x++) {
+            float *p = nprfx_image_at(&ins[0], x, y);
+            p[0] = 2.0f * x + 3.0f * y; /* a linear ramp: both filters reproduce it exactly */
+            p[1] = -1.0f;
+            float *o = nprfx_image_at(&ins[1], x, y);
+            o[0] = 0.25f;
+            o[1] = -0.5f;
+        }
+    nprfx_value pv[4];
+    defaults(n, pv);
+    set(n, pv, "amount", 2.0); /* displacement (0.5, -1) */
+    for (int filter = 0; filter < 2; filter++) {
+        set(n, pv, "filter", filter);
+        CHECK_OK(run(ctx, n, ins, pv, &out, r));
+        int bad = 0;
+        for (int y = 3; y < 10; y++)
+            for (int x = 2; x < 13; x++) {
+                const float *o = nprfx_image_at(&out, x, y);
+                bad += fabsf(o[0] - (2.0f * (x + 0.5f) + 3.0f * (y - 1.0f))) > 1e-4f;
+                bad += o[1] != -1.0f;
+            }
+        CHECK(bad == 0);
+    }
+    /* black border: a lookup far outside reads zero; clamp reads the edge */
+    nprfx_image_at(&ins[1], 0, 0)[0] = -4.0f; /* x - 8 */
+    set(n, pv, "filter", 0);
+    set(n, pv, "border", 1);
+    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK(nprfx_image_at(&out, 0, 0)[0] == 0.0f);
+    set(n, pv, "border", 0);
+    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK_NEAR(nprfx_image_at(&out, 0, 0)[0], 0.0f, 1e-6); /* clamped at (0, 0): ramp value 0 */
+    /* a NaN offset leaves the pixel in place; amount 0 is the identity */
+    nprfx_image_at(&ins[1], 5, 5)[0] = NAN;
+    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK(nprfx_image_at(&out, 5, 5)[0] == nprfx_image_at(&ins[0], 5, 5)[0]);
+    set(n, pv, "amount", 0.0);
+    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK(memcmp(out.data, ins[0].data, sizeof(float) * 16 * 12 * 2) == 0);
+    /* a one-channel offset is refused with a message naming the input */
+    nprfx_image one = nprfx_image_channels(&ins[1], 0, 1);
+    nprfx_image bad_ins[2] = {ins[0], one};
+    CHECK(run(ctx, n, bad_ins, pv, &out, r) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strstr(nprfx_last_error(ctx), "offset") != NULL);
+    nprfx_image_free(&ins[0]);
+    nprfx_image_free(&ins[1]);
+    nprfx_image_free(&out);
+}
+
+int main(void)
+{
+    nprfx_context *ctx = NULL;
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    nprfx_context_create(&ci, &ctx);
+    test_morphology(ctx);
+    test_warp(ctx);
+    nprfx_context_destroy(ctx);
+    return check_finish();
+}
