@@ -47,6 +47,19 @@ static void print_wrapped(FILE *f, const char *text, int indent, int width)
     }
 }
 
+/* Markdown table cell: '|' would end the cell, newlines the row. */
+static void md_cell(FILE *f, const char *text)
+{
+    for (const char *c = text ? text : ""; *c; c++) {
+        if (*c == '|')
+            fputs("\\|", f);
+        else if (*c == '\n')
+            fputs("<br>", f);
+        else
+            fputc(*c, f);
+    }
+}
+
 /* Markdown: paragraphs as they are, runs of verbatim lines (two leading spaces) fenced. */
 static void print_markdown(FILE *f, const char *text)
 {
@@ -108,9 +121,12 @@ static void print_node(FILE *f, const nprfx_node_desc *d, int md)
         input_channels_text(in, buf, sizeof buf);
         const char *req = (in->flags & NPRFX_INPUT_OPTIONAL) ? "optional" : "required";
         if (md) {
-            fprintf(f, "| `%s` | %s, %s%s | %s | %s |\n", in->name, buf, req,
-                    (in->flags & NPRFX_INPUT_TEMPORAL) ? ", other frames" : "",
-                    in->aov ? in->aov : "(as connected)", in->help ? in->help : "");
+            fprintf(f, "| `%s` | %s, %s%s | ", in->name, buf, req,
+                    (in->flags & NPRFX_INPUT_TEMPORAL) ? ", other frames" : "");
+            md_cell(f, in->aov ? in->aov : "(as connected)");
+            fputs(" | ", f);
+            md_cell(f, in->help);
+            fputs(" |\n", f);
         } else {
             fprintf(f, "  %-12s %s, %s%s\n", in->name, buf, req,
                     (in->flags & NPRFX_INPUT_TEMPORAL) ? ", fetched at other frames" : "");
@@ -136,10 +152,16 @@ static void print_node(FILE *f, const nprfx_node_desc *d, int md)
                            : (p->flags & NPRFX_PARAM_AREA) ? " (pixels²)"
                                                            : "";
         if (md) {
-            fprintf(f, "| `%s` | %s%s | `%s` | %s | %s", p->name, nprfx_param_type_name(p->type),
-                    unit, def, rng, p->help ? p->help : "");
-            for (int c = 0; p->type == NPRFX_PARAM_CHOICE && p->choice_help && p->choices[c]; c++)
-                fprintf(f, "<br>`%s`: %s", p->choices[c], p->choice_help[c]);
+            fprintf(f, "| `%s` | %s%s | `%s` | ", p->name, nprfx_param_type_name(p->type), unit,
+                    def);
+            md_cell(f, rng);
+            fputs(" | ", f);
+            md_cell(f, p->help);
+            for (int c = 0; p->type == NPRFX_PARAM_CHOICE && p->choice_help && p->choices[c];
+                 c++) {
+                fprintf(f, "<br>`%s`: ", p->choices[c]);
+                md_cell(f, p->choice_help[c]);
+            }
             fprintf(f, " |\n");
         } else {
             fprintf(f, "  %-12s %s%s, default %s%s%s\n", p->name, nprfx_param_type_name(p->type),
