@@ -684,11 +684,12 @@ typedef struct vec_convention {
     const char *layer; /* channels to look for: prev.x, prev.y, next.x, next.y */
     double sign[4];    /* multipliers applied to those channels */
 } vec_convention;
-/* Blender's Vector pass (measured on the sample renders, see samples/plates/README.md):
- * X,Y hold the motion towards the previous frame and Z,W towards the next one, in pixels with
- * image y up. */
+/* Blender's Vector pass (measured on the sample renders, see samples/plates/README.md), image y
+ * up: (X, Y) = position at frame i-1 minus position at i; (Z, W) = position at i minus position
+ * at i+1. So motion_prev = (X, -Y) and motion_next = (-Z, W). Nuke's backward/forward vectors
+ * point from this frame to the previous/next one, y up. */
 static const vec_convention vec_conventions[] = {
-    {"blender", "Vector.X,Vector.Y,Vector.Z,Vector.W", {1, -1, 1, -1}},
+    {"blender", "Vector.X,Vector.Y,Vector.Z,Vector.W", {1, -1, -1, 1}},
     {"nuke", "backward.u,backward.v,forward.u,forward.v", {1, -1, 1, -1}},
 };
 

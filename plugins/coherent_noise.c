@@ -61,7 +61,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      "motion_prev.X,motion_prev.Y", 2, NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED, 0},
     {"motion_next", "Motion Next",
      "symmetric mode: offset in pixels (y down) to where the surface point will be in the next "
-     "frame. Blender: (Vector.Z, -Vector.W). Nuke: (forward.u, -forward.v).",
+     "frame. Blender: (-Vector.Z, Vector.W). Nuke: (forward.u, -forward.v).",
      "motion_next.X,motion_next.Y", 2, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, 0,
      NPRFX_FETCH_UNBOUNDED},
     {"zvel", "Z Velocity",
@@ -294,8 +294,9 @@ static const char help[] =
     "Motion convention (DESIGN.md §2): motion vectors are in pixels of the full-resolution "
     "frame, y pointing down; motion_prev(x) goes from x to the same surface point in the "
     "previous frame, motion_next(x) to the next frame. Blender's Vector pass holds (to previous "
-    "X, Y, to next X, Y) with y up: motion_prev = (Vector.X, -Vector.Y), motion_next = "
-    "(Vector.Z, -Vector.W) (render without motion blur). Nuke's ScanlineRender motion vectors: "
+    "X, Y, and this frame's position minus the next one) with y up, as measured on the sample "
+    "plates: motion_prev = (Vector.X, -Vector.Y), motion_next = (-Vector.Z, Vector.W); a read "
+    "node with \"vectors\": \"blender\" applies exactly this mapping. Nuke's ScanlineRender motion vectors: "
     "motion_prev = (backward.u, -backward.v), motion_next = (forward.u, -forward.v); check the "
     "sign on one frame (some tools store the offset from the other frame to this one: negate "
     "it). Under a host proxy the vectors are scaled by the render scale.\n"
