@@ -1,4 +1,6 @@
 /* Compositing formulas: one function per formula, see nprfx/blend.h. */
+#include <math.h>
+
 #include "nprfx/blend.h"
 
 double nprfx_blend_alpha(double c0, double c1, double a)
@@ -31,6 +33,11 @@ double nprfx_blend_pigment(double c, double d)
     return c - (c - c * c) * (d - 1.0);
 }
 
+double nprfx_blend_difference(double c0, double c1, double f)
+{
+    return f * fabs(c0 - c1);
+}
+
 double nprfx_blend_pigment_density(double t, double beta)
 {
     return 1.0 + beta * (t - 0.5);
@@ -53,6 +60,8 @@ double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c
     case NPRFX_BLEND_PIGMENT:
         return nprfx_blend_alpha(c0, nprfx_blend_pigment(c0, nprfx_blend_pigment_density(c1, f)),
                                  a);
+    case NPRFX_BLEND_DIFFERENCE:
+        return nprfx_blend_alpha(c0, nprfx_blend_difference(c0, c1, f), a);
     default:
         return c0;
     }

@@ -12,7 +12,7 @@ enum { P_MODE, P_FACTOR, P_OPACITY, P_GAIN_BASE, P_GAIN_LAYER, P_BACKGROUND, P_C
 
 /* Same order as nprfx_blend_mode. */
 static const char *const mode_names[] = {
-    "alphablend", "overlay", "overlayalpha", "multiply", "screen", "pigment", NULL};
+    "alphablend", "overlay", "overlayalpha", "multiply", "screen", "pigment", "difference", NULL};
 _Static_assert(sizeof mode_names / sizeof mode_names[0] == NPRFX_BLEND_MODE_COUNT + 1,
                "blend: mode names must follow nprfx_blend_mode");
 
@@ -24,6 +24,8 @@ static const char *const mode_help[] = {
     "1 - (1 - c0)(1 - c1), mixed over c0 by a",
     "C - (C - C^2)(d - 1) with C = c0, d = 1 + f (c1 - 0.5), mixed over c0 by a (Bousseau et al. "
     "2006 pigment density: d > 1 darkens, d < 1 lightens)",
+    "f |c0 - c1|, mixed over c0 by a: e.g. two frames of coherent noise, which differ only "
+    "where things move (Kass & Pesare's Figure 2)",
     NULL};
 
 static const nprfx_input_desc inputs[IN_COUNT] = {
@@ -265,7 +267,8 @@ const nprfx_node_desc nprfx_node_blend = {
             "  multiply      (1 - a) c0 + a * c0 c1\n"
             "  screen        (1 - a) c0 + a * (1 - (1 - c0)(1 - c1))\n"
             "  pigment       (1 - a) C + a * (C - (C - C^2)(d - 1)), C = c0, d = 1 + f (c1 - 0.5)\n"
-            "overlay, multiply, screen and pigment apply a as a layer opacity over c0, as "
+            "  difference    (1 - a) c0 + a * f |c0 - c1|\n"
+            "overlay, multiply, screen, pigment and difference apply a as a layer opacity over c0, as "
             "compositors do; with a = 1 they are the bare formulas. alphablend and overlayalpha "
             "take a inside the formula, as the cookbook writes them.\n"
             "\n"

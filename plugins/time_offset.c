@@ -22,7 +22,7 @@ static const nprfx_param_desc params[P_COUNT] = {
     {.name = "offset",
      .label = "Offset",
      .help = "Frames to shift by: the output at frame i is the input at frame i + offset (-1: the "
-             "previous frame).",
+             "previous frame), held at the shot's first and last frames.",
      .type = NPRFX_PARAM_INT,
      .def = {-1},
      .soft_min = -10,
@@ -39,13 +39,20 @@ static nprfx_result time_offset_render(const nprfx_render_args *args)
     if (!args->fetch)
         return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                            "time-offset: this host cannot fetch other frames");
+    /* Frames outside the shot hold its first or last frame, so frame 1 of a "previous frame"
+     * graph does not ask for a frame 0 that was never rendered. */
+    double t = args->time + offset;
+    if (args->first_frame <= args->last_frame) {
+        if (t < args->first_frame) t = args->first_frame;
+        if (t > args->last_frame) t = args->last_frame;
+    }
     nprfx_image other;
-    nprfx_result r = args->fetch(args->fetch_user, IN_IMAGE, args->time + offset, &other);
+    nprfx_result r = args->fetch(args->fetch_user, IN_IMAGE, t, &other);
     if (r) return r;
     if (other.channels != args->output->channels)
         return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,
                            "time-offset: input 'image' has %d channels at frame %g but %d at %g",
-                           other.channels, args->time + offset, args->output->channels,
+                           other.channels, t, args->output->channels,
                            args->time);
     /* Outside the other frame's data window the output is 0, as EXR readers do. */
     nprfx_image win = nprfx_image_crop(args->output, args->window);

@@ -10,6 +10,7 @@
  *   multiply(c0, c1)                   = c0 c1
  *   screen(c0, c1)                     = 1 - (1 - c0)(1 - c1)
  *   pigment(C, d)                      = C - (C - C^2)(d - 1)
+ *   difference(c0, c1, f)              = f |c0 - c1|
  *
  * pigment is the colour modification of Bousseau, Kaplan, Thollot, Sillion, "Interactive
  * watercolor rendering with temporal coherence and abstraction" (NPAR 2006): d is a pigment
@@ -32,7 +33,8 @@ typedef enum nprfx_blend_mode {
     NPRFX_BLEND_MULTIPLY = 3,
     NPRFX_BLEND_SCREEN = 4,
     NPRFX_BLEND_PIGMENT = 5,
-    NPRFX_BLEND_MODE_COUNT = 6
+    NPRFX_BLEND_DIFFERENCE = 6,
+    NPRFX_BLEND_MODE_COUNT = 7
 } nprfx_blend_mode;
 
 double nprfx_blend_alpha(double c0, double c1, double a);
@@ -41,6 +43,9 @@ double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f, do
 double nprfx_blend_multiply(double c0, double c1);
 double nprfx_blend_screen(double c0, double c1);
 double nprfx_blend_pigment(double c, double d);
+/* Scaled absolute difference (a compositor's "difference" merge): what changed between two
+ * frames (Kass & Pesare's Figure 2). */
+double nprfx_blend_difference(double c0, double c1, double f);
 /* Bousseau et al.'s density from a texture value: d = 1 + beta (t - 0.5). */
 double nprfx_blend_pigment_density(double t, double beta);
 
@@ -51,6 +56,7 @@ double nprfx_blend_pigment_density(double t, double beta);
  *   multiply      nprfx_blend_alpha(c0, multiply(c0, c1), a)
  *   screen        nprfx_blend_alpha(c0, screen(c0, c1), a)
  *   pigment       nprfx_blend_alpha(c0, pigment(c0, pigment_density(c1, f)), a)
+ *   difference    nprfx_blend_alpha(c0, difference(c0, c1, f), a)
  * i.e. the last four are mixed over c0 by a, as compositors apply a layer's opacity; `back` is
  * used by overlayalpha only. An out-of-range mode returns c0. */
 double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1, double f,

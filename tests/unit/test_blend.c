@@ -143,6 +143,11 @@ static void test_formulas(void)
     /* pigment: c0 0.5, layer 0.75, f 2 => d 1.5 => 0.375; a 0.5 => 0.4375 */
     CHECK_NEAR(nprfx_blend_apply(NPRFX_BLEND_PIGMENT, 9, 0.5, 0.75, 2, 1.0), 0.375, 1e-12);
     CHECK_NEAR(nprfx_blend_apply(NPRFX_BLEND_PIGMENT, 9, 0.5, 0.75, 2, 0.5), 0.4375, 1e-12);
+    /* difference: f |c0 - c1|: 2 |0.5 - 0.75| = 0.5 both ways; a 0.5 => 0.25 + 0.25 = 0.5 */
+    CHECK_NEAR(nprfx_blend_difference(0.5, 0.75, 2), 0.5, 1e-12);
+    CHECK_NEAR(nprfx_blend_difference(0.75, 0.5, 2), 0.5, 1e-12);
+    CHECK_NEAR(nprfx_blend_apply(NPRFX_BLEND_DIFFERENCE, 9, 0.5, 0.75, 2, 1.0), 0.5, 1e-12);
+    CHECK_NEAR(nprfx_blend_apply(NPRFX_BLEND_DIFFERENCE, 9, 0.2, 0.75, 2, 0.5), 0.65, 1e-12);
 }
 
 /* ---- the node ---- */
@@ -152,7 +157,7 @@ static void test_descriptor(void)
     CHECK(node != NULL);
     CHECK(strcmp(node->id, "blend") == 0);
     const nprfx_param_desc *m = &node->params[PI("mode")];
-    const char *want[] = {"alphablend", "overlay", "overlayalpha", "multiply", "screen", "pigment"};
+    const char *want[] = {"alphablend", "overlay", "overlayalpha", "multiply", "screen", "pigment", "difference"};
     for (int i = 0; i < NPRFX_BLEND_MODE_COUNT; i++)
         CHECK(m->choices[i] && strcmp(m->choices[i], want[i]) == 0);
     CHECK(m->choices[NPRFX_BLEND_MODE_COUNT] == NULL);
