@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Regenerate the pictures of docs/styles.md: frame 12 of every sample graph, each PNG preview it
+# writes copied to docs/images/<graph>-<preview>.png. Usage: docs/make_pictures.sh build/nprfx
+set -euo pipefail
+NPRFX=$(realpath "${1:?usage: docs/make_pictures.sh PATH/TO/nprfx}")
+here=$(cd "$(dirname "$0")" && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for g in "$here"/../samples/graphs/*.json; do
+  name=$(basename "$g" .json)
+  "$NPRFX" run "$g" --frames 12 --output-dir "$tmp/$name" --quiet
+  find "$tmp/$name" -name '*.0012.png' | while read -r png; do
+    cp "$png" "$here/images/$name-$(basename "$png" .0012.png).png"
+  done
+done
+ls "$here"/images
