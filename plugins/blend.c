@@ -153,33 +153,69 @@ typedef struct blend_job {
     nprfx_image *out;
 } blend_job;
 
+/* Pointer to pixel (x0, y) when the whole row span [x0, x1) lies inside im's bounds, else NULL. */
+static const float *row_span(const nprfx_image *im, int x0, int x1, int y)
+{
+    const nprfx_rect b = im->bounds;
+    return y >= b.y0 && y < b.y1 && x0 >= b.x0 && x1 <= b.x1 ? nprfx_image_at(im, x0, y) : NULL;
+}
+
+/* One pixel; b, l, k (back) and the optional alpha/coverage values already fetched. */
+static inline void blend_pixel(const blend_job *j, const float *b, const float *l, const float *k,
+                               double a, double cov, float *o)
+{
+    a = clamp01(a);
+    for (int c = 0; c < j->ncol; c++) {
+        double c0 = j->gain_base * b[c];
+        double c1 = j->gain_layer * l[c * j->layer_step];
+        double r = nprfx_blend_apply(j->mode, k[c * j->back_step], c0, c1, j->factor, a);
+        /* coverage 1 returns r exactly: (1 - 1) * bg + 1 * r */
+        o[c] = (float)nprfx_blend_alpha(j->bg[c], r, cov);
+    }
+    if (j->nch > j->ncol) o[3] = (float)nprfx_blend_alpha(j->bg[3], b[3], cov);
+}
+
 static void blend_rows(void *user, int begin, int end, int worker)
 {
     (void)worker;
     const blend_job *j = user;
+    const int x0 = j->window.x0, x1 = j->window.x1;
     for (int y = j->window.y0 + begin; y < j->window.y0 + end; y++) {
-        for (int x = j->window.x0; x < j->window.x1; x++) {
+        /* Fast path: every connected input covers the row, so walk pointers by their strides
+         * instead of testing bounds per pixel. */
+        const float *bp = row_span(j->base, x0, x1, y), *lp = row_span(j->layer, x0, x1, y);
+        const float *kp = j->back ? row_span(j->back, x0, x1, y) : bp;
+        const float *ap = j->alpha ? row_span(j->alpha, x0, x1, y) : NULL;
+        const float *cp = j->coverage ? row_span(j->coverage, x0, x1, y) : NULL;
+        float *o = nprfx_image_at(j->out, x0, y);
+        if (bp && lp && kp && (!j->alpha || ap) && (!j->coverage || cp)) {
+            const ptrdiff_t bs = j->base->pixel_stride, ls = j->layer->pixel_stride;
+            const ptrdiff_t ks = j->back ? j->back->pixel_stride : bs;
+            const ptrdiff_t as = ap ? j->alpha->pixel_stride : 0;
+            const ptrdiff_t cs = cp ? j->coverage->pixel_stride : 0;
+            const ptrdiff_t os = j->out->pixel_stride;
+            for (int x = x0; x < x1; x++) {
+                double a = ap ? j->opacity * ap[0] : j->opacity;
+                double cov = cp ? clamp01(cp[0]) : 1.0;
+                blend_pixel(j, bp, lp, kp, a, cov, o);
+                bp += bs, lp += ls, kp += ks, o += os;
+                if (ap) ap += as;
+                if (cp) cp += cs;
+            }
+            continue;
+        }
+        for (int x = x0; x < x1; x++) {
             const float *b = pixel_or_zero(j->base, x, y);
             const float *l = pixel_or_zero(j->layer, x, y);
             const float *k = j->back ? pixel_or_zero(j->back, x, y) : b;
             double a = j->opacity;
             if (j->alpha) a *= pixel_or_zero(j->alpha, x, y)[0];
-            a = clamp01(a);
             double cov = j->coverage ? clamp01(pixel_or_zero(j->coverage, x, y)[0]) : 1.0;
-            float *o = nprfx_image_at(j->out, x, y);
-            for (int c = 0; c < j->ncol; c++) {
-                double c0 = j->gain_base * b[c];
-                double c1 = j->gain_layer * l[c * j->layer_step];
-                double r = nprfx_blend_apply(j->mode, k[c * j->back_step], c0, c1, j->factor, a);
-                /* coverage 1 returns r exactly: (1 - 1) * bg + 1 * r */
-                o[c] = (float)nprfx_blend_alpha(j->bg[c], r, cov);
-            }
-            if (j->nch > j->ncol) o[3] = (float)nprfx_blend_alpha(j->bg[3], b[3], cov);
+            blend_pixel(j, b, l, k, a, cov, nprfx_image_at(j->out, x, y));
         }
     }
 }
 
-/* 1 channel broadcasts; otherwise the colour channels must be there (a 4th, alpha, may be). */
 static int channels_fit(int have, int nch, int ncol)
 {
     return have == 1 || have == ncol || have == nch || (ncol == 3 && have == 4);
@@ -243,7 +279,7 @@ static nprfx_result blend_render(const nprfx_render_args *args)
     }
     int rows = nprfx_rect_height(j.window);
     if (rows == 0 || nprfx_rect_width(j.window) == 0) return NPRFX_OK;
-    nprfx_parallel_for(nprfx_context_executor(ctx), rows, 8, blend_rows, &j);
+    nprfx_parallel_for(nprfx_context_executor(ctx), rows, 16, blend_rows, &j);
     return NPRFX_OK;
 }
 

@@ -1,7 +1,8 @@
 /* nprfx — compositing formulas (style cookbook §4; Bousseau et al. 2006 for pigment density).
  *
- * Each blend mode is one formula written once, here and in core/blend.c (as openfx-supportext's
- * ofxsMerging.h does for merge operators); the blend node and any other node call these. All
+ * Each blend mode is one formula written once, here (as openfx-supportext's ofxsMerging.h does
+ * for merge operators), inline so the per-pixel loops of the blend node and any other node
+ * that calls them compile to straight arithmetic. All
  * functions work on one channel value and do not clamp: values are scene-linear floats.
  *
  *   alphaBlend(c0, c1, a)              = (1 - a) c0 + a c1
@@ -20,6 +21,8 @@
 #ifndef NPRFX_BLEND_H
 #define NPRFX_BLEND_H
 
+#include <math.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -37,17 +40,42 @@ typedef enum nprfx_blend_mode {
     NPRFX_BLEND_MODE_COUNT = 7
 } nprfx_blend_mode;
 
-double nprfx_blend_alpha(double c0, double c1, double a);
-double nprfx_blend_overlay(double c0, double c1, double f);
-double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f, double a);
-double nprfx_blend_multiply(double c0, double c1);
-double nprfx_blend_screen(double c0, double c1);
-double nprfx_blend_pigment(double c, double d);
+static inline double nprfx_blend_alpha(double c0, double c1, double a)
+{
+    return (1.0 - a) * c0 + a * c1;
+}
+static inline double nprfx_blend_overlay(double c0, double c1, double f)
+{
+    return c0 * f * (1.0 - (1.0 - c0) * (1.0 - c1));
+}
+static inline double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f,
+                                               double a)
+{
+    return back * (1.0 - a) + a * c0 * f * (1.0 - (1.0 - c0 * a) * (1.0 - c1));
+}
+static inline double nprfx_blend_multiply(double c0, double c1)
+{
+    return c0 * c1;
+}
+static inline double nprfx_blend_screen(double c0, double c1)
+{
+    return 1.0 - (1.0 - c0) * (1.0 - c1);
+}
+static inline double nprfx_blend_pigment(double c, double d)
+{
+    return c - (c - c * c) * (d - 1.0);
+}
 /* Scaled absolute difference (a compositor's "difference" merge): what changed between two
  * frames (Kass & Pesare's Figure 2). */
-double nprfx_blend_difference(double c0, double c1, double f);
+static inline double nprfx_blend_difference(double c0, double c1, double f)
+{
+    return f * fabs(c0 - c1);
+}
 /* Bousseau et al.'s density from a texture value: d = 1 + beta (t - 0.5). */
-double nprfx_blend_pigment_density(double t, double beta);
+static inline double nprfx_blend_pigment_density(double t, double beta)
+{
+    return 1.0 + beta * (t - 0.5);
+}
 
 /* One channel in one mode with the opacity rule the blend node documents:
  *   alphablend    nprfx_blend_alpha(c0, c1, a)
@@ -59,8 +87,23 @@ double nprfx_blend_pigment_density(double t, double beta);
  *   difference    nprfx_blend_alpha(c0, difference(c0, c1, f), a)
  * i.e. the last four are mixed over c0 by a, as compositors apply a layer's opacity; `back` is
  * used by overlayalpha only. An out-of-range mode returns c0. */
-double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1, double f,
-                         double a);
+static inline double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1,
+                                       double f, double a)
+{
+    switch (mode) {
+    case NPRFX_BLEND_ALPHABLEND: return nprfx_blend_alpha(c0, c1, a);
+    case NPRFX_BLEND_OVERLAYALPHA: return nprfx_blend_overlay_alpha(back, c0, c1, f, a);
+    case NPRFX_BLEND_OVERLAY: return nprfx_blend_alpha(c0, nprfx_blend_overlay(c0, c1, f), a);
+    case NPRFX_BLEND_MULTIPLY: return nprfx_blend_alpha(c0, nprfx_blend_multiply(c0, c1), a);
+    case NPRFX_BLEND_SCREEN: return nprfx_blend_alpha(c0, nprfx_blend_screen(c0, c1), a);
+    case NPRFX_BLEND_PIGMENT:
+        return nprfx_blend_alpha(c0, nprfx_blend_pigment(c0, nprfx_blend_pigment_density(c1, f)),
+                                 a);
+    case NPRFX_BLEND_DIFFERENCE:
+        return nprfx_blend_alpha(c0, nprfx_blend_difference(c0, c1, f), a);
+    default: return c0;
+    }
+}
 
 #ifdef __cplusplus
 }
