@@ -1,0 +1,32 @@
+/* nprfx CLI — a minimal OpenFX host that runs graph nodes through the plug-in bundle instead of
+ * calling their render functions: `nprfx run GRAPH --ofx build/plugins/ofx/nprfx.ofx.bundle`.
+ *
+ * It proves the OFX path (the adapter in plugins/ofx/) gives the same pixels as the direct path;
+ * it is not a substitute for real hosts. It loads the bundle with dlopen, describes every plug-in
+ * (checking that each param's type, default and ranges match the node's descriptor), creates
+ * one instance per graph node, sets params and channel selectors from the graph, serves clip
+ * images from the runner's inputs (at other times through the runner's fetch), and copies the
+ * rendered window back. */
+#ifndef NPRFX_CLI_OFX_HOST_H
+#define NPRFX_CLI_OFX_HOST_H
+
+#include "graph.h"
+#include "nprfx/nprfx.h"
+
+typedef struct nprfx_ofx_host nprfx_ofx_host;
+
+/* Load BUNDLE (an "X.ofx.bundle" folder or the .ofx binary inside it), load and describe all its
+ * plug-ins. Errors go to ctx; its executor backs the multithread suite. One host per process. */
+nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, nprfx_ofx_host **out);
+
+/* Number of plug-ins the bundle exports. */
+int nprfx_ofx_host_plugin_count(const nprfx_ofx_host *h);
+
+/* The hook to pass in nprfx_graph_options.hook; valid until the host is closed. */
+const nprfx_render_hook *nprfx_ofx_host_hook(nprfx_ofx_host *h);
+
+/* Unload the plug-ins and the bundle. Free every graph using the hook first (that destroys the
+ * instances). NULL is ignored. */
+void nprfx_ofx_host_close(nprfx_ofx_host *h);
+
+#endif

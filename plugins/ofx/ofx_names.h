@@ -1,0 +1,164 @@
+/* nprfx — how a node descriptor maps onto OpenFX names: plug-in identifiers, clip names,
+ * channel-selector params and their options. Everything is derived from the descriptor, never
+ * written a second time; the adapter (plugins/ofx/) and the test host (cli/ofx_host.c) include
+ * this one header so both sides agree on the derivation. */
+#ifndef NPRFX_OFX_NAMES_H
+#define NPRFX_OFX_NAMES_H
+
+#include <ctype.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "nprfx/node.h"
+
+#define NPRFX_OFX_ID_PREFIX "org.nprfx."
+#define NPRFX_OFX_OUTPUT_CLIP "Output"
+#define NPRFX_OFX_SOURCE_CLIP "Source"
+#define NPRFX_OFX_MASK_CLIP "Mask"
+#define NPRFX_OFX_NAME_MAX 128
+
+/* "coherent-noise" -> "org.nprfx.CoherentNoise". */
+static inline void nprfx_ofx_plugin_id(const nprfx_node_desc *d, char *buf, size_t n)
+{
+    size_t k = (size_t)snprintf(buf, n, "%s", NPRFX_OFX_ID_PREFIX);
+    int up = 1;
+    for (const char *s = d->id; *s && k + 1 < n; s++) {
+        if (!isalnum((unsigned char)*s)) {
+            up = 1;
+            continue;
+        }
+        buf[k++] = up ? (char)toupper((unsigned char)*s) : *s;
+        up = 0;
+    }
+    buf[k < n ? k : n - 1] = 0;
+}
+
+/* The input OFX calls "Source": the one flagged NPRFX_INPUT_MAIN, else the one labelled
+ * "Source" (coherent-noise's clip to make coherent), else the first; -1 without inputs. */
+static inline int nprfx_ofx_main_input(const nprfx_node_desc *d)
+{
+    for (int k = 0; k < d->num_inputs; k++)
+        if (d->inputs[k].flags & NPRFX_INPUT_MAIN) return k;
+    for (int k = 0; k < d->num_inputs; k++)
+        if (d->inputs[k].label && !strcmp(d->inputs[k].label, NPRFX_OFX_SOURCE_CLIP)) return k;
+    return d->num_inputs > 0 ? 0 : -1;
+}
+
+/* Only a node that modifies an image (NPRFX_INPUT_MAIN) gets the Mask clip and mix params. */
+static inline int nprfx_ofx_maskable(const nprfx_node_desc *d)
+{
+    for (int k = 0; k < d->num_inputs; k++)
+        if (d->inputs[k].flags & NPRFX_INPUT_MAIN) return 1;
+    return 0;
+}
+
+static inline int nprfx_ofx_reserved_clip(const char *s)
+{
+    return !strcmp(s, NPRFX_OFX_OUTPUT_CLIP) || !strcmp(s, NPRFX_OFX_SOURCE_CLIP) ||
+           !strcmp(s, NPRFX_OFX_MASK_CLIP);
+}
+
+/* Clip name of input k: "Source" for the main input, else its label without spaces or
+ * punctuation ("Z Velocity" -> "ZVelocity"); a clash with a reserved name gets the input's
+ * name appended, so every clip name stays unique. */
+static inline void nprfx_ofx_clip_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
+{
+    if (k == nprfx_ofx_main_input(d)) {
+        snprintf(buf, n, "%s", NPRFX_OFX_SOURCE_CLIP);
+        return;
+    }
+    const char *label = d->inputs[k].label ? d->inputs[k].label : d->inputs[k].name;
+    size_t j = 0;
+    int up = 1;
+    for (const char *s = label; *s && j + 1 < n; s++) {
+        if (!isalnum((unsigned char)*s)) {
+            up = 1;
+            continue;
+        }
+        buf[j++] = up ? (char)toupper((unsigned char)*s) : *s;
+        up = 0;
+    }
+    buf[j] = 0;
+    if (!j || nprfx_ofx_reserved_clip(buf)) {
+        size_t len = strlen(buf);
+        snprintf(buf + len, n - len, "_%s", d->inputs[k].name);
+    }
+}
+
+/* Param names the adapter adds beside the descriptor's own; a clash with a descriptor param
+ * (whose names are snake_case) gets an "ofx" prefix. */
+static inline void nprfx_ofx_extra_param(const nprfx_node_desc *d, const char *want, char *buf,
+                                         size_t n)
+{
+    int len = nprfx_node_param_index(d, want) < 0
+                  ? snprintf(buf, n, "%s", want)
+                  : snprintf(buf, n, "ofx%c%s", toupper((unsigned char)want[0]), want + 1);
+    if (len < 0 || (size_t)len >= n) buf[n - 1] = 0; /* names this long do not occur */
+}
+
+/* The channel selector of input k: "<clip name, first letter lower>Channels"
+ * ("Source" -> "sourceChannels", "ZVelocity" -> "zVelocityChannels"). */
+static inline void nprfx_ofx_selector_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
+{
+    char clip[NPRFX_OFX_NAME_MAX], want[NPRFX_OFX_NAME_MAX];
+    nprfx_ofx_clip_name(d, k, clip, sizeof clip - 8);
+    clip[0] = (char)tolower((unsigned char)clip[0]);
+    if (snprintf(want, sizeof want, "%sChannels", clip) >= (int)sizeof want)
+        want[sizeof want - 1] = 0;
+    nprfx_ofx_extra_param(d, want, buf, n);
+}
+
+/* Host images carry RGBA or Alpha only, so an input's channels are a contiguous run of the
+ * RGBA components, picked by its selector (openfx-misc style). */
+typedef struct nprfx_ofx_chan_option {
+    const char *label;
+    int first, count; /* components first .. first+count-1 of R,G,B,A */
+} nprfx_ofx_chan_option;
+
+static const nprfx_ofx_chan_option nprfx_ofx_chan_options[] = {
+    {"RGBA", 0, 4}, {"RGB", 0, 3}, {"GBA", 1, 3}, {"RG", 0, 2}, {"GB", 1, 2},
+    {"BA", 2, 2},   {"R", 0, 1},   {"G", 1, 1},   {"B", 2, 1},  {"A", 3, 1},
+};
+#define NPRFX_OFX_CHAN_OPTIONS                                                                     \
+    ((int)(sizeof nprfx_ofx_chan_options / sizeof nprfx_ofx_chan_options[0]))
+
+/* The selector's options for an input (indices into nprfx_ofx_chan_options): those with the
+ * input's exact channel count, or all of them for "any count from 1 to 4". Returns how many. */
+static inline int nprfx_ofx_selector_options(const nprfx_input_desc *in, int *opts)
+{
+    int n = 0;
+    for (int i = 0; i < NPRFX_OFX_CHAN_OPTIONS; i++)
+        if (in->channels <= 0 || nprfx_ofx_chan_options[i].count == in->channels) opts[n++] = i;
+    return n;
+}
+
+/* Position among the input's options of (first, count); -1 when it has none such. */
+static inline int nprfx_ofx_selector_find(const nprfx_input_desc *in, int first, int count)
+{
+    int opts[NPRFX_OFX_CHAN_OPTIONS];
+    int n = nprfx_ofx_selector_options(in, opts);
+    for (int i = 0; i < n; i++)
+        if (nprfx_ofx_chan_options[opts[i]].first == first &&
+            nprfx_ofx_chan_options[opts[i]].count == count)
+            return i;
+    return -1;
+}
+
+/* Default option: the first R/G/B/A single-letter alternative of the input's AOV hint (a
+ * coverage input that looks for "coverage|Coverage|A" reads A), else the first option. */
+static inline int nprfx_ofx_selector_default(const nprfx_input_desc *in)
+{
+    const char *s = in->aov;
+    while (s && *s) {
+        const char *e = strchr(s, '|');
+        size_t len = e ? (size_t)(e - s) : strlen(s);
+        if (len == 1 && strchr("RGBA", *s)) {
+            int i = nprfx_ofx_selector_find(in, (int)(strchr("RGBA", *s) - "RGBA"), 1);
+            if (i >= 0) return i;
+        }
+        s = e ? e + 1 : NULL;
+    }
+    return 0;
+}
+
+#endif

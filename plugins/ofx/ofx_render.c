@@ -1,0 +1,614 @@
+/* nprfx OpenFX adapter — the render action: host images become nprfx views, params are
+ * evaluated at the render time, and the node's render function runs with an executor built on
+ * the host's multithread suite and a fetch callback that gets clip images at other times.
+ *
+ * Coordinates. OFX pixel coordinates grow upward; nprfx's grow downward (DESIGN.md §2). Every
+ * frame-aligned image is flipped about the effect's frame [fy1, fy2): y_down = fy1 + fy2 - 1 -
+ * y_up, which maps the frame onto itself, so a frame at (0, 0, W, H) keeps those numbers and
+ * clips that share the canonical space stay aligned. An unaligned input (a lookup map) is
+ * flipped about its own bounds, as the runner passes it whole. The flip is free: a view starts
+ * at the top row and steps by -rowBytes, which also covers hosts whose rowBytes are negative. */
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ofx_internal.h"
+
+#define G nprfx_ofx_g
+
+/* ---- the executor on the host's multithread suite -------------------------------------------- */
+
+typedef struct mt_job {
+    nprfx_range_fn fn;
+    void *user;
+    int count, grain;
+    atomic_int next;
+} mt_job;
+
+static void mt_run(mt_job *j, int worker)
+{
+    for (;;) {
+        int begin = atomic_fetch_add(&j->next, j->grain);
+        if (begin >= j->count) break;
+        int end = begin + j->grain < j->count ? begin + j->grain : j->count;
+        j->fn(j->user, begin, end, worker);
+    }
+}
+
+static void mt_thread(unsigned int index, unsigned int max, void *arg)
+{
+    (void)max;
+    mt_job *j = arg;
+    mt_run(j, (int)index);
+}
+
+static int mt_workers(void *impl)
+{
+    (void)impl;
+    unsigned int n = 1;
+    if (!G.mt || G.mt->multiThreadNumCPUs(&n) != kOfxStatOK || n < 1) return 1;
+    return n > 256 ? 256 : (int)n;
+}
+
+/* Threads pull chunks from one counter, so which thread computes a chunk never matters (the
+ * nodes write disjoint output per item). The suite cannot be entered recursively: a nested call,
+ * or a host without the suite, runs on the calling thread under that thread's own index, which
+ * keeps worker indices unique among concurrent calls. If the host fails to launch threads, the
+ * calling thread finishes whatever is left. */
+static void mt_for(void *impl, int count, int grain, nprfx_range_fn fn, void *user)
+{
+    if (count <= 0) return;
+    if (grain < 1) grain = 1;
+    mt_job j;
+    j.fn = fn;
+    j.user = user;
+    j.count = count;
+    j.grain = grain;
+    atomic_init(&j.next, 0);
+    int chunks = (count - 1) / grain + 1;
+    int n = mt_workers(impl);
+    if (n > chunks) n = chunks;
+    int worker = 0;
+    if (G.mt && G.mt->multiThreadIsSpawnedThread()) {
+        unsigned int index = 0;
+        if (G.mt->multiThreadIndex(&index) == kOfxStatOK) worker = (int)index;
+    } else if (G.mt && n > 1) {
+        (void)G.mt->multiThread(mt_thread, (unsigned int)n, &j);
+    }
+    mt_run(&j, worker);
+}
+
+static const nprfx_executor host_executor = {sizeof(nprfx_executor), NULL, mt_workers, mt_for};
+
+/* ---- host images ----------------------------------------------------------------------------- */
+
+typedef struct ofx_img {
+    OfxPropertySetHandle h; /* NULL: nothing fetched */
+    char *data;             /* pixel (bounds.x1, bounds.y1) */
+    int row_bytes;
+    OfxRectI b;
+    int ncomp; /* 1 Alpha, 3 RGB, 4 RGBA */
+} ofx_img;
+
+static void img_release(ofx_img *im)
+{
+    if (im->h) G.fx->clipReleaseImage(im->h);
+    memset(im, 0, sizeof *im);
+}
+
+static OfxStatus img_fetch(OfxImageClipHandle clip, OfxTime t, ofx_img *im)
+{
+    memset(im, 0, sizeof *im);
+    OfxPropertySetHandle h = NULL;
+    OfxStatus st = G.fx->clipGetImage(clip, t, NULL, &h);
+    if (st != kOfxStatOK) return st;
+    if (!h) return kOfxStatFailed;
+    im->h = h;
+    void *data = NULL;
+    char *depth = NULL, *comps = NULL;
+    int b[4] = {0, 0, 0, 0};
+    if (G.prop->propGetPointer(h, kOfxImagePropData, 0, &data) != kOfxStatOK ||
+        G.prop->propGetInt(h, kOfxImagePropRowBytes, 0, &im->row_bytes) != kOfxStatOK ||
+        G.prop->propGetIntN(h, kOfxImagePropBounds, 4, b) != kOfxStatOK ||
+        G.prop->propGetString(h, kOfxImageEffectPropPixelDepth, 0, &depth) != kOfxStatOK ||
+        G.prop->propGetString(h, kOfxImageEffectPropComponents, 0, &comps) != kOfxStatOK) {
+        img_release(im);
+        return kOfxStatErrBadHandle;
+    }
+    im->data = data;
+    im->b.x1 = b[0], im->b.y1 = b[1], im->b.x2 = b[2], im->b.y2 = b[3];
+    im->ncomp = !strcmp(comps, kOfxImageComponentRGBA)    ? 4
+                : !strcmp(comps, kOfxImageComponentAlpha) ? 1
+                : !strcmp(comps, kOfxImageComponentRGB)   ? 3
+                                                          : 0;
+    if (strcmp(depth, kOfxBitDepthFloat) || !im->ncomp || im->row_bytes % (int)sizeof(float) ||
+        (!im->data && im->b.x2 > im->b.x1 && im->b.y2 > im->b.y1)) {
+        img_release(im);
+        return kOfxStatErrImageFormat;
+    }
+    return kOfxStatOK;
+}
+
+/* Pixel (x, y_up) of a host image, component c of its own layout. */
+static float *img_at(const ofx_img *im, int x, int y, int c)
+{
+    return (float *)(im->data + (ptrdiff_t)(y - im->b.y1) * im->row_bytes) +
+           (ptrdiff_t)(x - im->b.x1) * im->ncomp + c;
+}
+
+static nprfx_rect flip_rect(OfxRectI b, int f)
+{
+    if (b.x2 <= b.x1 || b.y2 <= b.y1) return nprfx_rect_make(b.x1, 0, b.x1, 0);
+    return nprfx_rect_make(b.x1, f - (b.y2 - 1), b.x2, f - b.y1 + 1);
+}
+
+/* Which host component holds RGBA component c (-1: the image has none). */
+static int host_comp(const ofx_img *im, int c)
+{
+    if (im->ncomp == 4) return c;
+    if (im->ncomp == 3) return c < 3 ? c : -1;
+    return c == 3 ? 0 : -1;
+}
+
+static float dummy_pixel[4];
+
+/* A view of `count` RGBA components from `first` (the selector's pick), flipped about f. It
+ * shares the host's pixels when the image has those components; an Alpha image read for a single
+ * channel gives its alpha whatever the pick (a matte in an Alpha-only clip is still the data the
+ * user routed there); otherwise the components are copied into *scratch, missing ones 0 (1 for
+ * the alpha of an RGB image, which is opaque). */
+static nprfx_result img_view(const ofx_img *im, int f, int first, int count, nprfx_image *v,
+                             float **scratch)
+{
+    memset(v, 0, sizeof *v);
+    *scratch = NULL;
+    v->bounds = flip_rect(im->b, f);
+    v->channels = count;
+    if (nprfx_rect_empty(v->bounds)) {
+        v->data = dummy_pixel; /* connected, but no pixels: reads as outside its bounds */
+        v->pixel_stride = count;
+        return NPRFX_OK;
+    }
+    int c0 = host_comp(im, first), direct;
+    if (im->ncomp == 1) {
+        direct = count == 1;
+        c0 = 0;
+    } else {
+        direct = c0 >= 0;
+        for (int k = 1; k < count; k++)
+            direct &= host_comp(im, first + k) == c0 + k;
+    }
+    if (direct) {
+        v->data = img_at(im, im->b.x1, im->b.y2 - 1, c0);
+        v->pixel_stride = im->ncomp;
+        v->row_stride = -(ptrdiff_t)(im->row_bytes / (int)sizeof(float));
+        return NPRFX_OK;
+    }
+    int w = im->b.x2 - im->b.x1, h = im->b.y2 - im->b.y1;
+    float *px = nprfx_ofx_alloc((size_t)w * (size_t)h * (size_t)count * sizeof(float));
+    if (!px) return NPRFX_ERR_OUT_OF_MEMORY;
+    for (int y = im->b.y1; y < im->b.y2; y++)
+        for (int x = im->b.x1; x < im->b.x2; x++) {
+            float *d = px + ((size_t)(f - y - v->bounds.y0) * (size_t)w + (size_t)(x - im->b.x1)) *
+                                (size_t)count;
+            for (int k = 0; k < count; k++) {
+                int hc = host_comp(im, first + k);
+                d[k] = hc >= 0 ? *img_at(im, x, y, hc)
+                               : (im->ncomp == 3 && first + k == 3 ? 1.0f : 0.0f);
+            }
+        }
+    v->data = px;
+    v->pixel_stride = count;
+    v->row_stride = (ptrdiff_t)w * count;
+    *scratch = px;
+    return NPRFX_OK;
+}
+
+/* ---- one render call ------------------------------------------------------------------------- */
+
+#define RING (NPRFX_FETCH_KEEP * 2)
+
+typedef struct fetched {
+    ofx_img img;
+    float *scratch;
+} fetched;
+
+typedef struct render_call {
+    ofx_instance *inst;
+    nprfx_context *ctx;
+    OfxTime time;
+    int f; /* the frame's flip: y_down = f - y_up */
+    nprfx_image *inputs;
+    fetched *cur; /* per input, at the render time */
+    int *first, *count;
+    pthread_mutex_t lock; /* guards the ring: a node may fetch from several threads */
+    fetched ring[RING];
+    long nfetch;
+} render_call;
+
+static void fetched_release(fetched *s)
+{
+    img_release(&s->img);
+    nprfx_ofx_free(s->scratch);
+    s->scratch = NULL;
+}
+
+static int input_flip(const render_call *rc, int k, const ofx_img *im)
+{
+    if (rc->inst->desc->inputs[k].flags & NPRFX_INPUT_UNALIGNED) return im->b.y1 + im->b.y2 - 1;
+    return rc->f;
+}
+
+/* nprfx_fetch_fn: clip k at another time. The current frame is served from the images already
+ * held; other frames go into a ring, so a view stays valid for the next RING - 1 fetches, more
+ * than NPRFX_FETCH_KEEP promises. */
+static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *out)
+{
+    render_call *rc = user;
+    const nprfx_node_desc *d = rc->inst->desc;
+    if (input < 0 || input >= d->num_inputs)
+        return nprfx_error(rc->ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: no input %d", d->id, input);
+    if (!rc->inputs[input].data)
+        return nprfx_error(rc->ctx, NPRFX_ERR_MISSING_INPUT, "%s: input '%s' is not connected",
+                           d->id, d->inputs[input].name);
+    if (time == rc->time) {
+        *out = rc->inputs[input];
+        return NPRFX_OK;
+    }
+    pthread_mutex_lock(&rc->lock);
+    fetched *s = &rc->ring[rc->nfetch++ % RING];
+    fetched_release(s);
+    OfxStatus st = img_fetch(rc->inst->clips[input], time, &s->img);
+    nprfx_result r = NPRFX_OK;
+    if (st != kOfxStatOK)
+        r = nprfx_error(rc->ctx,
+                        st == kOfxStatErrMemory ? NPRFX_ERR_OUT_OF_MEMORY : NPRFX_ERR_MISSING_INPUT,
+                        "%s: the host gave no image of input '%s' at frame %g (OFX status %d)",
+                        d->id, d->inputs[input].name, time, st);
+    else if ((r = img_view(&s->img, input_flip(rc, input, &s->img), rc->first[input],
+                           rc->count[input], out, &s->scratch)))
+        r = nprfx_error(rc->ctx, r, "%s: out of memory", d->id);
+    pthread_mutex_unlock(&rc->lock);
+    return r;
+}
+
+/* ---- params ---------------------------------------------------------------------------------- */
+
+/* Values at `time`; STRING values are copied into strings[i] (freed by the caller). */
+static nprfx_result eval_params(render_call *rc, nprfx_value *values, char **strings)
+{
+    const nprfx_node_desc *d = rc->inst->desc;
+    const OfxParameterSuiteV1 *pm = G.param;
+    for (int i = 0; i < d->num_params; i++) {
+        const nprfx_param_desc *p = &d->params[i];
+        OfxParamHandle h = rc->inst->params[i];
+        OfxStatus st = kOfxStatOK;
+        int iv = 0;
+        char *s = NULL;
+        memset(&values[i], 0, sizeof values[i]);
+        values[i].s = "";
+        switch (p->type) {
+        case NPRFX_PARAM_DOUBLE:
+            st = pm->paramGetValueAtTime(h, rc->time, &values[i].v[0]);
+            break;
+        case NPRFX_PARAM_INT:
+        case NPRFX_PARAM_BOOL:
+        case NPRFX_PARAM_CHOICE:
+            st = pm->paramGetValueAtTime(h, rc->time, &iv);
+            values[i].v[0] = iv;
+            break;
+        case NPRFX_PARAM_COLOR:
+            st = pm->paramGetValueAtTime(h, rc->time, &values[i].v[0], &values[i].v[1],
+                                         &values[i].v[2], &values[i].v[3]);
+            break;
+        case NPRFX_PARAM_STRING:
+            st = pm->paramGetValueAtTime(h, rc->time, &s);
+            if (st == kOfxStatOK) {
+                size_t n = strlen(s ? s : "") + 1;
+                if (!(strings[i] = malloc(n)))
+                    return nprfx_error(rc->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+                memcpy(strings[i], s ? s : "", n);
+                values[i].s = strings[i];
+            }
+            break;
+        }
+        if (st != kOfxStatOK)
+            return nprfx_error(rc->ctx, NPRFX_ERR_INTERNAL,
+                               "%s.%s: the host gave no value (OFX status %d)", d->id, p->name, st);
+        /* Hosts do not all clamp typed-in or expression values: refuse as the CLI does. */
+        nprfx_result r = nprfx_param_check(rc->ctx, d, p, &values[i]);
+        if (r) return r;
+    }
+    return NPRFX_OK;
+}
+
+/* ---- output ---------------------------------------------------------------------------------- */
+
+/* The host component values for a result pixel with n channels (see clip preferences). */
+static void result_rgba(const float *px, int n, float rgba[4])
+{
+    switch (n) {
+    case 1:
+        rgba[0] = rgba[1] = rgba[2] = px[0], rgba[3] = 1.0f;
+        break;
+    case 2:
+        rgba[0] = px[0], rgba[1] = px[1], rgba[2] = 0.0f, rgba[3] = 1.0f;
+        break;
+    case 3:
+        rgba[0] = px[0], rgba[1] = px[1], rgba[2] = px[2], rgba[3] = 1.0f;
+        break;
+    default:
+        memcpy(rgba, px, 4 * sizeof(float));
+        break;
+    }
+}
+
+typedef struct finish_job {
+    const ofx_img *out;
+    const nprfx_image *res, *src, *mask;
+    nprfx_rect window; /* nprfx coordinates, inside the frame */
+    int f, nout, mask_invert;
+    double mix;
+} finish_job;
+
+/* Mix with the Source by mix * Mask, then write the host components the result does not
+ * already fill in place. Rows are independent, so this runs on the executor too. */
+static void finish_rows(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const finish_job *j = user;
+    const int ncomp = j->out->ncomp;
+    for (int y = j->window.y0 + begin; y < j->window.y0 + end; y++)
+        for (int x = j->window.x0; x < j->window.x1; x++) {
+            float *px = nprfx_image_at(j->res, x, y);
+            if (j->mask || j->mix != 1.0) {
+                double m = j->mix;
+                if (j->mask) {
+                    double mv = nprfx_rect_contains(j->mask->bounds, x, y)
+                                    ? nprfx_image_at(j->mask, x, y)[0]
+                                    : 0.0;
+                    mv = mv > 0.0 ? (mv < 1.0 ? mv : 1.0) : 0.0;
+                    m *= j->mask_invert ? 1.0 - mv : mv;
+                }
+                int nc = j->src && j->src->channels < j->nout ? j->src->channels : j->nout;
+                const float *s = j->src && nprfx_rect_contains(j->src->bounds, x, y)
+                                     ? nprfx_image_at(j->src, x, y)
+                                     : NULL;
+                for (int c = 0; j->src && c < nc; c++) {
+                    double sv = s ? s[c] : 0.0;
+                    px[c] = (float)(sv + ((double)px[c] - sv) * m);
+                }
+            }
+            float rgba[4];
+            result_rgba(px, j->nout, rgba);
+            int yu = j->f - y;
+            if (ncomp == 1)
+                *img_at(j->out, x, yu, 0) = j->nout >= 4 ? px[3] : px[0];
+            else
+                for (int c = 0; c < ncomp; c++)
+                    *img_at(j->out, x, yu, c) = rgba[c];
+        }
+}
+
+/* ---- render ---------------------------------------------------------------------------------- */
+
+static OfxRectI to_pixels(OfxRectD r, double sx, double sy, double par)
+{
+    OfxRectI p;
+    p.x1 = (int)floor(r.x1 * sx / par + 1e-9);
+    p.y1 = (int)floor(r.y1 * sy + 1e-9);
+    p.x2 = (int)ceil(r.x2 * sx / par - 1e-9);
+    p.y2 = (int)ceil(r.y2 * sy - 1e-9);
+    return p;
+}
+
+static int round_frame(double t)
+{
+    return (int)floor(t + 0.5);
+}
+
+OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
+{
+    const nprfx_node_desc *d = inst->desc;
+    const OfxPropertySuiteV1 *ps = G.prop;
+    double time = 0, scale[2] = {1, 1};
+    int win[4] = {0, 0, 0, 0};
+    if (ps->propGetDouble(in_args, kOfxPropTime, 0, &time) != kOfxStatOK ||
+        ps->propGetIntN(in_args, kOfxImageEffectPropRenderWindow, 4, win) != kOfxStatOK)
+        return kOfxStatErrBadHandle;
+    if (ps->propGetDoubleN(in_args, kOfxImageEffectPropRenderScale, 2, scale) != kOfxStatOK ||
+        !(scale[0] > 0))
+        scale[0] = scale[1] = 1;
+    if (!(scale[1] > 0)) scale[1] = scale[0];
+
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    ci.executor = &host_executor;
+    render_call rc;
+    memset(&rc, 0, sizeof rc);
+    rc.inst = inst;
+    rc.time = time;
+    if (nprfx_context_create(&ci, &rc.ctx) != NPRFX_OK) return kOfxStatErrMemory;
+    pthread_mutex_init(&rc.lock, NULL);
+    size_t ni = (size_t)d->num_inputs + 1, np = (size_t)d->num_params + 1;
+    nprfx_value *values = calloc(np, sizeof *values);
+    char **strings = calloc(np, sizeof *strings);
+    int *in_ch = calloc(ni, sizeof *in_ch);
+    rc.inputs = calloc(ni, sizeof *rc.inputs);
+    rc.cur = calloc(ni, sizeof *rc.cur);
+    rc.first = calloc(ni, sizeof *rc.first);
+    rc.count = calloc(ni, sizeof *rc.count);
+    ofx_img out, mask;
+    memset(&out, 0, sizeof out);
+    memset(&mask, 0, sizeof mask);
+    nprfx_image res, mask_view;
+    float *res_scratch = NULL, *mask_scratch = NULL;
+    int res_owned = 0;
+    memset(&res, 0, sizeof res);
+    memset(&mask_view, 0, sizeof mask_view);
+    OfxStatus status = kOfxStatFailed;
+    nprfx_result r = NPRFX_OK;
+    int locked = 0;
+    if (!values || !strings || !in_ch || !rc.inputs || !rc.cur || !rc.first || !rc.count) {
+        r = nprfx_error(rc.ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        status = kOfxStatErrMemory;
+        goto done;
+    }
+
+    /* the frame, in host pixels at this render scale */
+    OfxRectD rod;
+    if (nprfx_ofx_frame_rod(inst, time, &rod) != kOfxStatOK) {
+        r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
+                        "%s: no input is connected and the host gives no project size", d->id);
+        goto done;
+    }
+    double par = 1;
+    OfxPropertySetHandle op = NULL;
+    if (G.fx->clipGetPropertySet(inst->output, &op) != kOfxStatOK ||
+        ps->propGetDouble(op, kOfxImagePropPixelAspectRatio, 0, &par) != kOfxStatOK || !(par > 0))
+        par = 1;
+    OfxRectI fr = to_pixels(rod, scale[0], scale[1], par);
+    rc.f = fr.y1 + fr.y2 - 1;
+    nprfx_rect frame = flip_rect(fr, rc.f);
+    OfxRectI wr = {win[0], win[1], win[2], win[3]};
+    nprfx_rect host_window = flip_rect(wr, rc.f);
+
+    if ((r = eval_params(&rc, values, strings))) goto done;
+    nprfx_node_apply_render_scale(d, values, scale[0]);
+
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (!nprfx_ofx_clip_connected(inst->clips[k])) continue;
+        nprfx_ofx_input_selection(inst, k, time, 0, &rc.first[k], &rc.count[k]);
+        OfxStatus st = img_fetch(inst->clips[k], time, &rc.cur[k].img);
+        if (st == kOfxStatFailed) continue; /* no image at this time: as if not connected */
+        if (st != kOfxStatOK) {
+            r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
+                            "%s: the host gave no usable image of input '%s' (OFX status %d)",
+                            d->id, d->inputs[k].name, st);
+            status = st;
+            goto done;
+        }
+        if ((r = img_view(&rc.cur[k].img, input_flip(&rc, k, &rc.cur[k].img), rc.first[k],
+                          rc.count[k], &rc.inputs[k], &rc.cur[k].scratch))) {
+            status = kOfxStatErrMemory;
+            goto done;
+        }
+        in_ch[k] = rc.count[k];
+    }
+
+    nprfx_output_info oi;
+    if ((r = nprfx_node_output_info(rc.ctx, d, values, in_ch, &oi))) goto done;
+    int nout = oi.channels;
+    if (nout > 4) {
+        r = nprfx_error(rc.ctx, NPRFX_ERR_UNSUPPORTED,
+                        "%s: %d output channels do not fit an RGBA image", d->id, nout);
+        goto done;
+    }
+    OfxStatus st = img_fetch(inst->output, time, &out);
+    if (st != kOfxStatOK) {
+        r = nprfx_error(rc.ctx, NPRFX_ERR_INTERNAL, "%s: the host gave no output image (%d)", d->id,
+                        st);
+        status = st;
+        goto done;
+    }
+    host_window = nprfx_rect_intersect(host_window, flip_rect(out.b, rc.f));
+    nprfx_rect window = nprfx_rect_intersect(host_window, frame);
+    /* The result: in place where the host image holds the first nout components in order,
+     * else in a scratch image covering the window. */
+    if ((out.ncomp == 4 || (out.ncomp == 3 && nout <= 3)) && !nprfx_rect_empty(window)) {
+        if ((r = img_view(&out, rc.f, 0, nout, &res, &res_scratch))) goto done;
+    } else if (!nprfx_rect_empty(window)) {
+        if ((r = nprfx_image_alloc(rc.ctx, window, nout, &res))) goto done;
+        res_owned = 1;
+    }
+
+    int main = nprfx_ofx_main_input(d);
+    finish_job fj;
+    memset(&fj, 0, sizeof fj);
+    fj.out = &out;
+    fj.res = &res;
+    fj.window = window;
+    fj.f = rc.f;
+    fj.nout = nout;
+    fj.mix = 1.0;
+    if (inst->mix) {
+        double mix = 1.0;
+        int inv = 0;
+        if (G.param->paramGetValueAtTime(inst->mix, time, &mix) == kOfxStatOK) fj.mix = mix;
+        if (inst->mask_invert &&
+            G.param->paramGetValueAtTime(inst->mask_invert, time, &inv) == kOfxStatOK)
+            fj.mask_invert = inv != 0;
+        if (nprfx_ofx_clip_connected(inst->mask) &&
+            img_fetch(inst->mask, time, &mask) == kOfxStatOK) {
+            if ((r = img_view(&mask, rc.f, mask.ncomp == 4 ? 3 : 0, 1, &mask_view, &mask_scratch)))
+                goto done;
+            fj.mask = &mask_view;
+        }
+        if (main >= 0 && rc.inputs[main].data) fj.src = &rc.inputs[main];
+    }
+
+    if (!nprfx_rect_empty(window)) {
+        double first = 0, last = 0;
+        nprfx_ofx_shot_range(inst, &first, &last);
+        nprfx_render_args a;
+        memset(&a, 0, sizeof a);
+        a.size = sizeof a;
+        a.ctx = rc.ctx;
+        a.node = d;
+        a.time = time;
+        a.render_scale = scale[0];
+        a.frame = frame;
+        a.window = window;
+        a.first_frame = round_frame(first);
+        a.last_frame = round_frame(last);
+        a.inputs = rc.inputs;
+        a.params = values;
+        a.output = &res;
+        a.fetch = fetch_cb;
+        a.fetch_user = &rc;
+        a.state = &inst->state;
+        if (d->flags & NPRFX_NODE_STATEFUL) {
+            pthread_mutex_lock(&inst->lock);
+            locked = 1;
+        }
+        r = d->render(&a);
+        if (locked) pthread_mutex_unlock(&inst->lock);
+        locked = 0;
+        if (r) goto done;
+        nprfx_parallel_for(&host_executor, nprfx_rect_height(window), 16, finish_rows, &fj);
+    }
+    /* Pixels the host asked for outside the frame: transparent black. */
+    for (int y = host_window.y0; y < host_window.y1; y++)
+        for (int x = host_window.x0; x < host_window.x1; x++)
+            if (!nprfx_rect_contains(frame, x, y))
+                for (int c = 0; c < out.ncomp; c++)
+                    *img_at(&out, x, rc.f - y, c) = 0.0f;
+    status = kOfxStatOK;
+
+done:
+    if (r && status == kOfxStatOK) status = kOfxStatFailed;
+    if (r) nprfx_ofx_post_error(inst->fx, nprfx_last_error(rc.ctx));
+    for (int i = 0; i < RING; i++)
+        fetched_release(&rc.ring[i]);
+    for (int k = 0; rc.cur && k < d->num_inputs; k++)
+        fetched_release(&rc.cur[k]);
+    img_release(&mask);
+    nprfx_ofx_free(mask_scratch);
+    nprfx_ofx_free(res_scratch);
+    if (res_owned) nprfx_image_free(&res);
+    img_release(&out);
+    for (int i = 0; strings && i < d->num_params; i++)
+        free(strings[i]);
+    free(values);
+    free(strings);
+    free(in_ch);
+    free(rc.inputs);
+    free(rc.cur);
+    free(rc.first);
+    free(rc.count);
+    pthread_mutex_destroy(&rc.lock);
+    nprfx_context_destroy(rc.ctx);
+    return status;
+}
