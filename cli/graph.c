@@ -943,6 +943,30 @@ static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *ou
     return fetch_input(user, input, (int)(time < 0 ? time - 0.5 : time + 0.5), 0, out);
 }
 
+/* Write the node's per-frame export (NPRFX_PARAM_EXPORT param set, desc->export_text given),
+ * relative to the output directory like write nodes, through a temporary name. */
+static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_args *a, int frame)
+{
+    const nprfx_node_desc *d = n->desc;
+    if (!d->export_text) return NPRFX_OK;
+    for (int i = 0; i < d->num_params; i++) {
+        if (!(d->params[i].flags & NPRFX_PARAM_EXPORT) || !n->params[i].s || !n->params[i].s[0])
+            continue;
+        char path[4096];
+        resolve_path(g, g->out_dir, n->params[i].s, frame, path, sizeof path);
+        char *text = NULL;
+        size_t len = 0;
+        a->window = a->frame;
+        nprfx_result r = d->export_text(a, path, &text, &len);
+        if (!r) r = nprfx_io_write_text(g->ctx, path, text, len);
+        free(text);
+        if (r)
+            return nprfx_error(g->ctx, r, "node '%s': export to %s: %s", n->name, path,
+                               nprfx_last_error(g->ctx));
+    }
+    return NPRFX_OK;
+}
+
 static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
 {
     gnode *n = &g->nodes[node];
@@ -1020,6 +1044,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             r = g->has_hook ? g->hook.render(g->hook.user, &a, &n->instance) : d->render(&a);
         }
     g->render_seconds += now_seconds() - t0;
+    if (!r) r = export_node(g, n, &a, frame);
     if (r) {
         nprfx_error(g->ctx, r, "node '%s' (%s) at frame %d: %s", n->name, d->id, frame,
                     nprfx_last_error(g->ctx));

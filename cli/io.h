@@ -71,6 +71,11 @@ typedef struct nprfx_preview_options {
 nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *path, const nprfx_image *im,
                                     const nprfx_preview_options *opt);
 
+/* Write len bytes of text to path through a temporary name and a rename, creating missing
+ * parent directories (vector exports: CSV, SVG). */
+nprfx_result nprfx_io_write_text(nprfx_context *ctx, const char *path, const char *text,
+                                 size_t len);
+
 /* Convert the first three channels of im in place from colour space `from` to `to` (names from
  * the OCIO config, or "linear"/"srgb" without one). Same names: no-op. */
 nprfx_result nprfx_io_convert_colorspace(nprfx_context *ctx, nprfx_image *im, const char *from,

@@ -678,3 +678,33 @@ extern "C" nprfx_result nprfx_io_convert_colorspace(nprfx_context *ctx, nprfx_im
                            from, to, e.what());
     }
 }
+
+extern "C" nprfx_result nprfx_io_write_text(nprfx_context *ctx, const char *path, const char *text,
+                                            size_t len)
+{
+    namespace fs = std::filesystem;
+    try {
+        fs::path target(path);
+        std::error_code ec;
+        if (target.has_parent_path()) {
+            fs::create_directories(target.parent_path(), ec);
+            if (ec)
+                return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
+                                   target.parent_path().string().c_str(), path,
+                                   ec.message().c_str());
+        }
+        std::string tmp = temp_path_for(target);
+        FILE *f = std::fopen(tmp.c_str(), "wb");
+        bool ok = f && std::fwrite(text, 1, len, f) == len;
+        if (f && std::fclose(f) != 0) ok = false;
+        if (ok && std::rename(tmp.c_str(), path) != 0) ok = false;
+        if (!ok) {
+            std::string err = std::strerror(errno);
+            fs::remove(tmp, ec);
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, err.c_str());
+        }
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, e.what());
+    }
+}

@@ -25,6 +25,8 @@ typedef enum nprfx_param_type {
 #define NPRFX_PARAM_PIXELS 0x1u /* a length in pixels: multiplied by the host's render scale */
 #define NPRFX_PARAM_AREA 0x2u   /* an area in pixels^2: multiplied by render scale squared */
 #define NPRFX_PARAM_PATH 0x4u   /* a STRING that names a file (sequence) path */
+#define NPRFX_PARAM_EXPORT 0x8u /* a PATH the caller writes desc->export_text's text to, per frame;
+                                   empty: no export */
 
 typedef struct nprfx_param_desc {
     const char *name;  /* identifier used in graphs, --set and OFX ("sigma") */
@@ -129,6 +131,12 @@ struct nprfx_node_desc {
     unsigned flags;
     nprfx_render_fn render;
     void (*state_free)(void *state);
+    /* Optional: a vector/text export of the frame (e.g. stipples as CSV or SVG). Called by the
+     * front end after the whole frame rendered, with the same args (window = frame) and `path`,
+     * the NPRFX_PARAM_EXPORT param's value expanded for this frame, whose extension picks the
+     * format. *text is malloc'd; the caller writes it (core does no file I/O). */
+    nprfx_result (*export_text)(const nprfx_render_args *args, const char *path, char **text,
+                                size_t *len);
 };
 
 /* ---- descriptor helpers (core/node.c) ---- */
