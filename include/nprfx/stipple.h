@@ -1,0 +1,159 @@
+/* nprfx — stippling from UV and shading (Ma et al. 2018; DESIGN.md §3.3).
+ *
+ * Candidate stipples are the points of the IVS sequence (ivs.h) tiled over UV space with period
+ * `tile` (A0 = tile^2 of UV area per copy) and shifted per object. A pixel with UV Jacobian J
+ * (k = 1 / |det J| screen px^2 per UV area) and darkness g = 1 - tone keeps sample i (1-based)
+ * when its screen area k * A0 / i is at least a threshold:
+ *
+ *   uniform    threshold area / g; every kept stipple has `area` px^2            (Eq. 5)
+ *   radius     threshold a0; stipple area g * a0, dropped below delta_min         (Eq. 6)
+ *   multitone  threshold a0; stipple area `area`; pen tone tau = g * a0 / area is made of the
+ *              two nearest pens tau_l <= tau <= tau_l+1: the samples with i / i_max <= (tau -
+ *              tau_l) / (tau_l+1 - tau_l) take the darker pen (Eq. 7-8 as read in DESIGN.md)
+ *
+ * Which pixel a sample belongs to is decided in UV space: each pixel's footprint is the
+ * quadrilateral through its four corners, a corner being the mean UV of the (same-object) pixels
+ * that share it, so neighbouring footprints share edges exactly and a sample lands in exactly one
+ * pixel (half-open edges). The Jacobian comes from finite differences that never straddle an
+ * object-id edge (and avoid a UV seam by taking the smaller one-sided difference); the |det J|
+ * the thresholds use is averaged over the 5x5 same-object pixels around, which keeps the kept
+ * prefix steady where the UV pass is quantised (half floats).
+ *
+ * Stipples are drawn as discs of their exact area (analytic disc/pixel-square intersection),
+ * overlapping discs combining as 1 - prod(1 - coverage * tone) in a fixed order, ink over paper.
+ * Results are bit-identical for any thread count, tile split or render order. */
+#ifndef NPRFX_STIPPLE_H
+#define NPRFX_STIPPLE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nprfx/image.h"
+#include "nprfx/ivs.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum nprfx_stipple_mode {
+    NPRFX_STIPPLE_UNIFORM = 0,
+    NPRFX_STIPPLE_RADIUS = 1,
+    NPRFX_STIPPLE_MULTITONE = 2
+} nprfx_stipple_mode;
+
+#define NPRFX_STIPPLE_MAX_TONES 16
+/* The longest prefix of the sequence a pixel may use (darker or denser requests saturate). */
+#define NPRFX_STIPPLE_MAX_SAMPLES (1 << 21)
+/* Without a uv input the image is its own UV space: uv = pixel / (this * render scale). */
+#define NPRFX_STIPPLE_PLANE_PIXELS 1024.0
+
+typedef struct nprfx_stipple_params {
+    size_t size;      /* sizeof(nprfx_stipple_params) */
+    int mode;         /* nprfx_stipple_mode */
+    double area;      /* px^2: the stipple area (uniform, multitone) */
+    double a0;        /* px^2: the screen area a kept sample stands for (radius, multitone) */
+    double delta_min; /* px^2: radius mode drops smaller stipples */
+    int num_tones;    /* multitone: pen darknesses, ascending in (0, 1] */
+    double tones[NPRFX_STIPPLE_MAX_TONES];
+    double tile;        /* UV period of the sequence, > 0 */
+    double plane_scale; /* without uv: pixels per UV unit (NPRFX_STIPPLE_PLANE_PIXELS * scale) */
+    float ink[4], paper[4]; /* RGBA, treated as premultiplied: out = paper + d * (ink - paper) */
+    uint64_t seed;          /* shifts the sequence per object id */
+    int coverage_channel;   /* output a 5th channel: the ink coverage d */
+    /* The sequence to use; NULL: the process-wide one (nprfx_stipple_shared_index), grown on
+     * demand. Results do not depend on which: only the prefix a pixel keeps is ever read. */
+    const nprfx_ivs_index *index;
+    /* NULL, or NPRFX_STIPPLE_CURVE_SIZE darknesses from nprfx_stipple_tone_curve: the
+     * darkness g of each pixel is replaced by curve(g) (linear interpolation) before the
+     * thresholds, which compensates for overlapping dots. */
+    const float *tone_curve;
+} nprfx_stipple_params;
+
+#define NPRFX_STIPPLE_CURVE_SIZE 17
+
+/* Defaults matching the stipple node's. */
+void nprfx_stipple_params_default(nprfx_stipple_params *p);
+
+/* Parse a pen-tone list ("0.3, 0.6, 1") into p->tones / p->num_tones. */
+nprfx_result nprfx_stipple_parse_tones(nprfx_context *ctx, const char *text,
+                                       nprfx_stipple_params *p);
+
+/* Tone correction. The paper's thresholds put down ink area g per unit area, but dots that
+ * overlap cover less than their summed area, so dark tones come out light (by up to ~0.15 in
+ * uniform mode). This measures the darkness D(g) the params actually produce (constant-tone
+ * patches rendered with the identity mapping, dots larger than 8 px^2 scaled down to 8 with
+ * their ratios kept: the coverage of blue-noise discs is scale-invariant) and writes its
+ * inverse: curve[k] = the g for which D(g) = k / (NPRFX_STIPPLE_CURVE_SIZE - 1), 1 where that
+ * darkness cannot be reached. About 30 ms; deterministic. p->tone_curve is ignored. */
+nprfx_result nprfx_stipple_tone_curve(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                      float *curve);
+
+typedef struct nprfx_stipple_inputs {
+    const nprfx_image *tone; /* required: 1 = paper white; 3-4 channels: Rec. 709 luma */
+    const nprfx_image *uv;   /* optional (NULL): 2 channels */
+    const nprfx_image *id;   /* optional (NULL): object id, 1 channel, rounded */
+    nprfx_rect frame;        /* the whole image domain */
+} nprfx_stipple_inputs;
+
+/* Render the pixels of `window` into out (4 channels RGBA, or 5 with coverage_channel). Inputs
+ * are read around the window as far as the stipples reaching it need. Parallel through the
+ * context's executor. */
+nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                  const nprfx_stipple_inputs *in, nprfx_rect window,
+                                  nprfx_image *out);
+
+/* One stipple, as the vector export writes it. */
+typedef struct nprfx_stipple {
+    double x, y;  /* screen position in core pixel coordinates (pixel centres at integers) */
+    float radius; /* px */
+    float tone;   /* pen darkness in (0, 1]: 1 for uniform and radius modes */
+    int sample;   /* 0-based index in the IVS sequence */
+    int object;   /* object id (0 without an id input) */
+} nprfx_stipple;
+
+/* The stipples owned by the pixels of `region` (usually the frame), in row-major order of their
+ * pixels. *list is malloc'd (NULL when *count is 0); the caller frees it. */
+nprfx_result nprfx_stipple_collect(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                   const nprfx_stipple_inputs *in, nprfx_rect region,
+                                   nprfx_stipple **list, size_t *count);
+
+/* Vector export formats for nprfx_stipple_format. Coordinates in both are image-plane pixels
+ * with the frame's top-left corner at (0, 0) and y down (a core position x becomes
+ * x - frame.x0 + 0.5), so pixel (i, j) covers [i, i+1) x [j, j+1).
+ *   CSV: the header line "x,y,radius,tone,sample,object", then one stipple per line.
+ *   SVG: an <svg> with viewBox "0 0 W H" (the frame size), a rectangle of the paper colour,
+ *        and one <circle cx cy r> per stipple, filled with the ink colour at opacity = tone. */
+typedef enum nprfx_stipple_format_kind {
+    NPRFX_STIPPLE_CSV = 0,
+    NPRFX_STIPPLE_SVG = 1
+} nprfx_stipple_format_kind;
+
+/* Format a stipple list as text (malloc'd, NUL-terminated; *len excludes the NUL). ink/paper are
+ * RGBA (display-referred values in [0, 1] are expected for SVG; they are clamped). The CLI writes
+ * the text to the frame's export path; core does no file I/O. */
+nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
+                                  nprfx_rect frame, nprfx_stipple_format_kind kind,
+                                  const float *ink, const float *paper, char **text, size_t *len);
+
+/* The stipple node's vector export (defined with the node in plugins/stipple.c, library
+ * nprfx_nodes): the stipples of the whole frame for render arguments of the `stipple` node
+ * (its inputs and params at the frame's time; window is ignored), formatted as `kind`. The CLI
+ * calls this after rendering a frame whose `export` param is set and writes the text to the
+ * frame's path (".csv" -> NPRFX_STIPPLE_CSV, ".svg" -> NPRFX_STIPPLE_SVG). */
+struct nprfx_render_args;
+nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
+                                       nprfx_stipple_format_kind kind, char **text, size_t *len);
+
+/* The process-wide sequence (seed NPRFX_IVS_DEFAULT_SEED) and its index, holding at least
+ * min_count points (clamped to NPRFX_STIPPLE_MAX_SAMPLES). Built on first use and regrown by
+ * powers of two when a longer prefix is asked for (about 2.5 s per million points); earlier
+ * versions stay valid for the life of the process, so a pointer once returned never dangles.
+ * Thread-safe. This lazily built, never-modified table is nprfx's only process-wide state: the
+ * sequence is a pure function of its seed, so sharing it changes no result. */
+nprfx_result nprfx_stipple_shared_index(nprfx_context *ctx, int min_count,
+                                        const nprfx_ivs_index **out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
