@@ -576,6 +576,14 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
     const char *text = override ? override : g->frames_text ? g->frames_text : "1";
     nprfx_result r = nprfx_seq_parse_frames(g->ctx, text, out);
     if (r) return r;
+    if (!g->frames_text && out->count > 0) {
+        /* No shot range in the graph: the frames asked for are the shot temporal nodes see. */
+        g->first_frame = g->last_frame = out->frames[0];
+        for (int k = 1; k < out->count; k++) {
+            if (out->frames[k] < g->first_frame) g->first_frame = out->frames[k];
+            if (out->frames[k] > g->last_frame) g->last_frame = out->frames[k];
+        }
+    }
     if (override && g->frames_text)
         for (int k = 0; k < out->count; k++)
             if (out->frames[k] < g->first_frame || out->frames[k] > g->last_frame) {
