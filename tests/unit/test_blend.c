@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/blend.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
@@ -16,33 +17,14 @@
 
 static nprfx_image make_image(int w, int h, int ch, const float *vals)
 {
-    nprfx_image im;
-    if (nprfx_image_alloc(NULL, nprfx_rect_make(0, 0, w, h), ch, &im) != NPRFX_OK) {
-        fprintf(stderr, "allocation failed\n");
-        exit(2);
-    }
-    if (vals) memcpy(im.data, vals, sizeof(float) * (size_t)(w * h * ch));
-    return im;
+    return th_image(w, h, ch, vals);
 }
 
 static nprfx_result render(nprfx_context *ctx, const nprfx_node_desc *node,
                            const nprfx_image *inputs, const nprfx_value *params, nprfx_image *out,
                            nprfx_rect window)
 {
-    nprfx_render_args a;
-    memset(&a, 0, sizeof a);
-    a.size = sizeof a;
-    a.ctx = ctx;
-    a.node = node;
-    a.time = 1;
-    a.render_scale = 1;
-    a.frame = out->bounds;
-    a.window = window;
-    a.first_frame = a.last_frame = 1;
-    a.inputs = inputs;
-    a.params = params;
-    a.output = out;
-    return node->render(&a);
+    return th_render(ctx, node, inputs, params, out, window);
 }
 
 static const nprfx_node_desc *node;
@@ -51,21 +33,11 @@ static nprfx_value pv[16];
 
 static int PI(const char *name)
 {
-    int i = nprfx_node_param_index(node, name);
-    if (i < 0) {
-        fprintf(stderr, "blend has no param %s\n", name);
-        exit(2);
-    }
-    return i;
+    return th_param(node, name);
 }
 static int II(const char *name)
 {
-    int i = nprfx_node_input_index(node, name);
-    if (i < 0) {
-        fprintf(stderr, "blend has no input %s\n", name);
-        exit(2);
-    }
-    return i;
+    return th_input(node, name);
 }
 
 static void reset(void)
@@ -77,14 +49,7 @@ static void reset(void)
 
 static void set_mode(const char *name)
 {
-    const nprfx_param_desc *p = &node->params[PI("mode")];
-    for (int i = 0; p->choices[i]; i++)
-        if (strcmp(p->choices[i], name) == 0) {
-            pv[PI("mode")].v[0] = i;
-            return;
-        }
-    fprintf(stderr, "blend has no mode %s\n", name);
-    exit(2);
+    th_set_choice(node, pv, "mode", name);
 }
 
 /* Render into a fresh output with base's channels over the whole frame. */

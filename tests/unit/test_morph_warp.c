@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/context.h"
 #include "nprfx/node.h"
 
@@ -12,18 +13,7 @@ extern const nprfx_node_desc nprfx_node_morphology, nprfx_node_warp;
 static nprfx_result run(nprfx_context *ctx, const nprfx_node_desc *node, const nprfx_image *ins,
                         const nprfx_value *pv, nprfx_image *out, nprfx_rect window)
 {
-    nprfx_render_args a;
-    memset(&a, 0, sizeof a);
-    a.size = sizeof a;
-    a.ctx = ctx;
-    a.node = node;
-    a.render_scale = 1.0;
-    a.frame = out->bounds;
-    a.window = window;
-    a.inputs = ins;
-    a.params = pv;
-    a.output = out;
-    return node->render(&a);
+    return th_render(ctx, node, ins, pv, out, window);
 }
 
 static void defaults(const nprfx_node_desc *node, nprfx_value *pv)
@@ -35,7 +25,7 @@ static void defaults(const nprfx_node_desc *node, nprfx_value *pv)
 
 static void set(const nprfx_node_desc *node, nprfx_value *pv, const char *name, double v)
 {
-    pv[nprfx_node_param_index(node, name)].v[0] = v;
+    pv[th_param(node, name)].v[0] = v;
 }
 
 static float px(const nprfx_image *im, int x, int y)

@@ -1,0 +1,80 @@
+/* Shared helpers for node tests: tiny images, direct calls of a node's render function through
+ * its descriptor, param/input lookup by name (a missing name is a test bug: exit 2). */
+#ifndef NPRFX_TEST_NODE_HARNESS_H
+#define NPRFX_TEST_NODE_HARNESS_H
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nprfx/node.h"
+
+/* A w x h image with ch channels at the origin, filled from vals (NULL: zeros). */
+static inline nprfx_image th_image(int w, int h, int ch, const float *vals)
+{
+    nprfx_image im;
+    if (nprfx_image_alloc(NULL, nprfx_rect_make(0, 0, w, h), ch, &im) != NPRFX_OK) {
+        fprintf(stderr, "test: allocation of %dx%dx%d failed\n", w, h, ch);
+        exit(2);
+    }
+    if (vals) memcpy(im.data, vals, sizeof(float) * (size_t)w * (size_t)h * (size_t)ch);
+    return im;
+}
+
+/* Render `window` of out at frame 1 of a one-frame shot, without fetch or state. */
+static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *node,
+                                     const nprfx_image *inputs, const nprfx_value *params,
+                                     nprfx_image *out, nprfx_rect window)
+{
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = ctx;
+    a.node = node;
+    a.time = 1;
+    a.render_scale = 1;
+    a.frame = out->bounds;
+    a.window = window;
+    a.first_frame = a.last_frame = 1;
+    a.inputs = inputs;
+    a.params = params;
+    a.output = out;
+    return node->render(&a);
+}
+
+static inline int th_param(const nprfx_node_desc *node, const char *name)
+{
+    int i = nprfx_node_param_index(node, name);
+    if (i < 0) {
+        fprintf(stderr, "test: %s has no param %s\n", node->id, name);
+        exit(2);
+    }
+    return i;
+}
+
+static inline int th_input(const nprfx_node_desc *node, const char *name)
+{
+    int i = nprfx_node_input_index(node, name);
+    if (i < 0) {
+        fprintf(stderr, "test: %s has no input %s\n", node->id, name);
+        exit(2);
+    }
+    return i;
+}
+
+/* Set CHOICE param `param` to the option named `option`. */
+static inline void th_set_choice(const nprfx_node_desc *node, nprfx_value *values,
+                                 const char *param, const char *option)
+{
+    int pi = th_param(node, param);
+    const nprfx_param_desc *p = &node->params[pi];
+    for (int i = 0; p->choices && p->choices[i]; i++)
+        if (strcmp(p->choices[i], option) == 0) {
+            values[pi].v[0] = i;
+            return;
+        }
+    fprintf(stderr, "test: %s.%s has no option %s\n", node->id, param, option);
+    exit(2);
+}
+
+#endif
