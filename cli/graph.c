@@ -1212,9 +1212,12 @@ void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n)
         if (w->kind != GK_WRITE) continue;
         size_t len = strlen(buf);
         const char *dir = g->out_dir ? g->out_dir : "";
-        snprintf(buf + len, n - len, "  %s%s%s%s%s%s\n", dir, dir[0] ? "/" : "", w->path,
-                 w->preview ? "  (previews " : "", w->preview ? w->preview : "",
-                 w->preview ? ")" : "");
+        const char *sep = dir[0] ? "/" : "";
+        if (w->preview)
+            snprintf(buf + len, n - len, "  %s%s%s  (previews %s%s%s)\n", dir, sep, w->path, dir,
+                     sep, w->preview);
+        else
+            snprintf(buf + len, n - len, "  %s%s%s\n", dir, sep, w->path);
     }
 }
 
