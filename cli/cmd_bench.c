@@ -70,9 +70,10 @@ int nprfx_cmd_bench(int argc, char **argv)
     /* Build the graph as JSON text, so bench exercises exactly the runner's wiring. */
     char json[8192];
     int len = snprintf(json, sizeof json,
-                       "{\"nodes\": {\"plate\": {\"node\": \"synth\", \"scene\": \"%s\", "
-                       "\"size\": \"%dx%d\"}, \"bench\": {\"node\": \"%s\", \"inputs\": {",
-                       scene, w, h, node_id);
+                       "{\"frames\": \"1-%d\", \"nodes\": {\"plate\": {\"node\": \"synth\", "
+                       "\"scene\": \"%s\", \"size\": \"%dx%d\"}, \"bench\": {\"node\": \"%s\", "
+                       "\"inputs\": {",
+                       frames + 1, scene, w, h, node_id);
     int first = 1;
     for (int k = 0; k < d->num_inputs; k++) {
         const char *sel = NULL;

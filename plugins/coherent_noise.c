@@ -8,6 +8,8 @@
 #include <string.h>
 
 #include "nprfx/coherent_noise.h"
+#include "nprfx/context.h"
+#include "nprfx/exec.h"
 #include "nprfx/node.h"
 
 enum { IN_DEPTH, IN_MOTION_PREV, IN_MOTION_NEXT, IN_ZVEL, IN_SOURCE, IN_COUNT };
@@ -296,7 +298,8 @@ static const char help[] =
     "previous frame, motion_next(x) to the next frame. Blender's Vector pass holds (to previous "
     "X, Y, and this frame's position minus the next one) with y up, as measured on the sample "
     "plates: motion_prev = (Vector.X, -Vector.Y), motion_next = (-Vector.Z, Vector.W); a read "
-    "node with \"vectors\": \"blender\" applies exactly this mapping. Nuke's ScanlineRender motion vectors: "
+    "node with \"vectors\": \"blender\" applies exactly this mapping. Nuke's ScanlineRender motion "
+    "vectors: "
     "motion_prev = (backward.u, -backward.v), motion_next = (forward.u, -forward.v); check the "
     "sign on one frame (some tools store the offset from the other frame to this one: negate "
     "it). Under a host proxy the vectors are scaled by the render scale.\n"
@@ -361,6 +364,13 @@ typedef struct cn_pass {
     cn_slot *ring; /* the most recent run of states */
     int nring, ring_next;
     nprfx_cn_state scratch;
+    /* The depth read by the latest step (frame depth_frame, of the state whose fingerprint is
+     * depth_fp): the next in-order step needs it as the previous depth, and fetching another
+     * frame can be costly in a host (an upstream render, a channel repack). */
+    nprfx_image depth;
+    int64_t depth_frame;
+    uint64_t depth_fp;
+    int depth_valid;
 } cn_pass;
 
 typedef struct cn_cache {
@@ -389,6 +399,7 @@ static void cn_pass_free(cn_pass *ps)
     free(ps->ckpt);
     free(ps->ring);
     nprfx_cn_state_free(&ps->scratch);
+    nprfx_image_free(&ps->depth);
     memset(ps, 0, sizeof *ps);
 }
 
@@ -479,6 +490,11 @@ static nprfx_result cn_fetch(const cn_run *run, int input, int64_t frame, nprfx_
     static const char *const names[IN_COUNT] = {"depth", "motion_prev", "motion_next", "zvel",
                                                 "source"};
     memset(out, 0, sizeof *out);
+    if (frame == run->frame && a->inputs[input].data) {
+        /* The render call's own inputs are the inputs at this frame: no second fetch. */
+        *out = a->inputs[input];
+        return NPRFX_OK;
+    }
     if (!a->fetch) {
         if (frame != run->frame)
             return nprfx_error(run->ctx, NPRFX_ERR_UNSUPPORTED,
@@ -615,6 +631,25 @@ static nprfx_result cn_pass_checkpoint(const cn_run *run, cn_pass *ps, const cn_
     return NPRFX_OK;
 }
 
+/* Keep a copy of the depth a step read at frame f (its state's fingerprint fp). Best effort:
+ * without memory the next step fetches the depth instead. */
+static void cn_copy(nprfx_context *ctx, const nprfx_image *src, nprfx_image *dst, nprfx_rect win,
+                    int unit01, float contrast);
+
+static void cn_pass_keep_depth(nprfx_context *ctx, cn_pass *ps, const nprfx_image *depth, int64_t f,
+                               uint64_t fp)
+{
+    ps->depth_valid = 0;
+    if (!ps->depth.data || !nprfx_rect_equal(ps->depth.bounds, depth->bounds)) {
+        nprfx_image_free(&ps->depth);
+        if (nprfx_image_alloc(NULL, depth->bounds, 1, &ps->depth)) return;
+    }
+    cn_copy(ctx, depth, &ps->depth, depth->bounds, 0, 0.0f);
+    ps->depth_frame = f;
+    ps->depth_fp = fp;
+    ps->depth_valid = 1;
+}
+
 /* The pass's state at frame f, computed from the nearest saved state (or the origin). */
 static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const cn_slot **out)
 {
@@ -644,8 +679,11 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
     while (g != f) {
         int64_t h = g + ps->dir;
         nprfx_image depth, motion, zvel = {0}, depth_prev, src = {0};
-        if ((r = cn_fetch(run, IN_DEPTH, h, &depth)) || (r = cn_fetch(run, minput, h, &motion)) ||
-            (r = cn_fetch(run, IN_DEPTH, g, &depth_prev)))
+        if ((r = cn_fetch(run, IN_DEPTH, h, &depth)) || (r = cn_fetch(run, minput, h, &motion)))
+            return r;
+        if (ps->depth_valid && ps->depth_frame == g && ps->depth_fp == cur->fingerprint)
+            depth_prev = ps->depth;
+        else if ((r = cn_fetch(run, IN_DEPTH, g, &depth_prev)))
             return r;
         if (run->have_zvel && (r = cn_fetch(run, IN_ZVEL, h, &zvel))) return r;
         if (run->p.noise == NPRFX_CN_NOISE_INPUT && (r = cn_fetch(run, IN_SOURCE, h, &src)))
@@ -658,6 +696,7 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
             return r;
         cn_slot *ns = cn_pass_push(ps, h, fp);
         if ((r = cn_pass_checkpoint(run, ps, ns))) return r;
+        cn_pass_keep_depth(run->ctx, ps, &depth, h, fp);
         cur = ns;
         g = h;
     }
@@ -668,6 +707,58 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
 static void cn_pass_invalidate(cn_pass *ps)
 {
     ps->valid = 0;
+}
+
+/* Rows of win from src into dst (dst->channels channels); unit01: 0.5 + contrast * v. Row-parallel
+ * over the context's executor: the copies are a sizeable part of a frame's memory traffic. */
+typedef struct cn_copy_job {
+    const nprfx_image *src;
+    nprfx_image *dst;
+    nprfx_rect win;
+    int unit01;
+    float contrast;
+} cn_copy_job;
+
+static void cn_copy_rows(void *user, int begin, int end, int worker)
+{
+    const cn_copy_job *j = user;
+    const int C = j->dst->channels, w = nprfx_rect_width(j->win);
+    const size_t n = (size_t)w * (size_t)C;
+    const int packed = j->src->pixel_stride == C && j->dst->pixel_stride == C;
+    (void)worker;
+    for (int y = j->win.y0 + begin; y < j->win.y0 + end; y++) {
+        const float *s = nprfx_image_at(j->src, j->win.x0, y);
+        float *o = nprfx_image_at(j->dst, j->win.x0, y);
+        if (packed && !j->unit01) {
+            memcpy(o, s, n * sizeof(float));
+        } else if (packed) {
+            for (size_t i = 0; i < n; i++)
+                o[i] = 0.5f + j->contrast * s[i];
+        } else {
+            for (int x = 0; x < w; x++)
+                for (int c = 0; c < C; c++) {
+                    float v = s[(ptrdiff_t)x * j->src->pixel_stride + c];
+                    o[(ptrdiff_t)x * j->dst->pixel_stride + c] =
+                        j->unit01 ? 0.5f + j->contrast * v : v;
+                }
+        }
+    }
+}
+
+static void cn_copy(nprfx_context *ctx, const nprfx_image *src, nprfx_image *dst, nprfx_rect win,
+                    int unit01, float contrast)
+{
+    if (nprfx_rect_empty(win)) return;
+    cn_copy_job job = {src, dst, win, unit01, contrast};
+    nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(win), 32, cn_copy_rows, &job);
+}
+
+/* The render window of src into the output. */
+static void cn_copy_window(const nprfx_render_args *args, const nprfx_image *src, int unit01,
+                           float contrast)
+{
+    cn_copy(args->ctx, src, args->output, nprfx_rect_intersect(args->window, args->frame), unit01,
+            contrast);
 }
 
 static nprfx_result cn_render(const nprfx_render_args *args)
@@ -782,6 +873,10 @@ static nprfx_result cn_render(const nprfx_render_args *args)
     okey = cn_hash_i64(okey, (int64_t)(outmap));
     okey = cn_hash_f64(okey, contrast);
 
+    /* Causal without smoothing: the output is the forward state itself (mapped), copied to the
+     * window straight from the pass; no full-frame result is kept. */
+    int direct = !run.symmetric && !(smooth > 0.0);
+
     pthread_mutex_lock(&cache->lock);
     if (!cache->have_key || cache->key != key) {
         cn_pass_free(&cache->pass[0]);
@@ -808,6 +903,13 @@ static nprfx_result cn_render(const nprfx_render_args *args)
             goto unlock;
         const cn_slot *fw = NULL, *bw = NULL;
         if ((r = cn_pass_get(&run, &cache->pass[0], run.frame, &fw))) goto unlock;
+        if (direct) {
+            nprfx_image_free(&cache->result);
+            cn_copy_window(args, &fw->st.value,
+                           outmap == OUT_UNIT01 && run.p.noise != NPRFX_CN_NOISE_INPUT,
+                           (float)contrast);
+            goto unlock;
+        }
         if (run.symmetric) {
             int64_t nb = run.window > 0 ? run.window + 1 : run.last - run.start + 1;
             if ((r = cn_pass_configure(&run, &cache->pass[1], NPRFX_CN_BACKWARD, run.last, nb)))
@@ -841,16 +943,7 @@ static nprfx_result cn_render(const nprfx_render_args *args)
         cache->result_key = okey;
         cache->result_fp = fp;
     }
-    {
-        nprfx_rect win = nprfx_rect_intersect(args->window, args->frame);
-        for (int y = win.y0; y < win.y1; y++)
-            for (int x = win.x0; x < win.x1; x++) {
-                const float *s = nprfx_image_at(&cache->result, x, y);
-                float *o = nprfx_image_at(args->output, x, y);
-                for (int c = 0; c < run.p.channels; c++)
-                    o[c] = s[c];
-            }
-    }
+    cn_copy_window(args, &cache->result, 0, 0.0f);
 unlock:
     pthread_mutex_unlock(&cache->lock);
     return r;

@@ -76,6 +76,7 @@ typedef struct nprfx_cn_state {
 nprfx_result nprfx_cn_state_alloc(nprfx_context *ctx, nprfx_rect frame, int channels,
                                   nprfx_cn_state *out);
 void nprfx_cn_state_free(nprfx_cn_state *s);
+/* Row-parallel over ctx's executor. */
 nprfx_result nprfx_cn_state_copy(nprfx_context *ctx, const nprfx_cn_state *src,
                                  nprfx_cn_state *dst);
 size_t nprfx_cn_state_bytes(nprfx_rect frame, int channels);
@@ -102,7 +103,12 @@ nprfx_result nprfx_cn_begin(nprfx_context *ctx, const nprfx_cn_params *p, int64_
                             const nprfx_image *source, nprfx_cn_state *out);
 
 /* One recursion step of a pass in `direction` from prev (frame - direction) to `frame`.
- * out and prev must be distinct states over the same frame. */
+ * out and prev must be distinct states over the same frame.
+ * Cost: one row-parallel pass over the pixels. White noise is made row by row (the compensation
+ * fields only where a pixel interpolates), so no frame-sized temporaries are allocated; band-pass
+ * noise is filtered as whole fields first. The result does not depend on the executor, the CPU's
+ * vector width or the states' memory layout (vector and scalar code do the same float operations
+ * in the same order). */
 nprfx_result nprfx_cn_step(nprfx_context *ctx, const nprfx_cn_params *p, int direction,
                            int64_t frame, const nprfx_cn_inputs *in, const nprfx_cn_state *prev,
                            nprfx_cn_state *out);
