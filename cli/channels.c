@@ -14,11 +14,12 @@ static int suffix_match(const char *name, const char *suffix)
     return name[n - s - 1] == '.' && strcmp(name + n - s, suffix) == 0;
 }
 
-/* Canonical order of the last component inside a layer: colour, then vectors, then the rest
- * alphabetically (EXR stores channels alphabetically, which would give A,B,G,R). */
+/* Canonical order of the last component inside a layer: colour, vectors, texture coordinates,
+ * then alpha/coverage, then the rest alphabetically (EXR stores channels alphabetically, which
+ * would give A,B,G,R, and Blender's UV layer A,U,V). */
 static int component_rank(const char *c)
 {
-    static const char *const order[] = {"R", "G", "B", "A", "X", "Y", "Z", "W", "U", "V", NULL};
+    static const char *const order[] = {"R", "G", "B", "X", "Y", "Z", "W", "U", "V", "A", NULL};
     for (int i = 0; order[i]; i++)
         if (!strcmp(c, order[i])) return i;
     return 100;
