@@ -15,6 +15,7 @@ int nprfx_cmd_diff(int argc, char **argv);
 int nprfx_cmd_synth(int argc, char **argv);
 int nprfx_cmd_bench(int argc, char **argv);
 int nprfx_cmd_docs(int argc, char **argv);
+int nprfx_cmd_ivs(int argc, char **argv);
 
 #ifdef __cplusplus
 }

@@ -21,6 +21,7 @@ static const command commands[] = {
     {"synth", nprfx_cmd_synth, "write analytic test plates with exact AOVs"},
     {"bench", nprfx_cmd_bench, "time a node: Mpixel/s, ms per frame, peak memory"},
     {"docs", nprfx_cmd_docs, "write the node reference (Markdown) generated from the descriptors"},
+    {"ivs", nprfx_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
 };
 
 static void usage(FILE *f)

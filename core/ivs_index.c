@@ -132,8 +132,12 @@ long long nprfx_ivs_index_query(const nprfx_ivs_index *ix, int limit, double u0,
 {
     if (!ix || limit <= 0 || !(u1 > u0) || !(v1 > v0)) return 0;
     if (limit > ix->count) limit = ix->count;
+    /* the first level holding limit points: level l holds min(2^l, count) */
     int l = 0;
-    while (l + 1 < ix->num_levels && ix->levels[l].count < limit)
+    while (l < 30 && (1 << l) < limit)
+        l++;
+    if (l > ix->num_levels - 1) l = ix->num_levels - 1;
+    while (l + 1 < ix->num_levels && ix->levels[l].count < limit) /* never, by the above */
         l++;
     const ivs_level *lv = &ix->levels[l];
     const int g = lv->grid;
@@ -144,21 +148,35 @@ long long nprfx_ivs_index_query(const nprfx_ivs_index *ix, int limit, double u0,
     double cv0 = floor(v0 * g - slack), cv1 = floor(v1 * g + slack);
     if (!(cu1 - cu0 < 1e9 && cv1 - cv0 < 1e9)) return 0; /* absurd rectangles: refuse */
     long long visited = 0;
+    /* cell (rx, ry) of tile (tx, ty), stepped without a division per cell */
+    const long long cx0 = (long long)cu0, cx1 = (long long)cu1;
+    const long long tx0 = floor_div(cx0, g);
+    const int rx0 = (int)(cx0 - tx0 * g);
+    long long ty = floor_div((long long)cv0, g);
+    int ry = (int)((long long)cv0 - ty * g);
     for (long long cy = (long long)cv0; cy <= (long long)cv1; cy++) {
-        long long ty = floor_div(cy, g);
-        int ry = (int)(cy - ty * g);
-        for (long long cx = (long long)cu0; cx <= (long long)cu1; cx++) {
-            long long tx = floor_div(cx, g);
-            int rx = (int)(cx - tx * g);
-            int c = ry * g + rx;
-            for (int e = lv->start[c]; e < lv->start[c + 1]; e++) {
+        const double dty = (double)ty;
+        long long tx = tx0;
+        int rx = rx0;
+        const int *start = lv->start + (size_t)ry * g;
+        for (long long cx = cx0; cx <= cx1; cx++) {
+            const double dtx = (double)tx;
+            for (int e = start[rx]; e < start[rx + 1]; e++) {
                 const ivs_entry *en = &lv->entries[e];
                 if (en->index >= limit) break;
-                double u = (double)en->x + (double)tx, v = (double)en->y + (double)ty;
+                double u = (double)en->x + dtx, v = (double)en->y + dty;
                 if (u < u0 || u >= u1 || v < v0 || v >= v1) continue;
                 visited++;
                 if (visit && visit(user, en->index, u, v)) return visited;
             }
+            if (++rx == g) {
+                rx = 0;
+                tx++;
+            }
+        }
+        if (++ry == g) {
+            ry = 0;
+            ty++;
         }
     }
     return visited;

@@ -16,6 +16,7 @@ enum {
     P_DELTA_MIN,
     P_TONES,
     P_TILE,
+    P_ASPECT,
     P_INK,
     P_PAPER,
     P_SEED,
@@ -128,6 +129,20 @@ static const nprfx_param_desc params[P_COUNT] = {
      .soft_max = 4,
      .hard_min = 1e-6,
      .hard_max = 1e6},
+    {.name = "aspect",
+     .label = "UV Aspect",
+     .help = "How many times longer a unit of u is than a unit of v on the surfaces (1: square "
+             "UVs). Where a UV map stretches, e.g. a unit square mapped onto a 2.5:1 plane, the "
+             "dots are stretched with it and line up in rows; give the stretch here and the "
+             "sequence is tiled with period tile / sqrt(aspect) in u and tile * sqrt(aspect) in "
+             "v, the same area per copy, so its copies are square on the surface again. One "
+             "value for all objects: pick the typical stretch of the shot's UV maps.",
+     .type = NPRFX_PARAM_DOUBLE,
+     .def = {1},
+     .soft_min = 0.25,
+     .soft_max = 4,
+     .hard_min = 1e-3,
+     .hard_max = 1e3},
     {.name = "ink",
      .label = "Ink",
      .help = "Colour of the dots (RGBA, premultiplied).",
@@ -188,7 +203,7 @@ static const nprfx_param_desc params[P_COUNT] = {
              "the same discs, viewBox = the frame size, paper as background. Empty: no export.",
      .type = NPRFX_PARAM_STRING,
      .def_string = "",
-     .flags = NPRFX_PARAM_PATH},
+     .flags = NPRFX_PARAM_PATH | NPRFX_PARAM_EXPORT},
 };
 
 static nprfx_result st_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
@@ -204,10 +219,12 @@ static nprfx_result st_output(const nprfx_value *pv, const int *ich, nprfx_outpu
     return NPRFX_OK;
 }
 
-/* ---- the per-instance cache: the tone-correction curve of the last params ---- */
+/* ---- the per-instance cache: the dot sequence, and the tone-correction curve of the last
+ * params ---- */
 
 typedef struct st_state {
-    pthread_mutex_t lock;
+    nprfx_stipple_sequence *seq; /* grown on demand, thread-safe on its own */
+    pthread_mutex_t lock;        /* guards the curve */
     int valid;
     nprfx_stipple_params key; /* the params the curve was measured for */
     float curve[NPRFX_STIPPLE_CURVE_SIZE];
@@ -217,8 +234,40 @@ static void st_state_free(void *state)
 {
     st_state *s = state;
     if (!s) return;
+    nprfx_stipple_sequence_destroy(s->seq);
     pthread_mutex_destroy(&s->lock);
     free(s);
+}
+
+/* The instance state, created on first use; NULL when the caller gives no state slot (then
+ * each call builds what it needs). Hosts may render tiles of one instance on several threads
+ * at once: a fresh state is installed with a compare-and-swap, the loser frees its own. */
+static nprfx_result st_get_state(const nprfx_render_args *args, st_state **out)
+{
+    *out = NULL;
+    if (!args->state) return NPRFX_OK;
+    _Atomic(void *) *slot = (_Atomic(void *) *)args->state;
+    st_state *s = atomic_load(slot);
+    if (!s) {
+        st_state *fresh = calloc(1, sizeof *fresh);
+        if (!fresh)
+            return nprfx_error(args->ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
+        nprfx_result r = nprfx_stipple_sequence_create(args->ctx, &fresh->seq);
+        if (r != NPRFX_OK) {
+            free(fresh);
+            return r;
+        }
+        pthread_mutex_init(&fresh->lock, NULL);
+        void *expected = NULL;
+        if (atomic_compare_exchange_strong(slot, &expected, fresh)) {
+            s = fresh;
+        } else {
+            st_state_free(fresh);
+            s = expected;
+        }
+    }
+    *out = s;
+    return NPRFX_OK;
 }
 
 /* The curve depends on the mode and the dot sizes and pens, nothing else. */
@@ -232,28 +281,11 @@ static int same_curve_params(const nprfx_stipple_params *a, const nprfx_stipple_
     return 1;
 }
 
-/* Fill curve for p, through the instance cache when the caller gives a state slot. Hosts may
- * render tiles of one instance on several threads at once: the state is installed with a
- * compare-and-swap and the curve computed under its lock. */
-static nprfx_result st_curve(const nprfx_render_args *args, const nprfx_stipple_params *p,
-                             float *curve)
+/* Fill curve for p, through the instance cache when there is one (computed under its lock). */
+static nprfx_result st_curve(const nprfx_render_args *args, st_state *s,
+                             const nprfx_stipple_params *p, float *curve)
 {
-    if (!args->state) return nprfx_stipple_tone_curve(args->ctx, p, curve);
-    _Atomic(void *) *slot = (_Atomic(void *) *)args->state;
-    st_state *s = atomic_load(slot);
-    if (!s) {
-        st_state *fresh = calloc(1, sizeof *fresh);
-        if (!fresh)
-            return nprfx_error(args->ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
-        pthread_mutex_init(&fresh->lock, NULL);
-        void *expected = NULL;
-        if (atomic_compare_exchange_strong(slot, &expected, fresh)) {
-            s = fresh;
-        } else {
-            st_state_free(fresh);
-            s = expected;
-        }
-    }
+    if (!s) return nprfx_stipple_tone_curve(args->ctx, p, curve);
     nprfx_result r = NPRFX_OK;
     pthread_mutex_lock(&s->lock);
     if (!s->valid || !same_curve_params(&s->key, p)) {
@@ -279,6 +311,7 @@ static nprfx_result st_params(const nprfx_render_args *args, nprfx_stipple_param
     p->a0 = pv[P_A0].v[0];
     p->delta_min = pv[P_DELTA_MIN].v[0];
     p->tile = pv[P_TILE].v[0];
+    p->aspect = pv[P_ASPECT].v[0];
     double scale = args->render_scale > 0 ? args->render_scale : 1.0;
     p->plane_scale = NPRFX_STIPPLE_PLANE_PIXELS * scale;
     for (int c = 0; c < 4; c++) {
@@ -292,13 +325,18 @@ static nprfx_result st_params(const nprfx_render_args *args, nprfx_stipple_param
     return NPRFX_OK;
 }
 
-/* st_params plus the tone curve when the param asks for it (curve: the caller's storage). */
+/* st_params plus the instance's sequence, and the tone curve when the param asks for it
+ * (curve: the caller's storage). */
 static nprfx_result st_params_full(const nprfx_render_args *args, nprfx_stipple_params *p,
                                    float *curve)
 {
+    st_state *s = NULL;
     nprfx_result r = st_params(args, p);
-    if (r == NPRFX_OK && args->params[P_TONE_CORRECTION].v[0] != 0.0) {
-        r = st_curve(args, p, curve);
+    if (r == NPRFX_OK) r = st_get_state(args, &s);
+    if (r != NPRFX_OK) return r;
+    p->sequence = s ? s->seq : NULL;
+    if (args->params[P_TONE_CORRECTION].v[0] != 0.0) {
+        r = st_curve(args, s, p, curve);
         p->tone_curve = curve;
     }
     return r;
@@ -357,6 +395,36 @@ nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
     return r;
 }
 
+/* The descriptor's export hook: the format from the path's extension (case-insensitive). */
+static nprfx_result st_export_text(const nprfx_render_args *args, const char *path, char **text,
+                                   size_t *len)
+{
+    if (!text)
+        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
+                           "stipple.export: NULL output");
+    *text = NULL;
+    if (len) *len = 0;
+    const char *p = path ? path : "";
+    const char *slash = strrchr(p, '/'), *dot = strrchr(p, '.');
+    if (dot && slash && dot < slash) dot = NULL; /* a dot in a directory name */
+    const char *ext = dot ? dot + 1 : "";
+    char low[8] = {0};
+    size_t n = strlen(ext);
+    for (size_t i = 0; i < n && i < sizeof low - 1; i++)
+        low[i] = (char)(ext[i] >= 'A' && ext[i] <= 'Z' ? ext[i] - 'A' + 'a' : ext[i]);
+    if (n == 3 && !strcmp(low, "csv"))
+        return nprfx_stipple_node_export(args, NPRFX_STIPPLE_CSV, text, len);
+    if (n == 3 && !strcmp(low, "svg"))
+        return nprfx_stipple_node_export(args, NPRFX_STIPPLE_SVG, text, len);
+    if (!dot)
+        return nprfx_error(args->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "stipple.export: '%s' has no extension: end it in .csv or .svg", p);
+    return nprfx_error(args->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                       "stipple.export: unknown extension '.%s' in '%s': use .csv (a table of "
+                       "dots) or .svg (vector discs)",
+                       ext, p);
+}
+
 const nprfx_node_desc nprfx_node_stipple = {
     .size = sizeof(nprfx_node_desc),
     .id = "stipple",
@@ -395,4 +463,5 @@ const nprfx_node_desc nprfx_node_stipple = {
     .flags = NPRFX_NODE_STATEFUL,
     .render = st_render,
     .state_free = st_state_free,
+    .export_text = st_export_text,
 };

@@ -1,7 +1,8 @@
 /* nprfx — stippling from UV and shading (Ma et al. 2018; DESIGN.md §3.3).
  *
  * Candidate stipples are the points of the IVS sequence (ivs.h) tiled over UV space with period
- * `tile` (A0 = tile^2 of UV area per copy) and shifted per object. A pixel with UV Jacobian J
+ * `tile` (A0 = tile^2 of UV area per copy; tile / sqrt(aspect) by tile * sqrt(aspect) where the
+ * UV map is stretched) and shifted per object. A pixel with UV Jacobian J
  * (k = 1 / |det J| screen px^2 per UV area) and darkness g = 1 - tone keeps sample i (1-based)
  * when its screen area k * A0 / i is at least a threshold:
  *
@@ -17,7 +18,11 @@
  * pixel (half-open edges). The Jacobian comes from finite differences that never straddle an
  * object-id edge (and avoid a UV seam by taking the smaller one-sided difference); the |det J|
  * the thresholds use is averaged over the 5x5 same-object pixels around, which keeps the kept
- * prefix steady where the UV pass is quantised (half floats).
+ * prefix steady where the UV pass is quantised (half floats). A pixel whose |det J| is more
+ * than 8 times that of each of its same-object neighbours holds a filtered blend of two
+ * surfaces' (or two UV charts') UVs, as renderers write along silhouettes and seams: it takes
+ * the UV extrapolated from (and the derivatives of) its smoothest such neighbour, instead of
+ * owning a huge footprint packed with dots (a dark outline).
  *
  * Stipples are drawn as discs of their exact area (analytic disc/pixel-square intersection),
  * overlapping discs combining as 1 - prod(1 - coverage * tone) in a fixed order, ink over paper.
@@ -60,13 +65,25 @@ typedef struct nprfx_stipple_params {
     float ink[4], paper[4]; /* RGBA, treated as premultiplied: out = paper + d * (ink - paper) */
     uint64_t seed;          /* shifts the sequence per object id */
     int coverage_channel;   /* output a 5th channel: the ink coverage d */
-    /* The sequence to use; NULL: the process-wide one (nprfx_stipple_shared_index), grown on
-     * demand. Results do not depend on which: only the prefix a pixel keeps is ever read. */
+    /* The sequence to use: a fixed index (its length caps the prefix a pixel may keep), or
+     * NULL to take it from `sequence` below. Results do not depend on which, nor on how long
+     * the sequence is beyond what a pixel keeps: only that prefix is ever read. */
     const nprfx_ivs_index *index;
     /* NULL, or NPRFX_STIPPLE_CURVE_SIZE darknesses from nprfx_stipple_tone_curve: the
      * darkness g of each pixel is replaced by curve(g) (linear interpolation) before the
      * thresholds, which compensates for overlapping dots. */
     const float *tone_curve;
+    /* When index is NULL: a caller-owned, lazily grown sequence (nprfx_stipple_sequence_create;
+     * the stipple node keeps one in its instance state), shared by the threads of a call and
+     * reused across calls. NULL too: each call builds its own for its duration (correct, but it
+     * pays the generation, ~0.15 s for the first 65536 points, every time). */
+    struct nprfx_stipple_sequence *sequence;
+    /* UV aspect, > 0 (1: UV units are square on the surfaces): how many times longer a unit of
+     * u is than a unit of v on the surfaces, as where a UV square is mapped onto a 2:1
+     * rectangle. The sequence is tiled with period tile / sqrt(aspect) in u and tile *
+     * sqrt(aspect) in v (the same area A0 = tile^2), which makes its copies square on such
+     * surfaces; otherwise the dots are stretched with the UV map and line up in rows. */
+    double aspect;
 } nprfx_stipple_params;
 
 #define NPRFX_STIPPLE_CURVE_SIZE 17
@@ -144,14 +161,24 @@ struct nprfx_render_args;
 nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
                                        nprfx_stipple_format_kind kind, char **text, size_t *len);
 
-/* The process-wide sequence (seed NPRFX_IVS_DEFAULT_SEED) and its index, holding at least
- * min_count points (clamped to NPRFX_STIPPLE_MAX_SAMPLES). Built on first use and regrown by
- * powers of two when a longer prefix is asked for (about 2.5 s per million points); earlier
- * versions stay valid for the life of the process, so a pointer once returned never dangles.
- * Thread-safe. This lazily built, never-modified table is nprfx's only process-wide state: the
- * sequence is a pure function of its seed, so sharing it changes no result. */
-nprfx_result nprfx_stipple_shared_index(nprfx_context *ctx, int min_count,
-                                        const nprfx_ivs_index **out);
+/* A lazily grown IVS sequence (seed NPRFX_IVS_DEFAULT_SEED) with its spatial index, owned by
+ * the caller: there is no process-wide sequence. Empty when created (cheap); it is generated on
+ * first use and regrown by powers of two (from 65536 points, at most NPRFX_STIPPLE_MAX_SAMPLES)
+ * when a longer prefix is asked for, about 2.5 s per million points. Thread-safe: concurrent
+ * calls share one object; a longer version is built under its lock and published atomically,
+ * and earlier versions stay valid until the object is destroyed, so an index pointer once
+ * returned never dangles while a render uses it (the versions together hold at most twice the
+ * longest one). The sequence is a pure function of its seed and has the prefix property, so
+ * which version a pixel reads never changes a result. */
+typedef struct nprfx_stipple_sequence nprfx_stipple_sequence;
+
+nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_sequence **out);
+/* Frees every version; no call may be using it. NULL is a no-op. */
+void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
+/* An index holding at least min_count points (clamped to NPRFX_STIPPLE_MAX_SAMPLES), valid
+ * until seq is destroyed. */
+nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *seq,
+                                          int min_count, const nprfx_ivs_index **out);
 
 #ifdef __cplusplus
 }

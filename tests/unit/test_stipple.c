@@ -2,6 +2,7 @@
  * ownership, the three modes' rules, determinism across threads and tiles, vector export and
  * errors. Temporal coherence and zoom live in test_stipple_motion.c. */
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,8 +16,16 @@
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
 
-static nprfx_context *ctx1; /* serial */
-static nprfx_context *ctx4; /* 4 threads */
+static nprfx_context *ctx1;         /* serial */
+static nprfx_context *ctx4;         /* 4 threads */
+static nprfx_stipple_sequence *seq; /* the tests' sequence, reused across calls */
+
+/* Defaults with the tests' sequence (without one, every call would generate its own). */
+static void default_params(nprfx_stipple_params *p)
+{
+    nprfx_stipple_params_default(p);
+    p->sequence = seq;
+}
 
 static nprfx_image make_image(int w, int h, int ch)
 {
@@ -70,7 +79,7 @@ static void test_tone(void)
     const int seeds = 4;
     for (int m = 0; m < 3; m++) {
         nprfx_stipple_params p;
-        nprfx_stipple_params_default(&p);
+        default_params(&p);
         p.mode = m;
         float curve[NPRFX_STIPPLE_CURVE_SIZE];
         CHECK_OK(nprfx_stipple_tone_curve(ctx4, &p, curve));
@@ -112,7 +121,7 @@ static void test_blue_noise(void)
     float t = 0.75f;
     nprfx_image_fill(&tone, &t);
     nprfx_stipple_params p;
-    nprfx_stipple_params_default(&p);
+    default_params(&p);
     nprfx_stipple_inputs in = plain_inputs(&tone);
     nprfx_stipple *list = NULL;
     size_t count = 0;
@@ -175,13 +184,13 @@ static void test_exactly_once(void)
     float t = 0.7f;
     nprfx_image_fill(&tone, &t);
     nprfx_stipple_params p;
-    nprfx_stipple_params_default(&p);
+    default_params(&p);
     nprfx_stipple_inputs in = plain_inputs(&tone);
     nprfx_stipple *list = NULL;
     size_t count = 0;
     CHECK_OK(nprfx_stipple_collect(ctx4, &p, &in, tone.bounds, &list, &count));
     const nprfx_ivs_index *ix = NULL;
-    CHECK_OK(nprfx_stipple_shared_index(ctx1, 1, &ix));
+    CHECK_OK(nprfx_stipple_sequence_index(ctx1, seq, 1, &ix));
     double g = 1.0 - (double)t, px = p.plane_scale * p.tile; /* pixels per sequence unit */
     int limit = (int)(g / p.area * px * px);
     /* the frame's sequence rectangle, less the object offset (unknown here): find it from one
@@ -263,7 +272,7 @@ static void test_no_duplicates(void)
     const int w = 240, h = 180;
     scene s = make_scene(w, h);
     nprfx_stipple_params p;
-    nprfx_stipple_params_default(&p);
+    default_params(&p);
     p.tile = 0.1;
     nprfx_stipple_inputs in = {&s.tone, &s.uv, &s.id, s.tone.bounds};
     nprfx_stipple *list = NULL;
@@ -289,6 +298,62 @@ static void test_no_duplicates(void)
     CHECK(fabs(ink / dark - 1.0) < 0.05);
     free(list);
     free_scene(&s);
+}
+
+/* ---- filtered UVs at silhouettes and seams ---- */
+
+/* Renderers filter the UV pass: along a silhouette the pixels on both sides hold a blend of
+ * the two surfaces' UVs, and across a UV seam of the two charts'. Those pixels must not own a
+ * footprint spanning the gap between the charts, which packed it with dots (a dark outline,
+ * about twice the density in a 3 px band), nor leave a gap: the dot density along such an
+ * edge stays about that of the surfaces. */
+static double band_ratio(int seam)
+{
+    const int w = 240, h = 160, edge = w / 2;
+    scene s = {make_image(w, h, 1), make_image(w, h, 2), make_image(w, h, 1)};
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            /* object 1 left of the edge, object 2 (or a second chart of object 1) right of it,
+             * each with its own planar UV chart; the two columns at the edge are blends */
+            double ul = x / 200.0, vl = y / 200.0, ur = x / 200.0 + 0.6, vr = y / 200.0 + 0.3;
+            double u = x < edge ? ul : ur, v = x < edge ? vl : vr;
+            if (x == edge - 1) u = 0.75 * ul + 0.25 * ur, v = 0.75 * vl + 0.25 * vr;
+            if (x == edge) u = 0.25 * ul + 0.75 * ur, v = 0.25 * vl + 0.75 * vr;
+            nprfx_image_at(&s.uv, x, y)[0] = (float)u;
+            nprfx_image_at(&s.uv, x, y)[1] = (float)v;
+            nprfx_image_at(&s.id, x, y)[0] = (float)(seam || x < edge ? 1 : 2);
+            nprfx_image_at(&s.tone, x, y)[0] = 0.6f;
+        }
+    nprfx_stipple_params p;
+    default_params(&p);
+    p.tile = 0.25;
+    nprfx_stipple_inputs in = {&s.tone, &s.uv, &s.id, s.tone.bounds};
+    nprfx_stipple *list = NULL;
+    size_t count = 0;
+    CHECK_OK(nprfx_stipple_collect(ctx4, &p, &in, s.tone.bounds, &list, &count));
+    /* dots whose centre lies within 1.5 px of the edge, against bands as wide elsewhere */
+    size_t band = 0, ref = 0;
+    for (size_t i = 0; i < count; i++) {
+        if (list[i].y < 8 || list[i].y > h - 9) continue;
+        double x = list[i].x + 0.5;
+        band += fabs(x - edge) < 1.5;
+        ref += fabs(x - edge / 2) < 1.5;
+        ref += fabs(x - 3 * edge / 2) < 1.5;
+    }
+    ref /= 2;
+    free(list);
+    free_scene(&s);
+    return ref ? (double)band / ref : 0;
+}
+
+static void test_silhouettes(void)
+{
+    double sil = band_ratio(0), seam = band_ratio(1);
+    printf("blended UVs at an edge: dot density along it / elsewhere = %.2f (silhouette), %.2f "
+           "(seam)\n",
+           sil, seam);
+    CHECK(sil > 0.7 && sil < 1.35);
+    CHECK(seam > 0.5 && seam < 1.35);
 }
 
 /* ---- determinism through the node ---- */
@@ -383,7 +448,7 @@ static void test_modes(void)
     nprfx_image_fill(&tone, &t);
     nprfx_stipple_inputs in = plain_inputs(&tone);
     nprfx_stipple_params p;
-    nprfx_stipple_params_default(&p);
+    default_params(&p);
     nprfx_stipple *list = NULL;
     size_t count = 0;
 
@@ -449,7 +514,7 @@ static void test_disc_area(void)
             nprfx_image_at(&tone, x, y)[0] =
                 x >= 16 && x < n - 16 && y >= 16 && y < n - 16 ? 0.99f : 1.0f;
     nprfx_stipple_params p;
-    nprfx_stipple_params_default(&p);
+    default_params(&p);
     p.area = 20;
     p.coverage_channel = 1;
     nprfx_stipple_inputs in = plain_inputs(&tone);
@@ -477,6 +542,126 @@ static void test_disc_area(void)
     CHECK(worst < 1e-5);
     nprfx_image_free(&tone);
     nprfx_image_free(&out);
+}
+
+/* ---- the sequence: caller-owned, grown on demand, shared by concurrent renders ---- */
+
+typedef struct render_job {
+    const nprfx_image *inputs;
+    const nprfx_value *pv;
+    nprfx_image *out;
+    nprfx_rect window;
+    void **state;
+    nprfx_result r;
+} render_job;
+
+static void *render_thread(void *user)
+{
+    render_job *rj = user;
+    nprfx_context *c = NULL;
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    rj->r = nprfx_context_create(&ci, &c);
+    if (rj->r != NPRFX_OK) return NULL;
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = c;
+    a.node = node;
+    a.time = 1;
+    a.render_scale = 1;
+    a.frame = rj->out->bounds;
+    a.window = rj->window;
+    a.first_frame = a.last_frame = 1;
+    a.inputs = rj->inputs;
+    a.params = rj->pv;
+    a.output = rj->out;
+    a.state = rj->state;
+    rj->r = node->render(&a);
+    nprfx_context_destroy(c);
+    return NULL;
+}
+
+static void test_sequence(void)
+{
+    /* an index once returned stays; shorter requests get the current one; long ones clamp */
+    nprfx_stipple_sequence *s2 = NULL;
+    const nprfx_ivs_index *a = NULL, *b = NULL, *c = NULL;
+    CHECK_OK(nprfx_stipple_sequence_create(ctx1, &s2));
+    CHECK_OK(nprfx_stipple_sequence_index(ctx1, s2, 100, &a));
+    CHECK_OK(nprfx_stipple_sequence_index(ctx1, s2, 1 << 16, &b));
+    CHECK(a && a == b && nprfx_ivs_index_count(a) == 1 << 16);
+    CHECK_OK(nprfx_stipple_sequence_index(ctx1, s2, (1 << 16) + 1, &c));
+    CHECK(c && c != a && nprfx_ivs_index_count(c) == 1 << 17);
+    float pa[2], pc[2]; /* the prefix property: the longer one starts with the shorter */
+    int same = 1;
+    for (int k = 0; k < (1 << 16); k += 97) {
+        nprfx_ivs_index_point(a, k, pa);
+        nprfx_ivs_index_point(c, k, pc);
+        same &= pa[0] == pc[0] && pa[1] == pc[1];
+    }
+    CHECK(same);
+    CHECK(nprfx_stipple_sequence_index(ctx1, NULL, 10, &c) == NPRFX_ERR_INVALID_ARGUMENT);
+
+    /* results do not depend on the sequence's length beyond what pixels keep: the tests'
+     * sequence (grown by earlier tests), the longer s2, and a fresh one per call */
+    const int w = 160, h = 120;
+    scene sc = make_scene(w, h);
+    nprfx_stipple_inputs in = {&sc.tone, &sc.uv, &sc.id, sc.tone.bounds};
+    nprfx_stipple_params p;
+    default_params(&p);
+    p.tile = 0.1;
+    p.coverage_channel = 1;
+    nprfx_image r1 = make_image(w, h, 5), r2 = make_image(w, h, 5), r3 = make_image(w, h, 5);
+    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r1.bounds, &r1));
+    p.sequence = s2;
+    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r2.bounds, &r2));
+    p.sequence = NULL;
+    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r3.bounds, &r3));
+    CHECK(memcmp(r1.data, r2.data, sizeof(float) * 5 * w * h) == 0);
+    CHECK(memcmp(r1.data, r3.data, sizeof(float) * 5 * w * h) == 0);
+    nprfx_stipple_sequence_destroy(s2);
+
+    /* a host rendering tiles of a fresh instance on several threads at once: the state (and
+     * its sequence) is created once, and the result is the serial one */
+    node = nprfx_node_find("stipple");
+    if (node) {
+        nprfx_image inputs[3] = {sc.tone, sc.uv, sc.id};
+        nprfx_value pv[16];
+        nprfx_node_defaults(node, pv);
+        pv[PI("coverage")].v[0] = 1;
+        pv[PI("tile")].v[0] = 0.1;
+        nprfx_image ref = make_image(w, h, 5), got = make_image(w, h, 5);
+        CHECK_OK(node_render(ctx1, inputs, pv, &ref, ref.bounds));
+        for (int round = 0; round < 3; round++) {
+            void *fresh = NULL;
+            memset(got.data, 0, sizeof(float) * 5 * w * h);
+            enum { T = 4 };
+            pthread_t th[T];
+            render_job jobs[T];
+            for (int t = 0; t < T; t++) {
+                jobs[t] = (render_job){inputs, pv,
+                                       &got,   nprfx_rect_make(0, t * h / T, w, (t + 1) * h / T),
+                                       &fresh, NPRFX_OK};
+                CHECK(pthread_create(&th[t], NULL, render_thread, &jobs[t]) == 0);
+            }
+            int ok = 1;
+            for (int t = 0; t < T; t++) {
+                pthread_join(th[t], NULL);
+                ok &= jobs[t].r == NPRFX_OK;
+            }
+            CHECK(ok && fresh != NULL);
+            CHECK(memcmp(ref.data, got.data, sizeof(float) * 5 * w * h) == 0);
+            if (fresh) node->state_free(fresh);
+        }
+        nprfx_image_free(&ref);
+        nprfx_image_free(&got);
+    }
+    printf("sequence: caller-owned, prefix-stable, same output fresh / grown / per call, "
+           "concurrent first renders\n");
+    nprfx_image_free(&r1);
+    nprfx_image_free(&r2);
+    nprfx_image_free(&r3);
+    free_scene(&sc);
 }
 
 /* ---- export and errors ---- */
@@ -517,7 +702,7 @@ static void test_export(void)
     size_t len = 0;
     CHECK_OK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len));
     nprfx_stipple_params p;
-    nprfx_stipple_params_default(&p);
+    nprfx_stipple_params_default(&p); /* no sequence: the call builds its own */
     nprfx_stipple_inputs in = plain_inputs(&tone);
     nprfx_stipple *list = NULL;
     size_t count = 0;
@@ -573,15 +758,19 @@ int main(void)
     CHECK_OK(nprfx_context_create(&ci, &ctx1));
     ci.executor = nprfx_pool_executor(pool);
     CHECK_OK(nprfx_context_create(&ci, &ctx4));
+    CHECK_OK(nprfx_stipple_sequence_create(ctx1, &seq));
     test_tone();
     test_blue_noise();
     test_exactly_once();
     test_no_duplicates();
+    test_silhouettes();
     test_determinism();
     test_modes();
     test_disc_area();
+    test_sequence();
     test_export();
     if (node && node->state_free) node->state_free(node_state);
+    nprfx_stipple_sequence_destroy(seq);
     nprfx_context_destroy(ctx1);
     nprfx_context_destroy(ctx4);
     nprfx_pool_destroy(pool);

@@ -16,6 +16,7 @@
 static int W = 256, H = 192;
 
 static nprfx_context *ctx;
+static nprfx_stipple_sequence *seq; /* reused across calls */
 
 static int channel(const char *name)
 {
@@ -117,6 +118,7 @@ static void coherence_run(const char *scene, int f0, int frames, double max_chan
 {
     nprfx_stipple_params p;
     nprfx_stipple_params_default(&p);
+    p.sequence = seq;
     p.tile = 0.125;
     plate prev, cur;
     render_plate(scene, f0, &prev);
@@ -167,6 +169,7 @@ static void test_dolly(void)
     H = 384;
     nprfx_stipple_params p;
     nprfx_stipple_params_default(&p);
+    p.sequence = seq;
     p.tile = 0.125;
     nprfx_image tone;
     CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &tone));
@@ -206,11 +209,13 @@ int main(void)
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     ci.executor = nprfx_pool_executor(pool);
     CHECK_OK(nprfx_context_create(&ci, &ctx));
+    CHECK_OK(nprfx_stipple_sequence_create(ctx, &seq));
     coherence_run("rotate", 1, 6, 0.03, 0.5);
     coherence_run("translate", 1, 6, 0.03, 0.5);
     coherence_run("zoom", 1, 6, 0.03, 0.5);
     coherence_run("orbit", 4, 6, 0.10, 0.5);
     test_dolly();
+    nprfx_stipple_sequence_destroy(seq);
     nprfx_context_destroy(ctx);
     nprfx_pool_destroy(pool);
     return check_finish();
