@@ -76,8 +76,10 @@ typedef struct nprfx_gabor_params {
     double contrast;        /* unit01: 0.5 + contrast * n */
     int points;             /* 1: write a second channel, the squared weights of the kernels each
                                pixel owns (debugging; their sum per pixel^2 is lambda) */
-    int simd;               /* testing: 0 the fastest path available, 1 scalar, 2 SSE2 (where
-                               built); every path gives bit-identical output */
+    int simd;               /* testing: 0 the fastest path available, 1 scalar, 2 the baseline
+                               ISA's vectors (SSE2, NEON: scalar emission, vector rows), 3 AVX2
+                               (where the CPU has it, else as 2); every path gives bit-identical
+                               output */
 } nprfx_gabor_params;
 
 /* Defaults: pref anchors, F0 0.1 cycles/px, w0 0, anisotropic, r 16 px, N0 32, seed 0, h0 1,
