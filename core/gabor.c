@@ -131,60 +131,52 @@ GV_INLINE gv8i gv_loadi(const int32_t *p)
     return v;
 }
 
-GV_INLINE void gv_storef(float *p, gv8f v)
-{
-    memcpy(p, &v, sizeof v);
-}
+/* Helpers that take vectors are macros (vector arguments are passed by pointer otherwise): no
+ * vector type crosses a call, so no ABI question (nor GCC's psabi notes) */
+#define gv_storef(p, v)                                                                            \
+    __extension__({                                                                                \
+        gv8f gv_t_ = (v);                                                                          \
+        memcpy((p), &gv_t_, sizeof gv_t_);                                                         \
+    })
+#define gv_storei(p, v)                                                                            \
+    __extension__({                                                                                \
+        gv8i gv_t_ = (v);                                                                          \
+        memcpy((p), &gv_t_, sizeof gv_t_);                                                         \
+    })
+#define gv_wide(v) __builtin_convertvector((v), gv8d)
 
-GV_INLINE void gv_storei(int32_t *p, gv8i v)
-{
-    memcpy(p, &v, sizeof v);
-}
+#define gv_narrow(v) __builtin_convertvector((v), gv8f)
+#define gv_mask(m) __builtin_convertvector((m), gv8i)
 
-GV_INLINE gv8d gv_wide(gv8f v)
-{
-    return __builtin_convertvector(v, gv8d);
-}
+/* m ? a : b for lane masks m (all bits set or clear; m is evaluated twice) */
+#define gv_self(m, a, b) ((gv8f)(((gv8i)(a) & (m)) | ((gv8i)(b) & ~(m))))
+#define gv_seli(m, a, b) (((a) & (m)) | ((b) & ~(m)))
 
-GV_INLINE gv8f gv_narrow(gv8d v)
-{
-    return __builtin_convertvector(v, gv8f);
-}
+#define gv_seld(m, a, b) ((gv8d)(((gv8l)(a) & (m)) | ((gv8l)(b) & ~(m))))
 
-GV_INLINE gv8i gv_mask(gv8l m)
-{
-    return __builtin_convertvector(m, gv8i);
-}
+#define gv_absf(v) ((gv8f)((gv8i)(v)&0x7fffffff))
 
-/* m ? a : b for lane masks m (all bits set or clear) */
-GV_INLINE gv8f gv_self(gv8i m, gv8f a, gv8f b)
-{
-    return (gv8f)(((gv8i)a & m) | ((gv8i)b & ~m));
-}
-
-GV_INLINE gv8i gv_seli(gv8i m, gv8i a, gv8i b)
-{
-    return (a & m) | (b & ~m);
-}
-
-GV_INLINE gv8d gv_seld(gv8l m, gv8d a, gv8d b)
-{
-    return (gv8d)(((gv8l)a & m) | ((gv8l)b & ~m));
-}
-
-GV_INLINE gv8f gv_absf(gv8f v)
-{
-    return (gv8f)((gv8i)v & 0x7fffffff);
-}
-
-GV_INLINE gv8d gv_absd(gv8d v)
-{
-    return (gv8d)((gv8l)v & 0x7fffffffffffffffll);
-}
+#define gv_absd(v) ((gv8d)((gv8l)(v)&0x7fffffffffffffffll))
+#define gv_sqrt(v)                                                                                 \
+    __extension__({                                                                                \
+        gv8d gv_t_ = (v);                                                                          \
+        gv_sqrt_(&gv_t_);                                                                          \
+    })
+#define gv_iceil(v)                                                                                \
+    __extension__({                                                                                \
+        gv8d gv_t_ = (v);                                                                          \
+        gv_iceil_(&gv_t_);                                                                         \
+    })
+#define gv_ifloor(v)                                                                               \
+    __extension__({                                                                                \
+        gv8d gv_t_ = (v);                                                                          \
+        gv_ifloor_(&gv_t_);                                                                        \
+    })
 
 /* (no generic vector sqrt: SSE2's, on register pieces) */
-GV_INLINE gv8d gv_sqrt(gv8d x)
+GV_INLINE gv8d gv_sqrt_(const gv8d *px)
 {
+    gv8d x = *px;
 #if GABOR_SSE
     gv2d q0 = (gv2d)_mm_sqrt_pd((__m128d)__builtin_shufflevector(x, x, 0, 1));
     gv2d q1 = (gv2d)_mm_sqrt_pd((__m128d)__builtin_shufflevector(x, x, 2, 3));
@@ -200,8 +192,9 @@ GV_INLINE gv8d gv_sqrt(gv8d x)
     return x;
 }
 
-GV_INLINE gv4d gv_sqrt4(gv4d x)
+GV_INLINE gv4d gv_sqrt4_(const gv4d *px)
 {
+    gv4d x = *px;
 #if GABOR_SSE
     gv2d q0 = (gv2d)_mm_sqrt_pd((__m128d)__builtin_shufflevector(x, x, 0, 1));
     gv2d q1 = (gv2d)_mm_sqrt_pd((__m128d)__builtin_shufflevector(x, x, 2, 3));
@@ -225,8 +218,20 @@ GV_INLINE gv4i gv4_mini(gv4i a, gv4i b)
     return (b & m) | (a & ~m);
 }
 
-GV_INLINE int gv_any(gv8i m)
+#define gv_sqrt4(v)                                                                                \
+    __extension__({                                                                                \
+        gv4d gv_t_ = (v);                                                                          \
+        gv_sqrt4_(&gv_t_);                                                                         \
+    })
+#define gv_any(v)                                                                                  \
+    __extension__({                                                                                \
+        gv8i gv_t_ = (v);                                                                          \
+        gv_any_(&gv_t_);                                                                           \
+    })
+
+GV_INLINE int gv_any_(const gv8i *pm)
 {
+    gv8i m = *pm;
     int32_t r = 0;
     for (int k = 0; k < 8; k++)
         r |= m[k];
@@ -945,8 +950,9 @@ GV_INLINE void cache_derive_vec(const gsrc *S, gcache *C, int cw, int ch)
  * and interior with a Jacobian (the lanes in sel; the others are left to pixel_scalar): as
  * pixel_scalar and finish_pixel lane by lane. */
 GV_INLINE void pixels_vec8(const gconf *G, gpixels *X, const gcache *C, int k, int c, int x, int y,
-                           gv8i sel)
+                           const gv8i *psel)
 {
+    gv8i sel = *psel;
     const gv8i lane = {0, 1, 2, 3, 4, 5, 6, 7};
     gv8d jx[3], jy[3], zero = {0};
     for (int m = 0; m < 3; m++) {
@@ -1006,7 +1012,7 @@ GV_INLINE void block_pixels_body(const gconf *G, const gstrip *T, int bx, int by
             if (inside) {
                 int c = (j + HALO) * CW + i0 + HALO;
                 self &= gv_loadi(C->hasj + c);
-                pixels_vec8(G, X, C, k, c, x0 + i0, y0 + j, self);
+                pixels_vec8(G, X, C, k, c, x0 + i0, y0 + j, &self);
             } else {
                 self &= 0;
             }
@@ -2029,27 +2035,22 @@ static void splat_points_scalar(const gjob *J, gtile *T)
 
 #if GABOR_VEC
 /* iceil / ifloor lane by lane: truncation, then the same comparison as the scalar code */
-GV_INLINE gv8i gv_iceil(gv8d v)
+GV_INLINE gv8i gv_iceil_(const gv8d *pv)
 {
+    gv8d v = *pv;
     gv8i i = __builtin_convertvector(v, gv8i);
     return i - gv_mask(v > __builtin_convertvector(i, gv8d));
 }
 
-GV_INLINE gv8i gv_ifloor(gv8d v)
+GV_INLINE gv8i gv_ifloor_(const gv8d *pv)
 {
+    gv8d v = *pv;
     gv8i i = __builtin_convertvector(v, gv8i);
     return i + gv_mask(v < __builtin_convertvector(i, gv8d));
 }
 
-GV_INLINE gv8i gv_maxi(gv8i a, gv8i b)
-{
-    return gv_seli(a < b, b, a);
-}
-
-GV_INLINE gv8i gv_mini(gv8i a, gv8i b)
-{
-    return gv_seli(a > b, b, a);
-}
+#define gv_maxi(a, b) gv_seli((a) < (b), (b), (a))
+#define gv_mini(a, b) gv_seli((a) > (b), (b), (a))
 
 /* One batched kernel: its point, rows and tables. */
 typedef struct gslot {
@@ -2188,10 +2189,17 @@ GV_INLINE void gv_tables(const gconf *G, gslot *sl, int nb)
 
 /* Add the rows of one batched kernel to the tile, as row_scalar does. */
 /* One vector of a kernel row: 8 samples, the lanes in m (a constant depth-test mode) */
+typedef struct gv_rowc {
+    gv8f va, vb, vid, vzr, vgx, vtol; /* a row's constants, broadcast */
+} gv_rowc;
+
 GV_INLINE void gv_row8(float *acc, const float *zt, const float *idt, const float *cx,
-                       const float *sx, gv8f va, gv8f vb, gv8f vid, gv8f vzr, gv8f vgx, gv8f vtol,
-                       gv8f vi, gv8i m, const int mode)
+                       const float *sx, const gv_rowc *R, const gv8f *pvi, const gv8i *pm,
+                       const int mode)
 {
+    gv8f va = R->va, vb = R->vb, vid = R->vid, vzr = R->vzr, vgx = R->vgx, vtol = R->vtol;
+    gv8f vi = *pvi;
+    gv8i m = *pm;
     const gv8i sign = (gv8i){0} + (int32_t)0x7fffffff;
     const gv8f one = (gv8f){0} + 1.0f, two = (gv8f){0} + 2.0f, zero = {0};
     gv8f v = va * gv_loadf(cx) - vb * gv_loadf(sx);
@@ -2221,15 +2229,20 @@ GV_INLINE void gv_rows(const gconf *G, const gslot *sl, gtile *T, const int mode
     double tolz = G->tol * p->z;
     float tol =
         mode == NPRFX_GABOR_DEPTH_SOFT ? (float)(tolz > 0.0 ? 1.0 / tolz : 1e30) : (float)tolz;
-    gv8f vid = p->id + (gv8f){0}, vgx = gx + (gv8f){0}, vtol = tol + (gv8f){0};
     gv8f zero = {0};
+    gv_rowc R;
+    R.vid = p->id + zero;
+    R.vgx = gx + zero;
+    R.vtol = tol + zero;
     long long evals = 0;
     for (int Y = sl->ya; Y <= sl->ye; Y++) {
         int xa = sl->xa[Y - sl->ya], xb = sl->xb[Y - sl->ya];
         if (xa > xb) continue;
         int n = xb - xa + 1, i0 = xa - p->X0;
         float A = p->amp * sl->CY[Y - p->Y0], B = p->amp * sl->SY[Y - p->Y0];
-        gv8f va = A + zero, vb = B + zero, vzr = sl->zr[Y - sl->ya] + zero;
+        R.va = A + zero;
+        R.vb = B + zero;
+        R.vzr = sl->zr[Y - sl->ya] + zero;
         size_t o = (size_t)(Y - T->TY0) * (size_t)T->W + (size_t)(xa - T->TX0);
         float *acc = T->acc + o;
         const float *zt = T->zt + o, *idt = T->idt + o;
@@ -2237,12 +2250,13 @@ GV_INLINE void gv_rows(const gconf *G, const gslot *sl, gtile *T, const int mode
         gv8f vi = (float)i0 + lanef; /* exact: small integers */
         evals += n;
         int j = 0;
+        const gv8i all = (gv8i){0} - 1;
         for (; j + 8 <= n; j += 8, vi = vi + 8.0f)
-            gv_row8(acc + j, zt + j, idt + j, cx + j, sx + j, va, vb, vid, vzr, vgx, vtol, vi,
-                    (gv8i){0} - 1, mode);
-        if (j < n) /* the last partial vector, masked */
-            gv_row8(acc + j, zt + j, idt + j, cx + j, sx + j, va, vb, vid, vzr, vgx, vtol, vi,
-                    (j + lanei) < n, mode);
+            gv_row8(acc + j, zt + j, idt + j, cx + j, sx + j, &R, &vi, &all, mode);
+        if (j < n) { /* the last partial vector, masked */
+            gv8i tail = (j + lanei) < n;
+            gv_row8(acc + j, zt + j, idt + j, cx + j, sx + j, &R, &vi, &tail, mode);
+        }
     }
     T->evals += evals;
 }
