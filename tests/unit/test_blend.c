@@ -15,18 +15,6 @@
 
 /* ---- helpers: tiny images and direct calls of a node's render function ---- */
 
-static nprfx_image make_image(int w, int h, int ch, const float *vals)
-{
-    return th_image(w, h, ch, vals);
-}
-
-static nprfx_result render(nprfx_context *ctx, const nprfx_node_desc *node,
-                           const nprfx_image *inputs, const nprfx_value *params, nprfx_image *out,
-                           nprfx_rect window)
-{
-    return th_render(ctx, node, inputs, params, out, window);
-}
-
 static const nprfx_node_desc *node;
 static nprfx_image in[8];
 static nprfx_value pv[16];
@@ -55,8 +43,8 @@ static void set_mode(const char *name)
 /* Render into a fresh output with base's channels over the whole frame. */
 static nprfx_image run(nprfx_context *ctx, int w, int h, nprfx_result *res)
 {
-    nprfx_image out = make_image(w, h, in[II("base")].channels, NULL);
-    *res = render(ctx, node, in, pv, &out, out.bounds);
+    nprfx_image out = th_image(w, h, in[II("base")].channels, NULL);
+    *res = th_render(ctx, node, in, pv, &out, out.bounds);
     return out;
 }
 
@@ -122,7 +110,8 @@ static void test_descriptor(void)
     CHECK(node != NULL);
     CHECK(strcmp(node->id, "blend") == 0);
     const nprfx_param_desc *m = &node->params[PI("mode")];
-    const char *want[] = {"alphablend", "overlay", "overlayalpha", "multiply", "screen", "pigment", "difference"};
+    const char *want[] = {"alphablend", "overlay", "overlayalpha", "multiply",
+                          "screen",     "pigment", "difference"};
     for (int i = 0; i < NPRFX_BLEND_MODE_COUNT; i++)
         CHECK(m->choices[i] && strcmp(m->choices[i], want[i]) == 0);
     CHECK(m->choices[NPRFX_BLEND_MODE_COUNT] == NULL);
@@ -145,8 +134,8 @@ static void test_broadcast(nprfx_context *ctx)
     reset();
     const float base[] = {0.5f, 0.2f, 0.8f, 0.7f, 1.0f, 0.0f, 0.25f, 0.3f};
     const float layer[] = {0.25f, 0.5f};
-    in[II("base")] = make_image(2, 1, 4, base);
-    in[II("layer")] = make_image(2, 1, 1, layer);
+    in[II("base")] = th_image(2, 1, 4, base);
+    in[II("layer")] = th_image(2, 1, 1, layer);
     set_mode("multiply");
     nprfx_image out = run(ctx, 2, 1, &r);
     CHECK_OK(r);
@@ -158,7 +147,7 @@ static void test_broadcast(nprfx_context *ctx)
     /* RGB layer onto RGBA base, screen, gains: c0 = 2 * base, c1 = 0.5 * layer */
     nprfx_image_free(&in[II("layer")]);
     const float layer3[] = {0.2f, 0.4f, 0.6f, 1.0f, 0.0f, 0.5f};
-    in[II("layer")] = make_image(2, 1, 3, layer3);
+    in[II("layer")] = th_image(2, 1, 3, layer3);
     set_mode("screen");
     pv[PI("gain_base")].v[0] = 2.0;
     pv[PI("gain_layer")].v[0] = 0.5;
@@ -181,8 +170,8 @@ static void test_broadcast(nprfx_context *ctx)
     reset();
     const float b3[] = {0.5f, 0.5f, 0.5f};
     const float l4[] = {0.2f, 0.4f, 0.6f, 0.0f};
-    in[II("base")] = make_image(1, 1, 3, b3);
-    in[II("layer")] = make_image(1, 1, 4, l4);
+    in[II("base")] = th_image(1, 1, 3, b3);
+    in[II("layer")] = th_image(1, 1, 4, l4);
     set_mode("alphablend");
     out = run(ctx, 1, 1, &r);
     CHECK_OK(r);
@@ -194,7 +183,7 @@ static void test_broadcast(nprfx_context *ctx)
     /* A 2-channel layer onto an RGB base has no reading: refused, naming the input */
     nprfx_image_free(&in[II("layer")]);
     const float l2[] = {0.1f, 0.2f};
-    in[II("layer")] = make_image(1, 1, 2, l2);
+    in[II("layer")] = th_image(1, 1, 2, l2);
     out = run(ctx, 1, 1, &r);
     CHECK(r == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(nprfx_last_error(ctx), "layer") != NULL);
@@ -214,8 +203,8 @@ static void test_alpha_opacity(nprfx_context *ctx)
     const float base[] = {0.2f, 0.2f, 0.2f};
     const float layer[] = {0.8f, 0.8f, 0.8f};
     const float alpha[] = {0.5f, 1.0f, 2.0f};
-    in[II("base")] = make_image(3, 1, 1, base);
-    in[II("layer")] = make_image(3, 1, 1, layer);
+    in[II("base")] = th_image(3, 1, 1, base);
+    in[II("layer")] = th_image(3, 1, 1, layer);
     set_mode("alphablend");
     /* opacity alone: a = 0.25 everywhere => 0.35 */
     pv[PI("opacity")].v[0] = 0.25;
@@ -225,7 +214,7 @@ static void test_alpha_opacity(nprfx_context *ctx)
         CHECK_NEAR(out.data[i], 0.35, TOL);
     nprfx_image_free(&out);
     /* alpha input times opacity 0.5: a = 0.25, 0.5, 1 (2 * 0.5) => 0.35, 0.5, 0.8 */
-    in[II("alpha")] = make_image(3, 1, 1, alpha);
+    in[II("alpha")] = th_image(3, 1, 1, alpha);
     pv[PI("opacity")].v[0] = 0.5;
     out = run(ctx, 3, 1, &r);
     CHECK_OK(r);
@@ -245,9 +234,9 @@ static void test_alpha_opacity(nprfx_context *ctx)
     const float b[] = {0.5f};
     const float l[] = {0.25f};
     const float a[] = {0.5f};
-    in[II("base")] = make_image(1, 1, 1, b);
-    in[II("layer")] = make_image(1, 1, 1, l);
-    in[II("alpha")] = make_image(1, 1, 1, a);
+    in[II("base")] = th_image(1, 1, 1, b);
+    in[II("layer")] = th_image(1, 1, 1, l);
+    in[II("alpha")] = th_image(1, 1, 1, a);
     set_mode("overlay");
     pv[PI("factor")].v[0] = 1.2;
     out = run(ctx, 1, 1, &r);
@@ -264,7 +253,7 @@ static void test_alpha_opacity(nprfx_context *ctx)
     nprfx_image_free(&out);
     /* with back 0.1 => 0.18125 */
     const float k[] = {0.1f};
-    in[II("back")] = make_image(1, 1, 1, k);
+    in[II("back")] = th_image(1, 1, 1, k);
     out = run(ctx, 1, 1, &r);
     CHECK_OK(r);
     CHECK_NEAR(out.data[0], 0.18125, TOL);
@@ -279,9 +268,9 @@ static void test_alpha_opacity(nprfx_context *ctx)
 
     /* pigment through the node: c0 0.5, layer 0.75, factor 2, a 1 => 0.375 */
     reset();
-    in[II("base")] = make_image(1, 1, 1, b);
+    in[II("base")] = th_image(1, 1, 1, b);
     const float t[] = {0.75f};
-    in[II("layer")] = make_image(1, 1, 1, t);
+    in[II("layer")] = th_image(1, 1, 1, t);
     set_mode("pigment");
     pv[PI("factor")].v[0] = 2.0;
     out = run(ctx, 1, 1, &r);
@@ -298,9 +287,9 @@ static void test_coverage(nprfx_context *ctx)
     const float base[] = {0.1f, 0.2f, 0.3f, 0.4f, 0.1f, 0.2f, 0.3f, 0.4f, 0.1f, 0.2f, 0.3f, 0.4f};
     const float layer[] = {0.6f, 0.6f, 0.6f};
     const float cov[] = {1.0f, 0.5f, 0.0f};
-    in[II("base")] = make_image(3, 1, 4, base);
-    in[II("layer")] = make_image(3, 1, 1, layer);
-    in[II("coverage")] = make_image(3, 1, 1, cov);
+    in[II("base")] = th_image(3, 1, 4, base);
+    in[II("layer")] = th_image(3, 1, 1, layer);
+    in[II("coverage")] = th_image(3, 1, 1, cov);
     set_mode("alphablend");
     double *bg = pv[PI("background")].v;
     bg[0] = 0.9, bg[1] = 0.8, bg[2] = 0.7, bg[3] = 1.0;
@@ -326,9 +315,9 @@ static void test_coverage(nprfx_context *ctx)
     reset();
     const float b1[] = {0.3f};
     const float z[] = {0.0f};
-    in[II("base")] = make_image(1, 1, 1, b1);
-    in[II("layer")] = make_image(1, 1, 1, b1);
-    in[II("coverage")] = make_image(1, 1, 1, z);
+    in[II("base")] = th_image(1, 1, 1, b1);
+    in[II("layer")] = th_image(1, 1, 1, b1);
+    in[II("coverage")] = th_image(1, 1, 1, z);
     bg = pv[PI("background")].v;
     bg[0] = 0.9, bg[1] = 0.8, bg[2] = 0.7, bg[3] = 1.0;
     out = run(ctx, 1, 1, &r);
@@ -342,14 +331,14 @@ static void test_window(nprfx_context *ctx)
     /* Only the window is written; an input smaller than the frame reads as 0 outside. */
     reset();
     const float base[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
-    in[II("base")] = make_image(4, 3, 1, base);
-    in[II("layer")] = make_image(2, 2, 1, NULL); /* covers x, y in [0, 2) */
+    in[II("base")] = th_image(4, 3, 1, base);
+    in[II("layer")] = th_image(2, 2, 1, NULL); /* covers x, y in [0, 2) */
     in[II("layer")].data[0] = 0.5f;
     set_mode("multiply");
-    nprfx_image out = make_image(4, 3, 1, NULL);
+    nprfx_image out = th_image(4, 3, 1, NULL);
     for (int i = 0; i < 12; i++)
         out.data[i] = -7.0f;
-    CHECK_OK(render(ctx, node, in, pv, &out, nprfx_rect_make(0, 0, 3, 2)));
+    CHECK_OK(th_render(ctx, node, in, pv, &out, nprfx_rect_make(0, 0, 3, 2)));
     /* row 0: 1 * 0.5, 2 * 0 (layer zero), 3 * 0 (outside layer), untouched */
     CHECK_NEAR(out.data[0], 0.5, TOL);
     CHECK_NEAR(out.data[1], 0.0, TOL);
@@ -369,7 +358,7 @@ static nprfx_result render_tiled(nprfx_context *ctx, nprfx_image *out, int tw, i
         for (int x = f.x0; x < f.x1; x += tw) {
             nprfx_rect w =
                 nprfx_rect_make(x, y, x + tw < f.x1 ? x + tw : f.x1, y + th < f.y1 ? y + th : f.y1);
-            nprfx_result r = render(ctx, node, in, pv, out, w);
+            nprfx_result r = th_render(ctx, node, in, pv, out, w);
             if (r) return r;
         }
     return NPRFX_OK;
@@ -387,11 +376,11 @@ static void test_determinism(nprfx_context *serial)
     const int w = 67, h = 45;
     for (int mode = 0; mode < NPRFX_BLEND_MODE_COUNT; mode++) {
         reset();
-        in[II("base")] = make_image(w, h, 4, NULL);
-        in[II("layer")] = make_image(w, h, 1, NULL);
-        in[II("back")] = make_image(w, h, 3, NULL);
-        in[II("alpha")] = make_image(w, h, 1, NULL);
-        in[II("coverage")] = make_image(w, h, 1, NULL);
+        in[II("base")] = th_image(w, h, 4, NULL);
+        in[II("layer")] = th_image(w, h, 1, NULL);
+        in[II("back")] = th_image(w, h, 3, NULL);
+        in[II("alpha")] = th_image(w, h, 1, NULL);
+        in[II("coverage")] = th_image(w, h, 1, NULL);
         for (int i = 0; i < 5; i++) {
             nprfx_image *im = &in[i];
             for (int y = 0; y < h; y++)
@@ -404,10 +393,10 @@ static void test_determinism(nprfx_context *serial)
         pv[PI("factor")].v[0] = 1.2;
         pv[PI("opacity")].v[0] = 0.8;
         pv[PI("gain_base")].v[0] = 0.9;
-        nprfx_image ref = make_image(w, h, 4, NULL), a = make_image(w, h, 4, NULL);
+        nprfx_image ref = th_image(w, h, 4, NULL), a = th_image(w, h, 4, NULL);
         size_t bytes = sizeof(float) * (size_t)(w * h * 4);
-        CHECK_OK(render(serial, node, in, pv, &ref, ref.bounds));
-        CHECK_OK(render(par, node, in, pv, &a, a.bounds));
+        CHECK_OK(th_render(serial, node, in, pv, &ref, ref.bounds));
+        CHECK_OK(th_render(par, node, in, pv, &a, a.bounds));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
         CHECK_OK(render_tiled(par, &a, 16, 16));

@@ -16,18 +16,6 @@
 
 /* ---- helpers: tiny images and direct calls of a node's render function ---- */
 
-static nprfx_image make_image(int w, int h, int ch, const float *vals)
-{
-    return th_image(w, h, ch, vals);
-}
-
-static nprfx_result render(nprfx_context *ctx, const nprfx_node_desc *node,
-                           const nprfx_image *inputs, const nprfx_value *params, nprfx_image *out,
-                           nprfx_rect window)
-{
-    return th_render(ctx, node, inputs, params, out, window);
-}
-
 static const nprfx_node_desc *node;
 static nprfx_image in[8];
 static nprfx_value pv[16];
@@ -66,8 +54,8 @@ static int out_channels(void)
 
 static nprfx_image run(nprfx_context *ctx, int w, int h, int channels, nprfx_result *res)
 {
-    nprfx_image out = make_image(w, h, channels, NULL);
-    *res = render(ctx, node, in, pv, &out, out.bounds);
+    nprfx_image out = th_image(w, h, channels, NULL);
+    *res = th_render(ctx, node, in, pv, &out, out.bounds);
     return out;
 }
 
@@ -163,7 +151,7 @@ static void test_map_lookup(void)
      *   top    (v = 1): 10 20 30
      *   bottom (v = 0):  0  1  2                                  */
     const float m[] = {10, 20, 30, 0, 1, 2};
-    nprfx_image map = make_image(3, 2, 1, m);
+    nprfx_image map = th_image(3, 2, 1, m);
     float o;
     nprfx_threshold_map_lookup(&map, 0, 0, &o);
     CHECK_NEAR(o, 0, TOL); /* bottom-left */
@@ -200,7 +188,7 @@ static void test_map_lookup(void)
 
     /* 2 channels; a 1 x 1 map; a 1-wide map */
     const float m2[] = {0, 100, 1, 200, 2, 300, 3, 400};
-    nprfx_image map2 = make_image(2, 2, 2, m2); /* top: (0,100) (1,200); bottom: (2,300) (3,400) */
+    nprfx_image map2 = th_image(2, 2, 2, m2); /* top: (0,100) (1,200); bottom: (2,300) (3,400) */
     float o2[2];
     nprfx_threshold_map_lookup(&map2, 0.5, 0.5, o2);
     CHECK_NEAR(o2[0], 1.5, TOL);
@@ -208,11 +196,11 @@ static void test_map_lookup(void)
     nprfx_threshold_map_lookup(&map2, 1, 0, o2);
     CHECK_NEAR(o2[0], 3, TOL);
     CHECK_NEAR(o2[1], 400, TOL);
-    nprfx_image one = make_image(1, 1, 1, m + 1);
+    nprfx_image one = th_image(1, 1, 1, m + 1);
     nprfx_threshold_map_lookup(&one, 0.3, 0.8, &o);
     CHECK_NEAR(o, 20, TOL);
     const float col[] = {4, 8}; /* 1 x 2: top 4, bottom 8 */
-    nprfx_image narrow = make_image(1, 2, 1, col);
+    nprfx_image narrow = th_image(1, 2, 1, col);
     nprfx_threshold_map_lookup(&narrow, 0.9, 0.25, &o);
     CHECK_NEAR(o, 7, TOL);
     nprfx_image_free(&map);
@@ -247,7 +235,7 @@ static void test_node_erf(nprfx_context *ctx)
     reset();
     /* 2-channel pattern: each channel thresholded on its own */
     const float p[] = {0.5f, 0.54f, 0.46f, 0.0f};
-    in[II("pattern")] = make_image(2, 1, 2, p);
+    in[II("pattern")] = th_image(2, 1, 2, p);
     CHECK(out_channels() == 2);
     nprfx_image out = run(ctx, 2, 1, 2, &r);
     CHECK_OK(r);
@@ -267,7 +255,7 @@ static void test_node_erf(nprfx_context *ctx)
     /* a tone input does not change the erf mode */
     pv[PI("invert")].v[0] = 0;
     const float t[] = {0.1f, 0.9f};
-    in[II("tone")] = make_image(2, 1, 1, t);
+    in[II("tone")] = th_image(2, 1, 1, t);
     out = run(ctx, 2, 1, 2, &r);
     CHECK_OK(r);
     CHECK_NEAR(out.data[1], 0.92135039647, TOL);
@@ -289,9 +277,9 @@ static void test_node_map(nprfx_context *ctx)
     const float m[] = {10, 20, 30, 0, 1, 2};
     const float p[] = {0.25f, 0.75f, 0.0f, 1.0f};
     const float t[] = {0.25f, 0.5f};
-    in[II("pattern")] = make_image(2, 1, 2, p);
-    in[II("tone")] = make_image(2, 1, 1, t);
-    in[II("map")] = make_image(3, 2, 1, m);
+    in[II("pattern")] = th_image(2, 1, 2, p);
+    in[II("tone")] = th_image(2, 1, 1, t);
+    in[II("map")] = th_image(3, 2, 1, m);
     CHECK(out_channels() == 2);
     nprfx_image out = run(ctx, 2, 1, 2, &r);
     CHECK_OK(r);
@@ -334,8 +322,8 @@ static void test_node_map(nprfx_context *ctx)
     /* 2 x 1 map (one row: v does not matter): left (0, 0.5, 1), right (1, 0.5, 0) */
     const float m3[] = {0, 0.5f, 1, 1, 0.5f, 0};
     const float p1[] = {0.25f};
-    in[II("pattern")] = make_image(1, 1, 1, p1);
-    in[II("map")] = make_image(2, 1, 3, m3);
+    in[II("pattern")] = th_image(1, 1, 1, p1);
+    in[II("map")] = th_image(2, 1, 3, m3);
     CHECK(out_channels() == 3);
     out = run(ctx, 1, 1, 3, &r);
     CHECK_OK(r);
@@ -345,7 +333,7 @@ static void test_node_map(nprfx_context *ctx)
     nprfx_image_free(&out);
     /* ... but refuses a 2-channel pattern with it */
     nprfx_image_free(&in[II("pattern")]);
-    in[II("pattern")] = make_image(1, 1, 2, p);
+    in[II("pattern")] = th_image(1, 1, 2, p);
     CHECK(out_channels() == -1);
     out = run(ctx, 1, 1, 3, &r);
     CHECK(r == NPRFX_ERR_INVALID_ARGUMENT);
@@ -367,7 +355,7 @@ static void test_node_builtin(nprfx_context *ctx)
     set_mode("builtin");
     /* pattern = uniform noise in [0,1]: the mean output reproduces the tone */
     const int w = 256, h = 256;
-    in[II("pattern")] = make_image(w, h, 1, NULL);
+    in[II("pattern")] = th_image(w, h, 1, NULL);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
             nprfx_image_at(&in[0], x, y)[0] = (float)nprfx_rand_u01(11, 0, x, y, 0, 0);
@@ -384,7 +372,7 @@ static void test_node_builtin(nprfx_context *ctx)
         nprfx_image_free(&out);
     }
     /* a tone input: a 4-band tone image, each band's mean follows its tone */
-    in[II("tone")] = make_image(w, h, 1, NULL);
+    in[II("tone")] = th_image(w, h, 1, NULL);
     const double band[] = {0.1, 0.4, 0.6, 0.9};
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
@@ -413,8 +401,8 @@ static void test_node_builtin(nprfx_context *ctx)
     set_mode("builtin");
     const float p[] = {0.75f};
     const float t[] = {0.3f};
-    in[II("pattern")] = make_image(1, 1, 1, p);
-    in[II("tone")] = make_image(1, 1, 1, t);
+    in[II("pattern")] = th_image(1, 1, 1, p);
+    in[II("tone")] = th_image(1, 1, 1, t);
     out = run(ctx, 1, 1, 1, &r);
     CHECK_OK(r);
     CHECK_NEAR(out.data[0], 0.96145006415, 2e-6);
@@ -429,7 +417,7 @@ static nprfx_result render_tiled(nprfx_context *ctx, nprfx_image *out, int tw, i
         for (int x = f.x0; x < f.x1; x += tw) {
             nprfx_rect w =
                 nprfx_rect_make(x, y, x + tw < f.x1 ? x + tw : f.x1, y + th < f.y1 ? y + th : f.y1);
-            nprfx_result r = render(ctx, node, in, pv, out, w);
+            nprfx_result r = th_render(ctx, node, in, pv, out, w);
             if (r) return r;
         }
     return NPRFX_OK;
@@ -449,9 +437,9 @@ static void test_determinism(nprfx_context *serial)
     for (int k = 0; k < 3; k++) {
         reset();
         set_mode(modes[k]);
-        in[II("pattern")] = make_image(w, h, 1, NULL);
-        in[II("tone")] = make_image(w, h, 1, NULL);
-        in[II("map")] = make_image(32, 8, 3, NULL);
+        in[II("pattern")] = th_image(w, h, 1, NULL);
+        in[II("tone")] = th_image(w, h, 1, NULL);
+        in[II("map")] = th_image(32, 8, 3, NULL);
         for (int i = 0; i < 3; i++) {
             nprfx_image *im = &in[i];
             int iw = nprfx_rect_width(im->bounds), ih = nprfx_rect_height(im->bounds);
@@ -464,10 +452,10 @@ static void test_determinism(nprfx_context *serial)
         pv[PI("steps")].v[0] = k == 2 ? 0 : 5;
         int ch = out_channels();
         CHECK(ch == (k == 1 ? 3 : 1));
-        nprfx_image ref = make_image(w, h, ch, NULL), a = make_image(w, h, ch, NULL);
+        nprfx_image ref = th_image(w, h, ch, NULL), a = th_image(w, h, ch, NULL);
         size_t bytes = sizeof(float) * (size_t)(w * h * ch);
-        CHECK_OK(render(serial, node, in, pv, &ref, ref.bounds));
-        CHECK_OK(render(par, node, in, pv, &a, a.bounds));
+        CHECK_OK(th_render(serial, node, in, pv, &ref, ref.bounds));
+        CHECK_OK(th_render(par, node, in, pv, &a, a.bounds));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
         CHECK_OK(render_tiled(par, &a, 16, 16));
