@@ -1,0 +1,149 @@
+/* Internal to the stipple renderer (core/stipple*.c), never installed: the per-pixel data,
+ * the per-worker scratch and the job that the files share. stipple.h has the model. */
+#ifndef NPRFX_INTERNAL_STIPPLE_H
+#define NPRFX_INTERNAL_STIPPLE_H
+
+#include <limits.h>
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include "nprfx/stipple.h"
+
+/* Drawing tiles of the window (and the stripes of nprfx_stipple_collect). */
+#define STRIPE_ROWS 64
+#define TILE_COLS 256
+/* Owners are found in units of this many rows and columns, each owner once per render: small
+ * enough for their per-pixel data (~70 bytes a pixel) to stay in cache, large enough that the
+ * margin of inputs read around each stays cheap. */
+#define UNIT_ROWS 64
+#define UNIT_COLS 256
+#define PI_D 3.14159265358979323846
+/* Half-width of the window over which |det J| is averaged for the density thresholds. */
+#define SMOOTH 2
+
+typedef struct pixdata {
+    nprfx_rect r; /* the pixels held */
+    int w;
+    double *su, *sv; /* UV in sequence units (uv / tile + object offset) */
+    float *jac;      /* 4 per pixel: du/dx, du/dy, dv/dx, dv/dy in sequence units */
+    float *g;        /* darkness 1 - tone */
+    float *adet;     /* |det J| */
+    float *hs, *hc;  /* smoothing scratch: horizontal sums of adet and their counts */
+    int *id;
+    int *uid; /* id where the pixel has a UV (OK_UV), else NO_ID */
+    int *jid; /* id where it also has usable derivatives (OK_J), else NO_ID */
+    unsigned char *ok;
+    size_t cap;    /* pixels allocated */
+    float *rowbuf; /* fill_raw: one row's input values, 6 a pixel */
+    size_t rowcap;
+    unsigned char *scratch; /* repair_outliers: per pixel */
+    void *fixes;            /* repair_outliers: the repaired values */
+    size_t fixcap;
+} pixdata;
+
+/* OK_SEAM: the two one-sided differences disagree (a UV seam next to the pixel, or a fold). */
+enum { OK_UV = 1, OK_J = 2, OK_SEAM = 4 };
+#define OK_BOTH (OK_UV | OK_J)
+/* Never a read id (those are -1 or more). */
+#define NO_ID INT_MIN
+
+static inline size_t pd_at(const pixdata *d, int x, int y)
+{
+    return (size_t)(y - d->r.y0) * (size_t)d->w + (size_t)(x - d->r.x0);
+}
+
+/* Corner (x - 0.5, y - 0.5) for x in [E.x0, E.x1], y in [E.y0, E.y1], computed once per tile
+ * where the 2x2 pixels around it are one object with usable derivatives, and agree on it. */
+typedef struct cgrid {
+    nprfx_rect E;
+    int gw, gh;
+    double *gu, *gv;
+    unsigned char *good;
+} cgrid;
+
+/* Per owner pixel: how many samples it keeps and the bounding box of its footprint. */
+typedef struct oinfo {
+    int limit;    /* keeps 0-based indices < limit; 0: nothing */
+    int start;    /* counting sort of the stipples by owner */
+    double i_max; /* the real-valued bound k A0 / threshold */
+    double bb[4]; /* u0, v0, u1, v1 */
+} oinfo;
+
+/* A stipple with the key that orders it: its owner pixel, then its sample. */
+typedef struct keyed {
+    int oy, ox;
+    double u, v;
+    nprfx_stipple s;
+} keyed;
+
+typedef struct klist {
+    keyed *k;
+    size_t n, cap;
+    int failed;
+} klist;
+
+typedef struct stlist {
+    nprfx_stipple *s;
+    size_t n, cap;
+    int failed;
+} stlist;
+
+/* Per-worker memory, reused from tile to tile. */
+typedef struct scratch {
+    pixdata d;
+    cgrid g;
+    size_t gcap;
+    oinfo *info;
+    size_t icap;
+    float *sdet; /* smoothed |det J| over the owners */
+    size_t scap;
+    klist kl;
+    stlist sl;
+    float *t;
+    size_t tcap;
+} scratch;
+
+typedef struct sjob {
+    nprfx_context *ctx;
+    const nprfx_stipple_params *p;
+    const nprfx_stipple_inputs *in;
+    nprfx_stipple_sequence *seq; /* where p->index is NULL: p->sequence or the job's own */
+    int own_seq;
+    nprfx_rect region; /* window (render) or region (collect) */
+    int margin;        /* owner rows/columns around a tile that can reach it */
+    float radius;      /* sqrt(area / pi): the disc radius of uniform and multitone stipples */
+    nprfx_image *out;  /* render */
+    stlist *lists;     /* collect: one per stripe; render: one per unit */
+    nprfx_rect owners; /* render: the owners that can reach the window, in units */
+    int units_x;       /* render: units per row */
+    int *row_start;    /* render: per unit, UNIT_ROWS + 1 offsets of its owner rows */
+    scratch *scr;      /* one per worker */
+    atomic_int error;
+} sjob;
+
+/* (x, y) is held, has a UV and usable derivatives, and belongs to object id. */
+static inline int internal_usable_j(const pixdata *d, int x, int y, int id)
+{
+    return nprfx_rect_contains(d->r, x, y) && d->jid[pd_at(d, x, y)] == id;
+}
+
+/* stipple_pixels.c */
+int internal_stipple_reserve(void **p, size_t *cap, size_t n, size_t elem);
+void internal_stipple_scratch_free(scratch *s);
+/* Fill the per-pixel data, the smoothed area scale (s->sdet over E) and the corner grid for
+ * the owners of E; 0 when out of memory. */
+int internal_stipple_prepare(const sjob *j, scratch *s, nprfx_rect E);
+int internal_stipple_off_corner(const pixdata *d, size_t k, double ox, double oy, double u,
+                                double v);
+
+/* stipple_owners.c: the stipples owned by the pixels of E, appended to out in row-major order
+ * of their owners; row_start (if not NULL) gets where each owner row starts in out. */
+nprfx_result internal_stipple_owner_stipples(const sjob *j, scratch *s, nprfx_rect E, stlist *out,
+                                             int *row_start);
+
+/* stipple_disc.c: multiply t (the rows and columns of rect, row stride its width) by
+ * (1 - coverage * tone) where the disc of radius r at (cx, cy) covers a pixel. */
+void internal_stipple_splat_disc(float *t, nprfx_rect rect, double cx, double cy, double r,
+                                 double tone);
+
+#endif
