@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include "cli_util.h"
 
@@ -18,6 +19,31 @@ int nprfx_cli_threads(int requested)
     return 0; /* all cores */
 }
 
+const char *nprfx_cli_data_dir(char *buf, size_t size)
+{
+    const char *env = getenv("NPRFX_DATA_DIR");
+    if (env) {
+        if (!*env || strlen(env) >= size) return NULL;
+        memcpy(buf, env, strlen(env) + 1);
+        return buf;
+    }
+    char exe[4096];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n <= 0) return NULL;
+    exe[n] = 0;
+    char *slash = strrchr(exe, '/');
+    if (!slash) return NULL;
+    *slash = 0;
+    static const char *const rel[] = {"/share/nprfx", "/../share/nprfx"};
+    for (size_t i = 0; i < sizeof rel / sizeof rel[0]; i++) {
+        char file[4200];
+        snprintf(file, sizeof file, "%s%s/ivs.bin", exe, rel[i]);
+        if (access(file, R_OK) == 0 && (size_t)snprintf(buf, size, "%s%s", exe, rel[i]) < size)
+            return buf;
+    }
+    return NULL;
+}
+
 int nprfx_cli_env_init(nprfx_cli_env *env, int threads)
 {
     memset(env, 0, sizeof *env);
@@ -27,6 +53,8 @@ int nprfx_cli_env_init(nprfx_cli_env *env, int threads)
     }
     nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
     init.executor = nprfx_pool_executor(env->pool);
+    char dir[4096];
+    init.data_dir = nprfx_cli_data_dir(dir, sizeof dir);
     if (nprfx_context_create(&init, &env->ctx)) {
         nprfx_pool_destroy(env->pool);
         fprintf(stderr, "nprfx: out of memory\n");

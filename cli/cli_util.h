@@ -7,8 +7,14 @@
 /* Threads from --threads (when > 0), else $NPRFX_THREADS, else all cores. */
 int nprfx_cli_threads(int requested);
 
-/* A context whose executor is a pthread pool of `threads` threads. Errors are not printed as they
- * are raised (layers wrap them with more context); commands print nprfx_last_error once. */
+/* The data directory (the stipple node's ivs.bin): $NPRFX_DATA_DIR when set (empty: none), else
+ * share/nprfx beside the executable (the build tree) or ../share/nprfx (an install), the first
+ * holding ivs.bin; NULL when there is none (the data is then generated when needed). */
+const char *nprfx_cli_data_dir(char *buf, size_t size);
+
+/* A context whose executor is a pthread pool of `threads` threads, and the data directory. Errors
+ * are not printed as they are raised (layers wrap them with more context); commands print
+ * nprfx_last_error once. */
 typedef struct nprfx_cli_env {
     nprfx_context *ctx;
     nprfx_pool *pool;

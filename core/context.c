@@ -12,6 +12,7 @@ struct nprfx_context {
     nprfx_error_handler handler;
     void *user;
     const nprfx_executor *executor;
+    char *data_dir;
     pthread_mutex_t lock; /* guards last_error: render threads may raise errors concurrently */
     char last_error[NPRFX_MESSAGE_MAX];
 };
@@ -32,6 +33,14 @@ nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context 
     ctx->handler = in.error_handler;
     ctx->user = in.error_user;
     ctx->executor = in.executor;
+    if (in.data_dir) {
+        size_t n = strlen(in.data_dir) + 1;
+        if (!(ctx->data_dir = malloc(n))) {
+            free(ctx);
+            return NPRFX_ERR_OUT_OF_MEMORY;
+        }
+        memcpy(ctx->data_dir, in.data_dir, n);
+    }
     pthread_mutex_init(&ctx->lock, NULL);
     *out = ctx;
     return NPRFX_OK;
@@ -41,6 +50,7 @@ void nprfx_context_destroy(nprfx_context *ctx)
 {
     if (!ctx) return;
     pthread_mutex_destroy(&ctx->lock);
+    free(ctx->data_dir);
     free(ctx);
 }
 
@@ -56,6 +66,11 @@ static int serial_workers(void *impl)
 }
 static const nprfx_executor serial_executor = {sizeof(nprfx_executor), NULL, serial_workers,
                                                serial_for};
+
+const char *nprfx_context_data_dir(const nprfx_context *ctx)
+{
+    return ctx ? ctx->data_dir : NULL;
+}
 
 const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx)
 {

@@ -60,6 +60,13 @@ static uint32_t quantize(float v)
     return (uint32_t)fmod(q, (double)(1u << IVS_BITS));
 }
 
+void nprfx_ivs_quantize(float *xy, int n)
+{
+    const float scale = 1.0f / (float)(1u << IVS_BITS);
+    for (size_t i = 0; n > 0 && i < (size_t)n * 2; i++)
+        xy[i] = (float)quantize(xy[i]) * scale; /* what nprfx_ivs_decode computes */
+}
+
 nprfx_result nprfx_ivs_encode(nprfx_context *ctx, uint64_t seed, int n, const float *xy,
                               unsigned char *buf, size_t buf_size)
 {

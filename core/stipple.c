@@ -124,6 +124,8 @@ typedef struct seq_version {
 struct nprfx_stipple_sequence {
     pthread_mutex_t lock;        /* held while a longer version is built */
     _Atomic(seq_version *) head; /* the longest version; read without the lock */
+    float *pre;                  /* preloaded points (on the grid), or NULL */
+    int pre_count;
 };
 
 nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_sequence **out)
@@ -152,7 +154,40 @@ void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *s)
         v = older;
     }
     pthread_mutex_destroy(&s->lock);
+    free(s->pre);
     free(s);
+}
+
+nprfx_result nprfx_stipple_sequence_preload(nprfx_context *ctx, nprfx_stipple_sequence *s,
+                                            const float *xy, int n)
+{
+    if (!s || !xy || n < 1)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: bad preload arguments");
+    float *pre = malloc(sizeof(float) * 2 * (size_t)n);
+    if (!pre)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory for %d points", n);
+    memcpy(pre, xy, sizeof(float) * 2 * (size_t)n);
+    nprfx_ivs_quantize(pre, n); /* a no-op for decoded points */
+    pthread_mutex_lock(&s->lock);
+    free(s->pre);
+    s->pre = pre;
+    s->pre_count = n;
+    pthread_mutex_unlock(&s->lock);
+    return NPRFX_OK;
+}
+
+/* The first n points of the sequence into xy: preloaded while there are enough, else generated,
+ * rounded to the grid either way (the same floats). Called under the lock. */
+static nprfx_result sequence_points(nprfx_context *ctx, const nprfx_stipple_sequence *s, int n,
+                                    float *xy)
+{
+    if (s->pre && s->pre_count >= n) {
+        memcpy(xy, s->pre, sizeof(float) * 2 * (size_t)n);
+        return NPRFX_OK;
+    }
+    nprfx_result r = nprfx_ivs_generate(ctx, NPRFX_IVS_DEFAULT_SEED, n, xy, NULL);
+    if (r == NPRFX_OK) nprfx_ivs_quantize(xy, n);
+    return r;
 }
 
 nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *s,
@@ -181,8 +216,7 @@ nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequ
         if (!xy || !nv) {
             r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory for %d points",
                             want);
-        } else if ((r = nprfx_ivs_generate(ctx, NPRFX_IVS_DEFAULT_SEED, want, xy, NULL)) ==
-                       NPRFX_OK &&
+        } else if ((r = sequence_points(ctx, s, want, xy)) == NPRFX_OK &&
                    (r = nprfx_ivs_index_create(ctx, xy, want, &nv->index)) == NPRFX_OK) {
             nv->older = v;
             atomic_store_explicit(&s->head, nv, memory_order_release);

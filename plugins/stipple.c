@@ -2,6 +2,7 @@
  * core/stipple.c and core/ivs*.c; this file is the descriptor and the glue. */
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -239,6 +240,63 @@ static void st_state_free(void *state)
     free(s);
 }
 
+/* The shipped dot sequence, DATA_DIR/ivs.bin (built with the project by `nprfx ivs`), saves the
+ * instance generating it on first use (seconds per million points) and keeps the dots the same
+ * whatever compiler built this. No data directory or no file: generated, same pixels. A file
+ * that is there but unreadable, corrupt or of another seed is an error that names it: a broken
+ * install should not pass silently. */
+static nprfx_result st_preload(nprfx_context *ctx, nprfx_stipple_sequence *seq)
+{
+    const char *dir = nprfx_context_data_dir(ctx);
+    if (!dir || !*dir) return NPRFX_OK;
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s/ivs.bin", dir) >= (int)sizeof path) return NPRFX_OK;
+    FILE *f = fopen(path, "rb");
+    if (!f) return NPRFX_OK;
+    unsigned char *buf = NULL;
+    size_t size = 0, cap = 0;
+    int failed = 0;
+    for (;;) {
+        if (size == cap) {
+            unsigned char *nb = realloc(buf, cap = cap ? 2 * cap : (size_t)8 << 20);
+            if (!nb) {
+                failed = 1;
+                break;
+            }
+            buf = nb;
+        }
+        size_t got = fread(buf + size, 1, cap - size, f);
+        size += got;
+        if (got == 0) break;
+    }
+    failed |= ferror(f) != 0;
+    fclose(f);
+    nprfx_result r = NPRFX_OK;
+    if (failed) {
+        r = nprfx_error(ctx, NPRFX_ERR_IO, "stipple: cannot read the dot sequence %s", path);
+    } else {
+        uint64_t seed = 0;
+        int n = 0;
+        float *xy = NULL;
+        r = nprfx_ivs_decode(ctx, buf, size, &seed, &n, &xy);
+        if (r != NPRFX_OK) {
+            char why[512];
+            snprintf(why, sizeof why, "%s", nprfx_last_error(ctx));
+            r = nprfx_error(ctx, r, "stipple: %s: %s (rebuild it with `nprfx ivs`, or remove it)",
+                            path, why);
+        } else if (seed != NPRFX_IVS_DEFAULT_SEED)
+            r = nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                            "stipple: %s holds the sequence of seed %llu, not the node's %u "
+                            "(rebuild it with `nprfx ivs`, or remove it)",
+                            path, (unsigned long long)seed, NPRFX_IVS_DEFAULT_SEED);
+        else
+            r = nprfx_stipple_sequence_preload(ctx, seq, xy, n);
+        free(xy);
+    }
+    free(buf);
+    return r;
+}
+
 /* The instance state, created on first use; NULL when the caller gives no state slot (then
  * each call builds what it needs). Hosts may render tiles of one instance on several threads
  * at once: a fresh state is installed with a compare-and-swap, the loser frees its own. */
@@ -253,7 +311,9 @@ static nprfx_result st_get_state(const nprfx_render_args *args, st_state **out)
         if (!fresh)
             return nprfx_error(args->ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
         nprfx_result r = nprfx_stipple_sequence_create(args->ctx, &fresh->seq);
+        if (r == NPRFX_OK) r = st_preload(args->ctx, fresh->seq);
         if (r != NPRFX_OK) {
+            nprfx_stipple_sequence_destroy(fresh->seq);
             free(fresh);
             return r;
         }
@@ -439,9 +499,12 @@ const nprfx_node_desc nprfx_node_stipple = {
         "stipples any 2D image.\n"
         "\n"
         "The dots are the points of an incremental Voronoi set (IVS, Ma, Chen, Qian, Sun, The "
-        "Visual Computer 34(6), 2018), a farthest-point sequence on the torus generated on first "
-        "use (deterministic; about 2.5 s per million points): every prefix of it is evenly "
-        "spread and sample i covers about 1/i of a tile. The sequence is tiled over UV space "
+        "Visual Computer 34(6), 2018), a farthest-point sequence on the torus: every prefix of it "
+        "is evenly spread and sample i covers about 1/i of a tile. Its first 2^20 points ship "
+        "as share/nprfx/ivs.bin (written by the build with `nprfx ivs`; in the OpenFX bundle, "
+        "Contents/Resources/ivs.bin; $NPRFX_DATA_DIR overrides the folder); longer prefixes, "
+        "or all of it without the file, are generated on first use (about 2.5 s per million "
+        "points), with the same result. The sequence is tiled over UV space "
         "(period 'tile') and shifted per object id. A pixel with UV Jacobian J sees k = 1 / "
         "|det J| px^2 per unit of UV area and keeps the samples i whose screen area k A0 / i "
         "passes the mode's threshold, g = 1 - tone being the darkness:\n"

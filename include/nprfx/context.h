@@ -19,15 +19,22 @@ typedef struct nprfx_context_init {
     nprfx_error_handler error_handler; /* NULL: messages are only kept for nprfx_last_error */
     void *error_user;
     const nprfx_executor *executor; /* NULL: run serially on the calling thread */
+    /* Directory of the library's data files (the stipple node's dot sequence, ivs.bin); copied.
+     * NULL, or a file missing there: what the file holds is generated when first needed, which
+     * gives the same results, only later. */
+    const char *data_dir;
 } nprfx_context_init;
 
 #define NPRFX_CONTEXT_INIT_DEFAULT                                                                 \
     {                                                                                              \
-        sizeof(nprfx_context_init), NULL, NULL, NULL                                               \
+        sizeof(nprfx_context_init), NULL, NULL, NULL, NULL                                         \
     }
 
 nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context **out);
 void nprfx_context_destroy(nprfx_context *ctx);
+
+/* The data directory given at creation, or NULL. */
+const char *nprfx_context_data_dir(const nprfx_context *ctx);
 
 /* The executor given at creation (never NULL: a serial one when none was given). */
 const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);

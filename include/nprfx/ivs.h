@@ -60,6 +60,10 @@ size_t nprfx_ivs_encoded_size(int n);
 nprfx_result nprfx_ivs_encode(nprfx_context *ctx, uint64_t seed, int n, const float *xy,
                               unsigned char *buf, size_t buf_size);
 
+/* Round n points (2 * n floats in [0, 1]) to the encoded form's grid, as encoding then decoding
+ * them would: q / 2^24 with q the nearest integer to v * 2^24, 1.0 wrapping to 0. */
+void nprfx_ivs_quantize(float *xy, int n);
+
 /* Decode and validate an encoded sequence (magic, version, bit depth, size, hash). On success
  * *xy_out is a malloc'd array of 2 * *n_out floats the caller frees; seed_out may be NULL. On
  * failure nothing is allocated and the error names what is wrong. */

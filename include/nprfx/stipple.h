@@ -162,17 +162,27 @@ nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
                                        nprfx_stipple_format_kind kind, char **text, size_t *len);
 
 /* A lazily grown IVS sequence (seed NPRFX_IVS_DEFAULT_SEED) with its spatial index, owned by
- * the caller: there is no process-wide sequence. Empty when created (cheap); it is generated on
- * first use and regrown by powers of two (from 65536 points, at most NPRFX_STIPPLE_MAX_SAMPLES)
- * when a longer prefix is asked for, about 2.5 s per million points. Thread-safe: concurrent
- * calls share one object; a longer version is built under its lock and published atomically,
- * and earlier versions stay valid until the object is destroyed, so an index pointer once
- * returned never dangles while a render uses it (the versions together hold at most twice the
- * longest one). The sequence is a pure function of its seed and has the prefix property, so
- * which version a pixel reads never changes a result. */
+ * the caller: there is no process-wide sequence. Empty when created (cheap). Its points are the
+ * generator's rounded to the 24-bit grid of the encoded form (nprfx_ivs_quantize), so a shipped
+ * file (nprfx_stipple_sequence_preload) and the generator give the same points and the same
+ * pixels; the file only saves the generation time (about 2.5 s per million points) and makes
+ * the dots independent of the compiler (ivs.h). It is built on first use and regrown by powers
+ * of two (from 65536 points, at most NPRFX_STIPPLE_MAX_SAMPLES) when a longer prefix is asked
+ * for, from the preloaded points while they suffice. Thread-safe: concurrent calls share one
+ * object; a longer version is built under its lock and published atomically, and earlier
+ * versions stay valid until the object is destroyed, so an index pointer once returned never
+ * dangles while a render uses it (the versions together hold at most twice the longest one).
+ * The sequence is a pure function of its seed and has the prefix property, so which version a
+ * pixel reads never changes a result. */
 typedef struct nprfx_stipple_sequence nprfx_stipple_sequence;
 
 nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_sequence **out);
+/* Use the first n points of xy (the default-seed sequence, decoded from its file) instead of
+ * generating them; copied. Call before the sequence is first used. The points must be the
+ * sequence's (a file's header names its seed: check it); they are rounded to the grid like
+ * generated ones. */
+nprfx_result nprfx_stipple_sequence_preload(nprfx_context *ctx, nprfx_stipple_sequence *seq,
+                                            const float *xy, int n);
 /* Frees every version; no call may be using it. NULL is a no-op. */
 void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
 /* An index holding at least min_count points (clamped to NPRFX_STIPPLE_MAX_SAMPLES), valid

@@ -5,6 +5,8 @@
  *
  * This file: the two exported entry points, the plug-in table, describe / describeInContext,
  * instance lifecycle and the actions other than render (ofx_render.c). */
+#define _GNU_SOURCE /* dladdr */
+#include <dlfcn.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -169,6 +171,22 @@ NPRFX_OFX_EXPORT OfxPlugin *OfxGetPlugin(int nth)
 
 /* ---- load ------------------------------------------------------------------------------------ */
 
+/* The module is BUNDLE/Contents/ARCH/nprfx.ofx; its data sit in BUNDLE/Contents/Resources. */
+static void find_data_dir(void)
+{
+    nprfx_ofx_g.data_dir[0] = 0;
+    Dl_info info;
+    if (!dladdr((void *)&OfxGetPlugin, &info) || !info.dli_fname) return;
+    char path[sizeof nprfx_ofx_g.data_dir];
+    if (snprintf(path, sizeof path, "%s", info.dli_fname) >= (int)sizeof path) return;
+    for (int up = 0; up < 2; up++) { /* drop the file name, then the architecture folder */
+        char *slash = strrchr(path, '/');
+        if (!slash) return;
+        *slash = 0;
+    }
+    snprintf(nprfx_ofx_g.data_dir, sizeof nprfx_ofx_g.data_dir, "%.4000s/Resources", path);
+}
+
 static OfxStatus load(void)
 {
     OfxHost *h = nprfx_ofx_g.host;
@@ -181,6 +199,7 @@ static OfxStatus load(void)
     nprfx_ofx_g.msg = h->fetchSuite(h->host, kOfxMessageSuite, 1);
     if (!nprfx_ofx_g.prop || !nprfx_ofx_g.fx || !nprfx_ofx_g.param)
         return kOfxStatErrMissingHostFeature;
+    find_data_dir();
     return kOfxStatOK;
 }
 

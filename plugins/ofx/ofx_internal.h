@@ -21,6 +21,9 @@ typedef struct ofx_suites {
     const OfxMultiThreadSuiteV1 *mt;
     const OfxMemorySuiteV1 *mem;
     const OfxMessageSuiteV1 *msg;
+    /* The bundle's Contents/Resources (data files such as the stipple dot sequence), found from
+     * the module's own path on load; empty when unknown. */
+    char data_dir[4096];
 } ofx_suites;
 extern ofx_suites nprfx_ofx_g;
 

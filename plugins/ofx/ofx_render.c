@@ -426,6 +426,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     ci.executor = &host_executor;
+    ci.data_dir = nprfx_ofx_g.data_dir[0] ? nprfx_ofx_g.data_dir : NULL;
     render_call rc;
     memset(&rc, 0, sizeof rc);
     rc.inst = inst;

@@ -2,7 +2,8 @@
 # `nprfx ivs`: writes the stipple node's sequence as the compact file of nprfx/ivs.h (32-byte
 # header, 6 bytes a point), deterministic from the seed and prefix-stable in the count; --check
 # reads it back, validates it and measures its spacing; corrupt, truncated or foreign files and
-# bad options give a clear error and a non-zero exit status.
+# bad options give a clear error and a non-zero exit status. The file the build ships is checked,
+# and renders with it equal renders that generate the sequence.
 #
 # usage: bash stipple_ivs.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
@@ -63,6 +64,25 @@ expect 1 "cannot open" "$NPRFX" ivs --check does_not_exist.ivs
 cp seq/a.ivs ver.ivs
 printf '\011' | dd of=ver.ivs bs=1 seek=8 conv=notrunc 2> /dev/null
 expect 1 "version 9" "$NPRFX" ivs --check ver.ivs
+
+# the shipped file: the build writes the first 2^20 points beside the runner (share/nprfx) and
+# into the OpenFX bundle; the node reads it, and renders exactly what it renders generating the
+# sequence itself ($NPRFX_DATA_DIR empty: no data folder)
+BIN=$(cd "$(dirname "$NPRFX")" && pwd)
+SHIP="$BIN/share/nprfx/ivs.bin"
+expect 0 "1048576 points, seed 20180601" "$NPRFX" ivs --check "$SHIP"
+cmp -s "$SHIP" "$BIN/plugins/ofx/nprfx.ofx.bundle/Contents/Resources/ivs.bin" && pass || fail "the OpenFX bundle lacks the shipped ivs.bin"
+"$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir shipped --quiet && pass || fail "render with the shipped file"
+NPRFX_DATA_DIR= "$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir generated --quiet && pass || fail "render generating the sequence"
+for m in uniform radius multitone 2d; do
+  "$NPRFX" diff -q --fail 0 --warn 0 shipped/golden/stipple_$m.0001.exr generated/golden/stipple_$m.0001.exr > /dev/null \
+    && pass || fail "stipple $m: the shipped sequence and the generated one render differently"
+done
+# a broken data file is an error that names it (a bad install must not pass silently)
+mkdir -p data && cp bad.ivs data/ivs.bin
+expect 1 "data/ivs.bin: ivs: checksum mismatch" env NPRFX_DATA_DIR="$W/data" "$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir broken
+cp seq/s5.ivs data/ivs.bin
+expect 1 "holds the sequence of seed 5" env NPRFX_DATA_DIR="$W/data" "$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir broken
 
 # usage errors
 expect 2 "-n must be a whole number" "$NPRFX" ivs -n 0 -o x.ivs

@@ -208,6 +208,15 @@ static void test_codec(nprfx_context *ctx, const float *xy)
             err = fmax(err, sqrt(torus_d2(dec[2 * i], dec[2 * i + 1], xy[2 * i], xy[2 * i + 1])));
         printf("codec: max coordinate error %.3g\n", err);
         CHECK(err <= 1.0 / (1 << 24));
+        /* nprfx_ivs_quantize gives the decoded floats bit for bit (the stipple node relies on
+         * it: its generated and shipped sequences must be the same points) */
+        float *q = malloc(sizeof(float) * 2 * n);
+        memcpy(q, xy, sizeof(float) * 2 * n);
+        nprfx_ivs_quantize(q, n);
+        CHECK(memcmp(q, dec, sizeof(float) * 2 * n) == 0);
+        nprfx_ivs_quantize(q, n); /* and is idempotent */
+        CHECK(memcmp(q, dec, sizeof(float) * 2 * n) == 0);
+        free(q);
         /* a second round trip is exact */
         unsigned char *buf2 = malloc(size);
         CHECK_OK(nprfx_ivs_encode(ctx, seed, m, dec, buf2, size));
