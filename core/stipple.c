@@ -23,6 +23,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
 #include "internal_stipple.h"
 #include "nprfx/exec.h"
 
@@ -254,6 +258,40 @@ static void unit_stipples(void *user, int begin, int end, int worker)
     }
 }
 
+/* The tile's paper transmittance t (rows y0..y1 of width x1 - x0) as ink over paper, and the
+ * coverage 1 - t in a fifth channel when asked. paper + dk * (ink - paper) per channel, four
+ * channels at once where SSE2 is there (each lane the same float operations). */
+static void write_tile(nprfx_image *o, const nprfx_stipple_params *p, const float *t, int x0,
+                       int y0, int x1, int y1)
+{
+    const int extra = p->coverage_channel, width = x1 - x0;
+    const ptrdiff_t ps = o->pixel_stride;
+    float paper[4], diff[4]; /* local: stores to the output cannot alias them */
+    for (int c = 0; c < 4; c++) {
+        paper[c] = p->paper[c];
+        diff[c] = p->ink[c] - p->paper[c];
+    }
+    for (int y = y0; y < y1; y++) {
+        const float *trow = t + (size_t)(y - y0) * width;
+        float *px = nprfx_image_at(o, x0, y);
+        int i = 0;
+#if defined(__SSE2__)
+        const __m128 vp = _mm_loadu_ps(paper), vd = _mm_loadu_ps(diff);
+        for (; i < width; i++, px += ps) {
+            float dk = 1.0f - trow[i];
+            _mm_storeu_ps(px, _mm_add_ps(vp, _mm_mul_ps(_mm_set1_ps(dk), vd)));
+            if (extra) px[4] = dk;
+        }
+#endif
+        for (; i < width; i++, px += ps) {
+            float dk = 1.0f - trow[i];
+            for (int c = 0; c < 4; c++)
+                px[c] = paper[c] + dk * diff[c];
+            if (extra) px[4] = dk;
+        }
+    }
+}
+
 /* Phase 2: draw the stipples that reach a tile of the window. They are taken owner row by
  * owner row, and within a row unit by unit from the left, so every pixel sees its stipples in
  * row-major order of their owners, however the window, units and tiles fall. */
@@ -302,21 +340,7 @@ static void render_tiles(void *user, int begin, int end, int worker)
                 }
             }
         }
-        nprfx_image *o = j->out;
-        const int extra = p->coverage_channel;
-        float diff[4];
-        for (int c = 0; c < 4; c++)
-            diff[c] = p->ink[c] - p->paper[c];
-        for (int y = y0; y < y1; y++) {
-            const float *trow = t + (size_t)(y - y0) * width;
-            float *px = nprfx_image_at(o, x0, y);
-            for (int i = 0; i < width; i++, px += o->pixel_stride) {
-                float dk = 1.0f - trow[i];
-                for (int c = 0; c < 4; c++)
-                    px[c] = p->paper[c] + dk * diff[c];
-                if (extra) px[4] = dk;
-            }
-        }
+        write_tile(j->out, p, t, x0, y0, x1, y1);
     }
 }
 
