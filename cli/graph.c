@@ -72,6 +72,7 @@ struct nprfx_graph {
     size_t cache_bytes, cache_limit;
     int tile;
     double render_seconds;
+    long long render_items; /* what nodes counted (nprfx_render_args.items) */
     nprfx_render_hook hook;
     int has_hook;
 };
@@ -1042,6 +1043,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     a.fetch = fetch_cb;
     a.fetch_user = &rf;
     a.state = &n->state;
+    a.items = &g->render_items;
     int tile = g->tile > 0 ? g->tile : 1 << 30;
     double t0 = now_seconds();
     for (int ty = frame_rect.y0; ty < frame_rect.y1 && !r; ty += tile)
@@ -1219,6 +1221,13 @@ void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n)
         else
             snprintf(buf + len, n - len, "  %s%s%s\n", dir, sep, w->path);
     }
+}
+
+long long nprfx_graph_take_render_items(nprfx_graph *g)
+{
+    long long n = g->render_items;
+    g->render_items = 0;
+    return n;
 }
 
 double nprfx_graph_take_render_seconds(nprfx_graph *g)

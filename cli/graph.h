@@ -59,5 +59,7 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
 
 /* Seconds spent inside node render functions since the last call (for bench); resets. */
 double nprfx_graph_take_render_seconds(nprfx_graph *g);
+/* Items the nodes counted since the last call (nprfx_render_args.items; for bench); resets. */
+long long nprfx_graph_take_render_items(nprfx_graph *g);
 
 #endif

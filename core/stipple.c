@@ -396,6 +396,20 @@ static void job_free(sjob *j)
     if (j->own_seq) nprfx_stipple_sequence_destroy(j->seq);
 }
 
+/* The stipples whose centre lies in the window's pixels (x0 - 0.5 <= x < x1 - 0.5, and so for
+ * y): each stipple of a frame is counted by exactly one of the tiles that cover it. */
+static long long count_in_window(const sjob *j, int units, nprfx_rect w)
+{
+    const double x0 = w.x0 - 0.5, x1 = w.x1 - 0.5, y0 = w.y0 - 0.5, y1 = w.y1 - 0.5;
+    long long n = 0;
+    for (int u = 0; u < units; u++)
+        for (size_t i = 0; i < j->lists[u].n; i++) {
+            const nprfx_stipple *q = &j->lists[u].s[i];
+            n += q->x >= x0 && q->x < x1 && q->y >= y0 && q->y < y1;
+        }
+    return n;
+}
+
 nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params *p,
                                   const nprfx_stipple_inputs *in_, nprfx_rect window,
                                   nprfx_image *out)
@@ -434,6 +448,7 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
         nprfx_parallel_for(nprfx_context_executor(ctx), units, 1, unit_stipples, &j);
         r = atomic_load(&j.error);
     }
+    if (r == NPRFX_OK && p->count) *p->count += count_in_window(&j, units, window);
     if (r == NPRFX_OK) {
         int tiles = ((nprfx_rect_height(window) + STRIPE_ROWS - 1) / STRIPE_ROWS) *
                     ((nprfx_rect_width(window) + TILE_COLS - 1) / TILE_COLS);

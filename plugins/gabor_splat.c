@@ -386,8 +386,12 @@ static nprfx_result gabor_render(const nprfx_render_args *args)
     gi.id = in[IN_ID].data ? &in[IN_ID] : NULL;
     gi.orientation = in[IN_ORIENTATION].data ? &in[IN_ORIENTATION] : NULL;
     gi.frequency = in[IN_FREQUENCY].data ? &in[IN_FREQUENCY] : NULL;
-    nprfx_result r = nprfx_gabor_render(ctx, &p, &gi, args->window, args->output, NULL);
+    long long *items = nprfx_render_items(args);
+    nprfx_gabor_stats stats;
+    nprfx_result r =
+        nprfx_gabor_render(ctx, &p, &gi, args->window, args->output, items ? &stats : NULL);
     if (r) return nprfx_error(ctx, r, "gabor-splat: %s", nprfx_last_error(ctx));
+    if (items) *items += stats.kernels;
     return NPRFX_OK;
 }
 
@@ -455,4 +459,5 @@ const nprfx_node_desc nprfx_node_gabor_splat = {
     .num_params = P_COUNT,
     .output = gabor_output,
     .render = gabor_render,
+    .item_name = "kernels",
 };

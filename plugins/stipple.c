@@ -433,6 +433,7 @@ static nprfx_result st_render(const nprfx_render_args *args)
     float curve[NPRFX_STIPPLE_CURVE_SIZE];
     if ((r = st_params_full(args, &p, curve)) != NPRFX_OK) return r;
     nprfx_stipple_inputs in = st_inputs(args);
+    p.count = nprfx_render_items(args);
     return nprfx_stipple_render(args->ctx, &p, &in, args->window, args->output);
 }
 
@@ -527,4 +528,5 @@ const nprfx_node_desc nprfx_node_stipple = {
     .render = st_render,
     .state_free = st_state_free,
     .export_text = st_export_text,
+    .item_name = "stipples",
 };

@@ -6,6 +6,8 @@
 #ifndef NPRFX_NODE_H
 #define NPRFX_NODE_H
 
+#include <stddef.h>
+
 #include "nprfx/image.h"
 
 #ifdef __cplusplus
@@ -25,8 +27,9 @@ typedef enum nprfx_param_type {
 #define NPRFX_PARAM_PIXELS 0x1u /* a length in pixels: multiplied by the host's render scale */
 #define NPRFX_PARAM_AREA 0x2u   /* an area in pixels^2: multiplied by render scale squared */
 #define NPRFX_PARAM_PATH 0x4u   /* a STRING that names a file (sequence) path */
-#define NPRFX_PARAM_EXPORT 0x8u /* a PATH the caller writes desc->export_text's text to, per frame;
-                                   empty: no export */
+#define NPRFX_PARAM_EXPORT                                                                         \
+    0x8u /* a PATH the caller writes desc->export_text's text to, per frame;                       \
+            empty: no export */
 
 typedef struct nprfx_param_desc {
     const char *name;  /* identifier used in graphs, --set and OFX ("sigma") */
@@ -102,6 +105,10 @@ typedef struct nprfx_render_args {
     nprfx_fetch_fn fetch; /* NULL when the caller cannot fetch other frames */
     void *fetch_user;
     void **state; /* per-instance slot, NULL at first; the node owns what it stores */
+    /* NULL, or where a node that counts what it makes (desc->item_name) adds how many it made
+     * for the window (stipples drawn, kernels splatted), for benchmarks and logs. Nodes read it
+     * only when args->size covers it (older callers pass a shorter struct). */
+    long long *items;
 } nprfx_render_args;
 
 typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args);
@@ -137,7 +144,16 @@ struct nprfx_node_desc {
      * format. *text is malloc'd; the caller writes it (core does no file I/O). */
     nprfx_result (*export_text)(const nprfx_render_args *args, const char *path, char **text,
                                 size_t *len);
+    /* Optional: what the node counts into args->items, a plural noun ("stipples"). */
+    const char *item_name;
 };
+
+/* The args' item counter, or NULL when the caller gave none or an older, shorter struct. */
+static inline long long *nprfx_render_items(const nprfx_render_args *args)
+{
+    return args->size >= offsetof(nprfx_render_args, items) + sizeof args->items ? args->items
+                                                                                 : NULL;
+}
 
 /* ---- descriptor helpers (core/node.c) ---- */
 

@@ -84,6 +84,9 @@ typedef struct nprfx_stipple_params {
      * sqrt(aspect) in v (the same area A0 = tile^2), which makes its copies square on such
      * surfaces; otherwise the dots are stretched with the UV map and line up in rows. */
     double aspect;
+    /* NULL, or a counter nprfx_stipple_render adds the number of stipples drawn to: those
+     * whose centre lies in the window (so tiles of a frame add up to the frame's count). */
+    long long *count;
 } nprfx_stipple_params;
 
 #define NPRFX_STIPPLE_CURVE_SIZE 17

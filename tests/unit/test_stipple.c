@@ -621,6 +621,27 @@ static void test_sequence(void)
     CHECK(memcmp(r1.data, r3.data, sizeof(float) * 5 * w * h) == 0);
     nprfx_stipple_sequence_destroy(s2);
 
+    /* the count of stipples drawn (bench's stipples/s): the tiles of a frame add up to the
+     * whole frame's count, which is the number of stipples the frame's pixels own (collect)
+     * but for the rare one whose centre sits exactly on the frame's right or bottom edge */
+    long long whole = 0, tiled = 0;
+    p.count = &whole;
+    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r1.bounds, &r1));
+    p.count = &tiled;
+    for (int ty = 0; ty < h; ty += 37)
+        for (int tx = 0; tx < w; tx += 53)
+            CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, nprfx_rect_make(tx, ty, tx + 53, ty + 37),
+                                          &r2));
+    p.count = NULL;
+    nprfx_stipple *owned = NULL;
+    size_t nowned = 0;
+    CHECK_OK(nprfx_stipple_collect(ctx4, &p, &in, r1.bounds, &owned, &nowned));
+    printf("count: %lld stipples drawn in the frame, %lld in its tiles, %zu owned\n", whole, tiled,
+           nowned);
+    CHECK(whole > 100 && tiled == whole);
+    CHECK(whole <= (long long)nowned && whole >= (long long)nowned - 2);
+    free(owned);
+
     /* a host rendering tiles of a fresh instance on several threads at once: the state (and
      * its sequence) is created once, and the result is the serial one */
     node = nprfx_node_find("stipple");
