@@ -13,7 +13,7 @@
 #define STRIPE_ROWS 64
 #define TILE_COLS 256
 /* Owners are found in units of this many rows and columns, each owner once per render: small
- * enough for their per-pixel data (~70 bytes a pixel) to stay in cache, large enough that the
+ * enough for their per-pixel data (~57 bytes a pixel) to stay in cache, large enough that the
  * margin of inputs read around each stays cheap. */
 #define UNIT_ROWS 64
 #define UNIT_COLS 256
@@ -26,23 +26,21 @@ typedef struct pixdata {
     int w;
     double *su, *sv; /* UV in sequence units (uv / tile + object offset) */
     float *jac;      /* 4 per pixel: du/dx, du/dy, dv/dx, dv/dy in sequence units */
-    float *g;        /* darkness 1 - tone */
+    float *g;        /* darkness 1 - tone, on the owners (E) only */
     float *adet;     /* |det J| */
     float *hs, *hc;  /* smoothing scratch: horizontal sums of adet and their counts */
-    int *id;
-    int *uid; /* id where the pixel has a UV (OK_UV), else NO_ID */
-    int *jid; /* id where it also has usable derivatives (OK_J), else NO_ID */
+    int *id;         /* the object where the pixel has a UV (OK_UV), else NO_ID */
+    int *jid;        /* id where it also has usable derivatives (OK_J), else NO_ID; set where
+                      * whether a derivative is usable is known (E plus SMOOTH + 1) */
     unsigned char *ok;
     size_t cap;    /* pixels allocated */
-    float *rowbuf; /* fill_raw: one row's input values, 6 a pixel */
-    size_t rowcap;
-    unsigned char *scratch; /* repair_outliers: per pixel */
-    void *fixes;            /* repair_outliers: the repaired values */
-    size_t fixcap;
+    void *fixes;   /* repair_outliers: the repaired values */
+    size_t fixcap; /* repairs they have room for */
 } pixdata;
 
-/* OK_SEAM: the two one-sided differences disagree (a UV seam next to the pixel, or a fold). */
-enum { OK_UV = 1, OK_J = 2, OK_SEAM = 4 };
+/* OK_SEAM: the two one-sided differences disagree (a UV seam next to the pixel, or a fold).
+ * OK_DROP: only while repair_outliers runs out of memory, a repair to be dropped. */
+enum { OK_UV = 1, OK_J = 2, OK_SEAM = 4, OK_DROP = 8 };
 #define OK_BOTH (OK_UV | OK_J)
 /* Never a read id (those are -1 or more). */
 #define NO_ID INT_MIN
