@@ -99,6 +99,21 @@ typedef int (*nprfx_ivs_visit_fn)(void *user, int index, double u, double v);
 long long nprfx_ivs_index_query(const nprfx_ivs_index *index, int limit, double u0, double v0,
                                 double u1, double v1, nprfx_ivs_visit_fn visit, void *user);
 
+/* Samples at most handed to a batch callback at once. */
+#define NPRFX_IVS_BATCH 64
+
+/* Called with n >= 1 samples found (index[k], u[k], v[k] as a visit callback gets them), in the
+ * order nprfx_ivs_index_query visits them. Return nonzero to stop the query. */
+typedef int (*nprfx_ivs_batch_fn)(void *user, int n, const int32_t *index, const double *u,
+                                  const double *v);
+
+/* nprfx_ivs_index_query with the samples handed over up to NPRFX_IVS_BATCH at a time, for
+ * callers whose work per sample is small next to a call (fn may be NULL: count only). The same
+ * samples in the same order. Returns the number found, including those of the batch after which
+ * fn stopped the query. */
+long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *index, int limit, double u0, double v0,
+                                      double u1, double v1, nprfx_ivs_batch_fn fn, void *user);
+
 #ifdef __cplusplus
 }
 #endif

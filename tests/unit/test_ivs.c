@@ -274,6 +274,29 @@ static int collect(void *user, int index, double u, double v)
     return 0;
 }
 
+/* The batches of nprfx_ivs_index_query_batch, one sample at a time into the hits. */
+static int collect_batch(void *user, int n, const int32_t *index, const double *u, const double *v)
+{
+    for (int k = 0; k < n; k++)
+        collect(user, index[k], u[k], v[k]);
+    return 0;
+}
+
+/* Stops after the first batch. */
+static int first_batch(void *user, int n, const int32_t *index, const double *u, const double *v)
+{
+    (void)index, (void)u, (void)v;
+    *(int *)user = n;
+    return 1;
+}
+
+/* Stops at the third sample. */
+static int third_sample(void *user, int index, double u, double v)
+{
+    (void)index, (void)u, (void)v;
+    return ++*(int *)user == 3;
+}
+
 static int cmp_key(const void *a, const void *b)
 {
     const double *x = a, *y = b;
@@ -325,6 +348,22 @@ static void test_index(nprfx_context *ctx, const float *xy)
                     if (u >= u0 && u < u0 + w && v >= v0 && v < v0 + h) collect(&want, i, u, v);
                 }
         if (q == 0) CHECK(got.n == N);
+        /* in batches: the same samples in the same order; and both stop when asked */
+        hits bat = {0};
+        CHECK(nprfx_ivs_index_query_batch(ix, limit, u0, v0, u0 + w, v0 + h, collect_batch, &bat) ==
+              got.n);
+        if (bat.n != got.n || (got.n && (memcmp(bat.index, got.index, sizeof(int) * got.n) ||
+                                         memcmp(bat.uv, got.uv, sizeof(double) * 2 * got.n))))
+            mismatches++;
+        free(bat.index);
+        free(bat.uv);
+        int first = 0, seen = 0;
+        long long c1 =
+            nprfx_ivs_index_query_batch(ix, limit, u0, v0, u0 + w, v0 + h, first_batch, &first);
+        CHECK(c1 == first && (got.n == 0 || (first >= 1 && first <= NPRFX_IVS_BATCH)));
+        long long c3 =
+            nprfx_ivs_index_query(ix, limit, u0, v0, u0 + w, v0 + h, third_sample, &seen);
+        CHECK(c3 == (got.n < 3 ? got.n : 3));
         if (got.n != want.n) {
             mismatches++;
         } else {
