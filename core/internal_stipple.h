@@ -59,14 +59,6 @@ typedef struct cgrid {
     unsigned char *good;
 } cgrid;
 
-/* Per owner pixel: how many samples it keeps and the bounding box of its footprint. */
-typedef struct oinfo {
-    int limit;    /* keeps 0-based indices < limit; 0: nothing */
-    int start;    /* counting sort of the stipples by owner */
-    double i_max; /* the real-valued bound k A0 / threshold */
-    double bb[4]; /* u0, v0, u1, v1 */
-} oinfo;
-
 /* A stipple with the key that orders it: its owner pixel, then its sample. */
 typedef struct keyed {
     int oy, ox;
@@ -91,8 +83,6 @@ typedef struct scratch {
     pixdata d;
     cgrid g;
     size_t gcap;
-    oinfo *info;
-    size_t icap;
     float *sdet; /* smoothed |det J| over the owners */
     size_t scap;
     klist kl;

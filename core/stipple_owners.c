@@ -273,7 +273,8 @@ static int keyed_cmp(const void *pa, const void *pb)
  * footprint boxes and the largest of their limits; each sample found is then tested against
  * every owner of the block whose box and limit admit it. That is the same per-pixel decision
  * as one query per pixel, at a fraction of the cost, and the result does not depend on where
- * the blocks fall (each block's stipples are sorted by owner). */
+ * the blocks fall (each block's stipples are sorted by owner, and the rows of blocks dealt out
+ * by owner row). */
 #define BLOCK 4
 #define BLOCK_PX (BLOCK * BLOCK)
 /* owned samples waiting for emit() */
@@ -386,9 +387,10 @@ static void strip_fill(const sjob *j, const scratch *s, nprfx_rect E, int y0, in
         for (i = ew; i < (ew + BLOCK - 1) / BLOCK * BLOCK; i++)
             lim[i] = 0;
         /* the footprint's box, straight from the grid where it has all four corners: the
-         * extremes of each column of corners (top, bottom), then of two columns; for every
-         * owner without a branch (where a corner is not in the grid, its values are not used:
-         * the box is replaced below) */
+         * extremes of each column of corners (top, bottom), then of two columns (min and max
+         * are exact, so the order does not matter, but for the sign of a zero, which no test of
+         * a box sees); for every owner without a branch (where a corner is not in the grid,
+         * its values are not used: the box is replaced below) */
         const size_t g0 = (size_t)(y - g->E.y0) * g->gw + (size_t)(x0 - g->E.x0);
         const size_t g1 = g0 + g->gw;
         const double *ut = g->gu + g0, *ub = g->gu + g1, *vt = g->gv + g0, *vb = g->gv + g1;
@@ -438,7 +440,7 @@ typedef struct block_ctx {
     const sjob *j;
     const pixdata *d;
     const cgrid *grid;
-    /* the index: the params' own, or the sequence's, fetched as long as the limits need */
+    /* the index: the params' own, or the sequence's, fetched again when a limit needs more */
     const nprfx_ivs_index *ix;
     int ix_count;
     nprfx_result r;
@@ -450,7 +452,7 @@ typedef struct block_ctx {
     unsigned built;   /* the slots whose own[] is built */
     int id[BLOCK_PX]; /* the slots' objects */
     owner own[BLOCK_PX];
-    /* owned samples: slot, index, position */
+    /* owned samples waiting for emit(): slot, index, position */
     int np;
     int pslot[PENDING];
     int32_t pindex[PENDING];

@@ -53,7 +53,6 @@ void internal_stipple_scratch_free(scratch *s)
     free(s->g.gu);
     free(s->g.gv);
     free(s->g.good);
-    free(s->info);
     free(s->sdet);
     free(s->kl.k);
     free(s->sl.s);
@@ -1072,8 +1071,6 @@ int internal_stipple_prepare(const sjob *j, scratch *s, nprfx_rect E)
     c = s->gcap, ok &= internal_stipple_reserve((void **)&g->gv, &c, gn, sizeof(double));
     c = s->gcap, ok &= internal_stipple_reserve((void **)&g->good, &c, gn, 1);
     s->gcap = ok ? (gn > s->gcap ? gn : s->gcap) : 0;
-    ok &= internal_stipple_reserve((void **)&s->info, &s->icap, (size_t)ew * (size_t)eh,
-                                   sizeof(oinfo));
     ok &= internal_stipple_reserve((void **)&s->sdet, &s->scap, (size_t)ew * (size_t)eh,
                                    sizeof(float));
     if (!ok) return 0;
