@@ -11,8 +11,8 @@ enum { IN_BASE, IN_LAYER, IN_BACK, IN_ALPHA, IN_COVERAGE, IN_COUNT };
 enum { P_MODE, P_FACTOR, P_OPACITY, P_GAIN_BASE, P_GAIN_LAYER, P_BACKGROUND, P_COUNT };
 
 /* Same order as nprfx_blend_mode. */
-static const char *const mode_names[] = {
-    "alphablend", "overlay", "overlayalpha", "multiply", "screen", "pigment", "difference", NULL};
+static const char *const mode_names[] = {"alphablend", "overlay", "overlayalpha", "multiply",
+                                         "screen",     "pigment", "difference",   NULL};
 _Static_assert(sizeof mode_names / sizeof mode_names[0] == NPRFX_BLEND_MODE_COUNT + 1,
                "blend: mode names must follow nprfx_blend_mode");
 
@@ -71,10 +71,7 @@ static const nprfx_param_desc params[P_COUNT] = {
              "clamp(alpha * opacity, 0, 1), f = factor. Values are not clamped.",
      .type = NPRFX_PARAM_CHOICE,
      .def = {0},
-     .soft_min = 0,
-     .soft_max = NPRFX_BLEND_MODE_COUNT - 1,
-     .hard_min = 0,
-     .hard_max = NPRFX_BLEND_MODE_COUNT - 1,
+     NPRFX_CHOICE_RANGE(NPRFX_BLEND_MODE_COUNT),
      .choices = mode_names,
      .choice_help = mode_help},
     {.name = "factor",
@@ -288,42 +285,43 @@ const nprfx_node_desc nprfx_node_blend = {
     .id = "blend",
     .label = "Blend",
     .group = "NPR",
-    .help = "Composites a layer onto a base with the compositing functions of the NPR Gabor noise"
-            " style cookbook (Benard et al. 2010, supplemental section 4): alphablend, overlay "
-            "and overlayalpha exactly as written there, plus multiply, screen and the watercolor "
-            "pigment-density modification of Bousseau et al. 2006, then the background colour "
-            "where the coverage AOV is 0.\n"
-            "\n"
-            "Per colour channel, with c0 = gain_base * base, c1 = gain_layer * layer, a = "
-            "clamp(alpha * opacity, 0, 1) (opacity alone when alpha is not connected) and f = "
-            "factor:\n"
-            "  alphablend    (1 - a) c0 + a c1\n"
-            "  overlay       (1 - a) c0 + a * c0 f (1 - (1 - c0)(1 - c1))\n"
-            "  overlayalpha  back (1 - a) + a c0 f (1 - (1 - c0 a)(1 - c1))\n"
-            "  multiply      (1 - a) c0 + a * c0 c1\n"
-            "  screen        (1 - a) c0 + a * (1 - (1 - c0)(1 - c1))\n"
-            "  pigment       (1 - a) C + a * (C - (C - C^2)(d - 1)), C = c0, d = 1 + f (c1 - 0.5)\n"
-            "  difference    (1 - a) c0 + a * f |c0 - c1|\n"
-            "overlay, multiply, screen, pigment and difference apply a as a layer opacity over c0, as "
-            "compositors do; with a = 1 they are the bare formulas. alphablend and overlayalpha "
-            "take a inside the formula, as the cookbook writes them.\n"
-            "\n"
-            "pigment: d is Bousseau et al.'s pigment density, computed from the layer as in their"
-            " paper (d = 1 + beta (T - 0.5), beta = factor, T = c1): a layer value of 0.5 leaves "
-            "the colour alone, brighter layer values mean denser pigment (darker, for factor > "
-            "0), darker values thinner pigment. Colour values 0 and 1 are fixed points.\n"
-            "\n"
-            "Channels: the output has base's channels. A 4-channel base is RGBA: its alpha passes"
-            " through unblended. A 1-channel layer (a noise pattern) is used for every colour "
-            "channel; a layer with base's colour channels is used channel by channel (an RGBA "
-            "layer's alpha is ignored: connect it to the alpha input to use it).\n"
-            "\n"
-            "Background: out = coverage * result + (1 - coverage) * background on every channel "
-            "(alpha too), an antialiased form of the cookbook's `if (isBackground) final_color = "
-            "background`.\n"
-            "\n"
-            "Inputs read as 0 outside their data window. No value is clamped except a and "
-            "coverage.",
+    .help =
+        "Composites a layer onto a base with the compositing functions of the NPR Gabor noise"
+        " style cookbook (Benard et al. 2010, supplemental section 4): alphablend, overlay "
+        "and overlayalpha exactly as written there, plus multiply, screen and the watercolor "
+        "pigment-density modification of Bousseau et al. 2006, then the background colour "
+        "where the coverage AOV is 0.\n"
+        "\n"
+        "Per colour channel, with c0 = gain_base * base, c1 = gain_layer * layer, a = "
+        "clamp(alpha * opacity, 0, 1) (opacity alone when alpha is not connected) and f = "
+        "factor:\n"
+        "  alphablend    (1 - a) c0 + a c1\n"
+        "  overlay       (1 - a) c0 + a * c0 f (1 - (1 - c0)(1 - c1))\n"
+        "  overlayalpha  back (1 - a) + a c0 f (1 - (1 - c0 a)(1 - c1))\n"
+        "  multiply      (1 - a) c0 + a * c0 c1\n"
+        "  screen        (1 - a) c0 + a * (1 - (1 - c0)(1 - c1))\n"
+        "  pigment       (1 - a) C + a * (C - (C - C^2)(d - 1)), C = c0, d = 1 + f (c1 - 0.5)\n"
+        "  difference    (1 - a) c0 + a * f |c0 - c1|\n"
+        "overlay, multiply, screen, pigment and difference apply a as a layer opacity over c0, as "
+        "compositors do; with a = 1 they are the bare formulas. alphablend and overlayalpha "
+        "take a inside the formula, as the cookbook writes them.\n"
+        "\n"
+        "pigment: d is Bousseau et al.'s pigment density, computed from the layer as in their"
+        " paper (d = 1 + beta (T - 0.5), beta = factor, T = c1): a layer value of 0.5 leaves "
+        "the colour alone, brighter layer values mean denser pigment (darker, for factor > "
+        "0), darker values thinner pigment. Colour values 0 and 1 are fixed points.\n"
+        "\n"
+        "Channels: the output has base's channels. A 4-channel base is RGBA: its alpha passes"
+        " through unblended. A 1-channel layer (a noise pattern) is used for every colour "
+        "channel; a layer with base's colour channels is used channel by channel (an RGBA "
+        "layer's alpha is ignored: connect it to the alpha input to use it).\n"
+        "\n"
+        "Background: out = coverage * result + (1 - coverage) * background on every channel "
+        "(alpha too), an antialiased form of the cookbook's `if (isBackground) final_color = "
+        "background`.\n"
+        "\n"
+        "Inputs read as 0 outside their data window. No value is clamped except a and "
+        "coverage.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -52,8 +52,7 @@ static nprfx_result time_offset_render(const nprfx_render_args *args)
     if (other.channels != args->output->channels)
         return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,
                            "time-offset: input 'image' has %d channels at frame %g but %d at %g",
-                           other.channels, t, args->output->channels,
-                           args->time);
+                           other.channels, t, args->output->channels, args->time);
     /* Outside the other frame's data window the output is 0, as EXR readers do. */
     nprfx_image win = nprfx_image_crop(args->output, args->window);
     float zero[NPRFX_MAX_CHANNELS] = {0};

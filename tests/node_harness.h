@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "nprfx/node.h"
+#include "nprfx/synth.h"
 
 /* A w x h image with ch channels at the origin, filled from vals (NULL: zeros). */
 static inline nprfx_image th_image(int w, int h, int ch, const float *vals)
@@ -18,6 +19,27 @@ static inline nprfx_image th_image(int w, int h, int ch, const float *vals)
         exit(2);
     }
     if (vals) memcpy(im.data, vals, sizeof(float) * (size_t)w * (size_t)h * (size_t)ch);
+    return im;
+}
+
+/* The index of a synthetic plate's channel (nprfx synth --list names them). */
+static inline int th_synth_channel(const char *name)
+{
+    const char *const *n = nprfx_synth_channel_names();
+    for (int i = 0; n[i]; i++)
+        if (strcmp(n[i], name) == 0) return i;
+    fprintf(stderr, "test: synth has no channel %s\n", name);
+    exit(2);
+}
+
+/* Frame `frame` of a synthetic scene at w x h, every channel. */
+static inline nprfx_image th_synth(nprfx_context *ctx, const char *scene, int frame, int w, int h)
+{
+    nprfx_image im = th_image(w, h, nprfx_synth_channel_count(), NULL);
+    if (nprfx_synth_render(ctx, scene, frame, &im) != NPRFX_OK) {
+        fprintf(stderr, "test: synth %s failed: %s\n", scene, nprfx_last_error(ctx));
+        exit(2);
+    }
     return im;
 }
 

@@ -113,6 +113,9 @@ typedef struct nprfx_render_args {
 
 typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args);
 
+/* In a CHOICE param's initializer: the range of its n options, 0 .. n - 1, soft and hard alike. */
+#define NPRFX_CHOICE_RANGE(n) .soft_min = 0, .soft_max = (n)-1, .hard_min = 0, .hard_max = (n)-1
+
 /* Node flags. */
 #define NPRFX_NODE_TEMPORAL 0x1u /* fetches inputs at other frames */
 #define NPRFX_NODE_STATEFUL                                                                        \

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/coherent_noise.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
@@ -167,14 +168,6 @@ static void scene_free(scene *s)
         nprfx_image_free(&s->plates[i]);
 }
 
-static int synth_channel(const char *name)
-{
-    const char *const *n = nprfx_synth_channel_names();
-    for (int i = 0; i < nprfx_synth_channel_count(); i++)
-        if (strcmp(n[i], name) == 0) return i;
-    return -1;
-}
-
 static void scene_synth(scene *s, nprfx_context *ctx, const char *name, int W, int H)
 {
     memset(s, 0, sizeof *s);
@@ -184,11 +177,11 @@ static void scene_synth(scene *s, nprfx_context *ctx, const char *name, int W, i
     s->H = H;
     s->synth = name;
     s->connected = (1u << IN_DEPTH) | (1u << IN_MPREV) | (1u << IN_MNEXT) | (1u << IN_SOURCE);
-    s->ch_z = synth_channel("Z");
-    s->ch_mp = synth_channel("motion_prev.X");
-    s->ch_mn = synth_channel("motion_next.X");
-    s->ch_id = synth_channel("id");
-    s->ch_r = synth_channel("R");
+    s->ch_z = th_synth_channel("Z");
+    s->ch_mp = th_synth_channel("motion_prev.X");
+    s->ch_mn = th_synth_channel("motion_next.X");
+    s->ch_id = th_synth_channel("id");
+    s->ch_r = th_synth_channel("R");
 }
 
 /* ---- driving the node -------------------------------------------------------------------- */

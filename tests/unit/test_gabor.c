@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
 #include "nprfx/gabor.h"
@@ -23,58 +24,9 @@ static const double k_pi = 3.14159265358979323846;
 static nprfx_context *ctx;
 static const nprfx_node_desc *node;
 
-static int synth_channel(const char *name)
-{
-    const char *const *n = nprfx_synth_channel_names();
-    for (int i = 0; n[i]; i++)
-        if (!strcmp(n[i], name)) return i;
-    fprintf(stderr, "no synth channel %s\n", name);
-    exit(2);
-}
-
-static nprfx_image alloc_image(int w, int h, int ch)
-{
-    nprfx_image im;
-    if (nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, w, h), ch, &im) != NPRFX_OK) {
-        fprintf(stderr, "allocation failed\n");
-        exit(2);
-    }
-    return im;
-}
-
-static nprfx_image synth(const char *scene, int frame, int w, int h)
-{
-    nprfx_image im = alloc_image(w, h, nprfx_synth_channel_count());
-    if (nprfx_synth_render(ctx, scene, frame, &im) != NPRFX_OK) {
-        fprintf(stderr, "synth failed: %s\n", nprfx_last_error(ctx));
-        exit(2);
-    }
-    return im;
-}
-
-static int PI(const char *name)
-{
-    int i = nprfx_node_param_index(node, name);
-    if (i < 0) {
-        fprintf(stderr, "gabor-splat has no param %s\n", name);
-        exit(2);
-    }
-    return i;
-}
-
-static int II(const char *name)
-{
-    int i = nprfx_node_input_index(node, name);
-    if (i < 0) {
-        fprintf(stderr, "gabor-splat has no input %s\n", name);
-        exit(2);
-    }
-    return i;
-}
-
 static void set(nprfx_value *pv, const char *name, const char *text)
 {
-    int i = PI(name);
+    int i = th_param(node, name);
     if (nprfx_param_parse(ctx, node, &node->params[i], text, &pv[i]) != NPRFX_OK) {
         fprintf(stderr, "bad value %s for %s: %s\n", text, name, nprfx_last_error(ctx));
         exit(2);
@@ -90,10 +42,12 @@ static gin plate_inputs(const nprfx_image *plate, int uv, int with_id)
 {
     gin g;
     memset(&g, 0, sizeof g);
-    g.in[II("anchor")] = uv ? nprfx_image_channels(plate, synth_channel("UV.U"), 2)
-                            : nprfx_image_channels(plate, synth_channel("Pref.X"), 3);
-    g.in[II("depth")] = nprfx_image_channels(plate, synth_channel("Z"), 1);
-    if (with_id) g.in[II("id")] = nprfx_image_channels(plate, synth_channel("id"), 1);
+    g.in[th_input(node, "anchor")] =
+        uv ? nprfx_image_channels(plate, th_synth_channel("UV.U"), 2)
+           : nprfx_image_channels(plate, th_synth_channel("Pref.X"), 3);
+    g.in[th_input(node, "depth")] = nprfx_image_channels(plate, th_synth_channel("Z"), 1);
+    if (with_id)
+        g.in[th_input(node, "id")] = nprfx_image_channels(plate, th_synth_channel("id"), 1);
     return g;
 }
 
@@ -234,27 +188,27 @@ static void test_descriptor(void)
                              "amplitude",       "lod_levels",  "depth_test",  "points"};
     for (int i = 0; i < 16; i++)
         CHECK(nprfx_node_param_index(node, p_names[i]) >= 0);
-    CHECK(node->inputs[II("id")].flags & NPRFX_INPUT_OPTIONAL);
-    CHECK(node->inputs[II("orientation")].flags & NPRFX_INPUT_OPTIONAL);
-    CHECK(node->inputs[II("frequency")].flags & NPRFX_INPUT_OPTIONAL);
-    CHECK(!(node->inputs[II("anchor")].flags & NPRFX_INPUT_OPTIONAL));
+    CHECK(node->inputs[th_input(node, "id")].flags & NPRFX_INPUT_OPTIONAL);
+    CHECK(node->inputs[th_input(node, "orientation")].flags & NPRFX_INPUT_OPTIONAL);
+    CHECK(node->inputs[th_input(node, "frequency")].flags & NPRFX_INPUT_OPTIONAL);
+    CHECK(!(node->inputs[th_input(node, "anchor")].flags & NPRFX_INPUT_OPTIONAL));
     CHECK(strstr(node->help, "Pref") && strstr(node->help, "Blender") && strstr(node->help, "UV"));
-    CHECK(node->params[PI("radius")].flags & NPRFX_PARAM_PIXELS);
+    CHECK(node->params[th_param(node, "radius")].flags & NPRFX_PARAM_PIXELS);
 }
 
 static void test_errors(void)
 {
-    nprfx_image plate = synth("orbit", 24, 32, 24);
+    nprfx_image plate = th_synth(ctx, "orbit", 24, 32, 24);
     nprfx_value pv[32];
     nprfx_node_defaults(node, pv);
-    nprfx_image out = alloc_image(32, 24, 1);
+    nprfx_image out = th_image(32, 24, 1, NULL);
     gin g = plate_inputs(&plate, 0, 1);
     gin none = g;
-    none.in[II("anchor")].data = NULL;
+    none.in[th_input(node, "anchor")].data = NULL;
     CHECK(render(&none, pv, &out) == NPRFX_ERR_MISSING_INPUT);
     CHECK(strstr(nprfx_last_error(ctx), "anchor") != NULL);
     none = g;
-    none.in[II("depth")].data = NULL;
+    none.in[th_input(node, "depth")].data = NULL;
     CHECK(render(&none, pv, &out) == NPRFX_ERR_MISSING_INPUT);
     CHECK(strstr(nprfx_last_error(ctx), "depth") != NULL);
     /* a 3D anchor space with a 2-channel anchor */
@@ -269,9 +223,10 @@ static void test_errors(void)
     CHECK(render(&g, pv, &out) == NPRFX_ERR_INVALID_ARGUMENT);
     /* out of range values are refused by the descriptor */
     nprfx_value v;
-    CHECK(nprfx_param_parse(ctx, node, &node->params[PI("radius")], "0", &v) ==
+    CHECK(nprfx_param_parse(ctx, node, &node->params[th_param(node, "radius")], "0", &v) ==
           NPRFX_ERR_OUT_OF_RANGE);
-    CHECK(nprfx_param_parse(ctx, node, &node->params[PI("anchor_space")], "world", &v) != NPRFX_OK);
+    CHECK(nprfx_param_parse(ctx, node, &node->params[th_param(node, "anchor_space")], "world",
+                            &v) != NPRFX_OK);
     nprfx_image_free(&out);
     nprfx_image_free(&plate);
 }
@@ -280,9 +235,9 @@ static void test_errors(void)
 
 static void test_flat_plane(void)
 {
-    nprfx_image plate = synth("translate", 0, 256, 256);
+    nprfx_image plate = th_synth(ctx, "translate", 0, 256, 256);
     gin g = plate_inputs(&plate, 0, 1);
-    nprfx_image out = alloc_image(256, 256, 1), out2 = alloc_image(256, 256, 1);
+    nprfx_image out = th_image(256, 256, 1, NULL), out2 = th_image(256, 256, 1, NULL);
     nprfx_value pv[32];
     const char *laws[3] = {"uniform", "sign", "gauss"};
     for (int k = 0; k < 4; k++) {
@@ -292,7 +247,7 @@ static void test_flat_plane(void)
             set(pv, "amplitude", laws[k < 3 ? k : 0]);
             if (k == 3) set(pv, "supersample", "2");
             set(pv, "radius", "10");
-            pv[PI("seed")].v[0] = seed;
+            pv[th_param(node, "seed")].v[0] = seed;
             CHECK_OK(render(&g, pv, &out));
             nprfx_stats st;
             CHECK_OK(nprfx_image_stats(ctx, &out, 0, NULL, &st));
@@ -325,15 +280,15 @@ static void test_flat_plane(void)
  * (virtual pixels extrapolate the anchors), so the variance does not fade at the border. */
 static void test_frame_border(void)
 {
-    nprfx_image plate = synth("translate", 3, 256, 256);
+    nprfx_image plate = th_synth(ctx, "translate", 3, 256, 256);
     gin g = plate_inputs(&plate, 0, 1);
-    nprfx_image out = alloc_image(256, 256, 1);
+    nprfx_image out = th_image(256, 256, 1, NULL);
     nprfx_value pv[32];
     double eb = 0, ec = 0;
     long long nb = 0, nc = 0;
     for (int seed = 0; seed < 4; seed++) {
         nprfx_node_defaults(node, pv);
-        pv[PI("seed")].v[0] = seed;
+        pv[th_param(node, "seed")].v[0] = seed;
         CHECK_OK(render(&g, pv, &out));
         for (int y = 0; y < 256; y++)
             for (int x = 0; x < 256; x++) {
@@ -364,7 +319,7 @@ static void test_determinism(void)
     const char *scenes[2] = {"orbit", "dolly"};
     const int frames[2] = {24, 40};
     for (int sc = 0; sc < 2; sc++) {
-        nprfx_image plate = synth(scenes[sc], frames[sc], 96, 72);
+        nprfx_image plate = th_synth(ctx, scenes[sc], frames[sc], 96, 72);
         gin g = plate_inputs(&plate, 0, 1);
         for (int variant = 0; variant < 3; variant++) {
             nprfx_value pv[32];
@@ -382,7 +337,7 @@ static void test_determinism(void)
                 set(pv, "output", "unit01");
                 set(pv, "n0", "70");
             }
-            nprfx_image ref = alloc_image(96, 72, 2), o = alloc_image(96, 72, 2);
+            nprfx_image ref = th_image(96, 72, 2, NULL), o = th_image(96, 72, 2, NULL);
             CHECK_OK(render(&g, pv, &ref));
             /* threads */
             CHECK_OK(render_with(mt, &g, pv, &o, o.bounds, 1.0));
@@ -413,9 +368,13 @@ static void test_determinism(void)
                                : (variant == 2 ? NPRFX_GABOR_DEPTH_OFF : NPRFX_GABOR_DEPTH_HARD);
             p.supersample = variant == 1 ? 2 : 1;
             p.amplitude = variant == 1 ? NPRFX_GABOR_AMP_GAUSS : NPRFX_GABOR_AMP_UNIFORM;
-            nprfx_gabor_inputs gi = {
-                sizeof gi, &g.in[II("anchor")], &g.in[II("depth")], &g.in[II("id")], NULL, NULL};
-            nprfx_image s0 = alloc_image(96, 72, 2), s1 = alloc_image(96, 72, 2);
+            nprfx_gabor_inputs gi = {sizeof gi,
+                                     &g.in[th_input(node, "anchor")],
+                                     &g.in[th_input(node, "depth")],
+                                     &g.in[th_input(node, "id")],
+                                     NULL,
+                                     NULL};
+            nprfx_image s0 = th_image(96, 72, 2, NULL), s1 = th_image(96, 72, 2, NULL);
             for (int simd = 0; simd <= 3; simd++) {
                 p.simd = simd;
                 CHECK_OK(nprfx_gabor_render(ctx, &p, &gi, s1.bounds, simd ? &s1 : &s0, NULL));
@@ -441,10 +400,10 @@ static void test_determinism(void)
 static void test_simd_paths(void)
 {
     const int w = 232, h = 168;
-    nprfx_image orbit = synth("orbit", 30, w, h), dolly = synth("dolly", 20, w, h);
-    nprfx_image trans = synth("translate", 5, w, h);
-    nprfx_image anchor4 = alloc_image(w, h, 4), angle = alloc_image(w, h, 1);
-    int cp = synth_channel("Pref.X");
+    nprfx_image orbit = th_synth(ctx, "orbit", 30, w, h), dolly = th_synth(ctx, "dolly", 20, w, h);
+    nprfx_image trans = th_synth(ctx, "translate", 5, w, h);
+    nprfx_image anchor4 = th_image(w, h, 4, NULL), angle = th_image(w, h, 1, NULL);
+    int cp = th_synth_channel("Pref.X");
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             const float *src = nprfx_image_at(&orbit, x, y);
@@ -458,10 +417,10 @@ static void test_simd_paths(void)
     int bad = 0;
     for (int v = 0; v < 6; v++) {
         const nprfx_image *plate = v == 1 ? &dolly : (v == 5 ? &trans : &orbit);
-        nprfx_image anchor = v == 5 ? nprfx_image_channels(plate, synth_channel("UV.U"), 2)
+        nprfx_image anchor = v == 5 ? nprfx_image_channels(plate, th_synth_channel("UV.U"), 2)
                                     : nprfx_image_channels(plate, cp, 3);
-        nprfx_image depth = nprfx_image_channels(plate, synth_channel("Z"), 1);
-        nprfx_image id = nprfx_image_channels(plate, synth_channel("id"), 1);
+        nprfx_image depth = nprfx_image_channels(plate, th_synth_channel("Z"), 1);
+        nprfx_image id = nprfx_image_channels(plate, th_synth_channel("id"), 1);
         nprfx_gabor_inputs gi = {sizeof gi, &anchor, &depth, &id, NULL, NULL};
         nprfx_gabor_params p;
         nprfx_gabor_params_default(&p);
@@ -502,7 +461,7 @@ static void test_simd_paths(void)
         }
         nprfx_rect win =
             v % 2 ? nprfx_rect_make(17, 9, w - 5, h - 13) : nprfx_rect_make(0, 0, w, h);
-        nprfx_image ref = alloc_image(w, h, 2), o = alloc_image(w, h, 2);
+        nprfx_image ref = th_image(w, h, 2, NULL), o = th_image(w, h, 2, NULL);
         nprfx_gabor_stats sref, so;
         p.simd = 1;
         CHECK_OK(nprfx_gabor_render(ctx, &p, &gi, win, &ref, &sref));
@@ -536,9 +495,9 @@ static void test_simd_paths(void)
  * across an object-id edge, and no pixel of another object owns its points. */
 static void test_id_edges(void)
 {
-    nprfx_image plate = synth("orbit", 24, 128, 96);
-    nprfx_image moved = synth("orbit", 24, 128, 96);
-    int cid = synth_channel("id"), cp = synth_channel("Pref.X");
+    nprfx_image plate = th_synth(ctx, "orbit", 24, 128, 96);
+    nprfx_image moved = th_synth(ctx, "orbit", 24, 128, 96);
+    int cid = th_synth_channel("id"), cp = th_synth_channel("Pref.X");
     long long n2 = 0;
     for (int y = 0; y < 96; y++)
         for (int x = 0; x < 128; x++) {
@@ -554,7 +513,7 @@ static void test_id_edges(void)
     nprfx_node_defaults(node, pv);
     set(pv, "radius", "12");
     gin g0 = plate_inputs(&plate, 0, 1), g1 = plate_inputs(&moved, 0, 1);
-    nprfx_image a = alloc_image(128, 96, 1), b = alloc_image(128, 96, 1);
+    nprfx_image a = th_image(128, 96, 1, NULL), b = th_image(128, 96, 1, NULL);
     for (int t = 0; t < 3; t++) {
         set(pv, "depth_test", t == 0 ? "off" : (t == 1 ? "hard" : "soft"));
         CHECK_OK(render(&g0, pv, &a));
@@ -583,8 +542,8 @@ static void test_id_edges(void)
 static void test_depth_edges(void)
 {
     const int w = 96, h = 64;
-    nprfx_image anchor = alloc_image(w, h, 3), depth = alloc_image(w, h, 1);
-    nprfx_image anchor2 = alloc_image(w, h, 3);
+    nprfx_image anchor = th_image(w, h, 3, NULL), depth = th_image(w, h, 1, NULL);
+    nprfx_image anchor2 = th_image(w, h, 3, NULL);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             float *a = nprfx_image_at(&anchor, x, y), *a2 = nprfx_image_at(&anchor2, x, y);
@@ -599,14 +558,14 @@ static void test_depth_edges(void)
         }
     gin g0, g1;
     memset(&g0, 0, sizeof g0);
-    g0.in[II("anchor")] = anchor;
-    g0.in[II("depth")] = depth;
+    g0.in[th_input(node, "anchor")] = anchor;
+    g0.in[th_input(node, "depth")] = depth;
     g1 = g0;
-    g1.in[II("anchor")] = anchor2;
+    g1.in[th_input(node, "anchor")] = anchor2;
     nprfx_value pv[32];
     nprfx_node_defaults(node, pv);
     set(pv, "radius", "10");
-    nprfx_image a = alloc_image(w, h, 1), b = alloc_image(w, h, 1);
+    nprfx_image a = th_image(w, h, 1, NULL), b = th_image(w, h, 1, NULL);
     for (int t = 0; t < 3; t++) {
         set(pv, "depth_test", t == 0 ? "hard" : (t == 1 ? "soft" : "off"));
         CHECK_OK(render(&g0, pv, &a));
@@ -629,12 +588,12 @@ static void test_depth_edges(void)
 
 static void test_background(void)
 {
-    nprfx_image plate = synth("dolly", 10, 96, 72);
+    nprfx_image plate = th_synth(ctx, "dolly", 10, 96, 72);
     gin g = plate_inputs(&plate, 0, 0); /* no id input: one object */
     nprfx_value pv[32];
     nprfx_node_defaults(node, pv);
-    nprfx_image out = alloc_image(96, 72, 1);
-    int cz = synth_channel("Z");
+    nprfx_image out = th_image(96, 72, 1, NULL);
+    int cz = th_synth_channel("Z");
     for (int m = 0; m < 2; m++) {
         if (m) set(pv, "output", "unit01");
         CHECK_OK(render(&g, pv, &out));
@@ -658,10 +617,10 @@ static void test_background(void)
 
 static void test_driver_inputs(void)
 {
-    nprfx_image plate = synth("orbit", 24, 96, 72);
+    nprfx_image plate = th_synth(ctx, "orbit", 24, 96, 72);
     gin g = plate_inputs(&plate, 0, 1);
-    nprfx_image angle = alloc_image(96, 72, 1), dir = alloc_image(96, 72, 2);
-    nprfx_image scale = alloc_image(96, 72, 1);
+    nprfx_image angle = th_image(96, 72, 1, NULL), dir = th_image(96, 72, 2, NULL);
+    nprfx_image scale = th_image(96, 72, 1, NULL);
     for (int i = 0; i < 96 * 72; i++) {
         angle.data[i] = 90.0f;
         dir.data[2 * i] = 0.0f;
@@ -669,17 +628,17 @@ static void test_driver_inputs(void)
         scale.data[i] = 2.0f;
     }
     nprfx_value pv[32];
-    nprfx_image a = alloc_image(96, 72, 1), b = alloc_image(96, 72, 1);
+    nprfx_image a = th_image(96, 72, 1, NULL), b = th_image(96, 72, 1, NULL);
     /* orientation input 90 == orientation param 90 */
     nprfx_node_defaults(node, pv);
     set(pv, "orientation", "90");
     CHECK_OK(render(&g, pv, &a));
     nprfx_node_defaults(node, pv);
     gin ga = g;
-    ga.in[II("orientation")] = angle;
+    ga.in[th_input(node, "orientation")] = angle;
     CHECK_OK(render(&ga, pv, &b));
     CHECK(same_pixels(&a, &b));
-    ga.in[II("orientation")] = dir;
+    ga.in[th_input(node, "orientation")] = dir;
     CHECK_OK(render(&ga, pv, &b));
     long long far = 0;
     for (int i = 0; i < 96 * 72; i++)
@@ -692,14 +651,14 @@ static void test_driver_inputs(void)
     nprfx_node_defaults(node, pv);
     set(pv, "frequency", "0.1");
     gin gf = g;
-    gf.in[II("frequency")] = scale;
+    gf.in[th_input(node, "frequency")] = scale;
     CHECK_OK(render(&gf, pv, &b));
     CHECK(same_pixels(&a, &b));
     /* a host proxy at half scale: radius arrives scaled, the frequency is doubled inside */
     nprfx_node_defaults(node, pv);
     set(pv, "frequency", "0.1");
     nprfx_node_apply_render_scale(node, pv, 0.5);
-    CHECK_NEAR(pv[PI("radius")].v[0], 8.0, 1e-12);
+    CHECK_NEAR(pv[th_param(node, "radius")].v[0], 8.0, 1e-12);
     CHECK_OK(render_with(ctx, &g, pv, &a, a.bounds, 0.5));
     nprfx_node_defaults(node, pv);
     set(pv, "frequency", "0.2");
@@ -717,18 +676,19 @@ static void test_driver_inputs(void)
 /* UV anchors (2D) on the flat plane: unit variance too, and the pattern moves with the plane. */
 static void test_uv_anchor(void)
 {
-    nprfx_image p0 = synth("translate", 20, 128, 128), p1 = synth("translate", 21, 128, 128);
+    nprfx_image p0 = th_synth(ctx, "translate", 20, 128, 128),
+                p1 = th_synth(ctx, "translate", 21, 128, 128);
     nprfx_value pv[32];
     nprfx_node_defaults(node, pv);
     set(pv, "anchor_space", "uv");
     set(pv, "radius", "8");
-    nprfx_image a = alloc_image(128, 128, 1), b = alloc_image(128, 128, 1);
+    nprfx_image a = th_image(128, 128, 1, NULL), b = th_image(128, 128, 1, NULL);
     gin g0 = plate_inputs(&p0, 1, 1), g1 = plate_inputs(&p1, 1, 1);
     CHECK_OK(render(&g0, pv, &a));
     CHECK_OK(render(&g1, pv, &b));
     nprfx_stats st;
     CHECK_OK(nprfx_image_stats(ctx, &b, 0, NULL, &st));
-    nprfx_image mp = nprfx_image_channels(&p1, synth_channel("motion_prev.X"), 2);
+    nprfx_image mp = nprfx_image_channels(&p1, th_synth_channel("motion_prev.X"), 2);
     nprfx_warp_error we;
     CHECK_OK(nprfx_warp_compare(ctx, &b, &a, 0, &mp, NULL, &we));
     printf("uv anchors: variance %.3f, warp correlation %.4f\n", st.variance, we.correlation);

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
 #include "nprfx/filter.h"
@@ -27,35 +28,6 @@ static const double k_pi = 3.14159265358979323846;
 
 static nprfx_context *ctx;
 static const nprfx_node_desc *node;
-
-static int synth_channel(const char *name)
-{
-    const char *const *n = nprfx_synth_channel_names();
-    for (int i = 0; n[i]; i++)
-        if (!strcmp(n[i], name)) return i;
-    fprintf(stderr, "no synth channel %s\n", name);
-    exit(2);
-}
-
-static nprfx_image alloc_image(int w, int h, int ch)
-{
-    nprfx_image im;
-    if (nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, w, h), ch, &im) != NPRFX_OK) {
-        fprintf(stderr, "allocation failed\n");
-        exit(2);
-    }
-    return im;
-}
-
-static nprfx_image synth(const char *scene, int frame, int w, int h)
-{
-    nprfx_image im = alloc_image(w, h, nprfx_synth_channel_count());
-    if (nprfx_synth_render(ctx, scene, frame, &im) != NPRFX_OK) {
-        fprintf(stderr, "synth failed: %s\n", nprfx_last_error(ctx));
-        exit(2);
-    }
-    return im;
-}
 
 /* Params of the node: defaults, then "name=value" settings. */
 typedef struct gparams {
@@ -87,9 +59,10 @@ static void render(const nprfx_image *plate, const gparams *p, nprfx_image *out)
     nprfx_image in[8];
     memset(in, 0, sizeof in);
     in[nprfx_node_input_index(node, "anchor")] =
-        nprfx_image_channels(plate, synth_channel("Pref.X"), 3);
-    in[nprfx_node_input_index(node, "depth")] = nprfx_image_channels(plate, synth_channel("Z"), 1);
-    in[nprfx_node_input_index(node, "id")] = nprfx_image_channels(plate, synth_channel("id"), 1);
+        nprfx_image_channels(plate, th_synth_channel("Pref.X"), 3);
+    in[nprfx_node_input_index(node, "depth")] =
+        nprfx_image_channels(plate, th_synth_channel("Z"), 1);
+    in[nprfx_node_input_index(node, "id")] = nprfx_image_channels(plate, th_synth_channel("id"), 1);
     nprfx_render_args a;
     memset(&a, 0, sizeof a);
     a.size = sizeof a;
@@ -114,8 +87,8 @@ static void render(const nprfx_image *plate, const gparams *p, nprfx_image *out)
 static double *plane_spectrum(const char *const *sets, int nsets, int nseeds, int *n_out)
 {
     const int size = 256;
-    nprfx_image plate = synth("translate", 0, size, size);
-    nprfx_image out = alloc_image(size, size, 1);
+    nprfx_image plate = th_synth(ctx, "translate", 0, size, size);
+    nprfx_image out = th_image(size, size, 1, NULL);
     int n = 0;
     CHECK_OK(nprfx_power_spectrum_2d(ctx, &out, 0, NULL, &n));
     double *sum = calloc((size_t)n * n, sizeof(double)), *pw = malloc(sizeof(double) * n * n);
@@ -261,9 +234,9 @@ static void test_spectrum(void)
  * by kernels cut at edges. */
 static nprfx_image interior_mask(const nprfx_image *plate, int r)
 {
-    int w = plate->bounds.x1, h = plate->bounds.y1, cid = synth_channel("id"),
-        cz = synth_channel("Z");
-    nprfx_image m = alloc_image(w, h, 1);
+    int w = plate->bounds.x1, h = plate->bounds.y1, cid = th_synth_channel("id"),
+        cz = th_synth_channel("Z");
+    nprfx_image m = th_image(w, h, 1, NULL);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             const float *p = nprfx_image_at(plate, x, y);
@@ -314,8 +287,8 @@ static void test_dolly_lod(void)
     /* reference: the flat plane's frequency estimate with the same kernels */
     double fref;
     {
-        nprfx_image plate = synth("translate", 0, 256, 256);
-        nprfx_image out = alloc_image(256, 256, 1), m = interior_mask(&plate, r);
+        nprfx_image plate = th_synth(ctx, "translate", 0, 256, 256);
+        nprfx_image out = th_image(256, 256, 1, NULL), m = interior_mask(&plate, r);
         double s = 0;
         for (int seed = 0; seed < 4; seed++) {
             gparams p = params(sets, 3);
@@ -330,10 +303,10 @@ static void test_dolly_lod(void)
     }
     double ratio_first = 0, ratio_last = 0, area_first = 0, area_last = 0;
     for (int fi = 0; fi < 7; fi++) {
-        nprfx_image plate = synth("dolly", frames[fi], w, h);
-        nprfx_image mask = interior_mask(&plate, r), out = alloc_image(w, h, 1);
+        nprfx_image plate = th_synth(ctx, "dolly", frames[fi], w, h);
+        nprfx_image mask = interior_mask(&plate, r), out = th_image(w, h, 1, NULL);
         long long inside = 0, area = 0;
-        int cz = synth_channel("Z");
+        int cz = th_synth_channel("Z");
         for (int i = 0; i < w * h; i++) {
             inside += mask.data[i] > 0.5f;
             area += nprfx_image_at(&plate, i % w, i / w)[cz] < 1e9f;
@@ -357,9 +330,9 @@ static void test_dolly_lod(void)
         nprfx_gabor_params_default(&gp);
         gp.radius = r;
         gp.frequency = 0.15;
-        nprfx_image anchor = nprfx_image_channels(&plate, synth_channel("Pref.X"), 3);
+        nprfx_image anchor = nprfx_image_channels(&plate, th_synth_channel("Pref.X"), 3);
         nprfx_image depth = nprfx_image_channels(&plate, cz, 1);
-        nprfx_image id = nprfx_image_channels(&plate, synth_channel("id"), 1);
+        nprfx_image id = nprfx_image_channels(&plate, th_synth_channel("id"), 1);
         nprfx_gabor_inputs gi = {sizeof gi, &anchor, &depth, &id, NULL, NULL};
         nprfx_gabor_stats st;
         CHECK_OK(nprfx_gabor_render(ctx, &gp, &gi, out.bounds, &out, &st));
@@ -393,8 +366,9 @@ static void test_dolly_lod(void)
 static nprfx_image visible_mask(const nprfx_image *cur, const nprfx_image *prev)
 {
     int w = cur->bounds.x1, h = cur->bounds.y1;
-    int cid = synth_channel("id"), cz = synth_channel("Z"), cmx = synth_channel("motion_prev.X");
-    nprfx_image m = alloc_image(w, h, 1);
+    int cid = th_synth_channel("id"), cz = th_synth_channel("Z"),
+        cmx = th_synth_channel("motion_prev.X");
+    nprfx_image m = th_image(w, h, 1, NULL);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             const float *p = nprfx_image_at(cur, x, y);
@@ -428,22 +402,22 @@ static void test_coherence(void)
     const char *sets[2] = {"radius=8", "frequency=0.12"};
     for (int c = 0; c < 5; c++) {
         int w = cases[c].w, h = cases[c].h;
-        nprfx_image p0 = synth(cases[c].scene, cases[c].frame - 1, w, h);
-        nprfx_image p1 = synth(cases[c].scene, cases[c].frame, w, h);
-        nprfx_image a = alloc_image(w, h, 1), b = alloc_image(w, h, 1);
+        nprfx_image p0 = th_synth(ctx, cases[c].scene, cases[c].frame - 1, w, h);
+        nprfx_image p1 = th_synth(ctx, cases[c].scene, cases[c].frame, w, h);
+        nprfx_image a = th_image(w, h, 1, NULL), b = th_image(w, h, 1, NULL);
         gparams p = params(sets, 2);
         render(&p0, &p, &a);
         render(&p1, &p, &b);
         nprfx_image mask = visible_mask(&p1, &p0);
-        nprfx_image mp = nprfx_image_channels(&p1, synth_channel("motion_prev.X"), 2);
+        nprfx_image mp = nprfx_image_channels(&p1, th_synth_channel("motion_prev.X"), 2);
         nprfx_warp_error we, sd;
         CHECK_OK(nprfx_warp_compare(ctx, &b, &a, 0, &mp, &mask, &we));
         /* the shower door: the pattern left where it was */
-        nprfx_image zero = alloc_image(w, h, 2);
+        nprfx_image zero = th_image(w, h, 2, NULL);
         CHECK_OK(nprfx_warp_compare(ctx, &b, &a, 0, &zero, &mask, &sd));
         /* restricted to the moving pixels (the orbit's box and backdrop stand still) */
-        int cmx = synth_channel("motion_prev.X");
-        nprfx_image moving = alloc_image(w, h, 1);
+        int cmx = th_synth_channel("motion_prev.X");
+        nprfx_image moving = th_image(w, h, 1, NULL);
         for (int i = 0; i < w * h; i++) {
             const float *q = nprfx_image_at(&p1, i % w, i / w);
             moving.data[i] = mask.data[i] * (fabsf(q[cmx]) + fabsf(q[cmx + 1]) > 0.05f);
@@ -485,16 +459,16 @@ static void test_continuity(void)
     const int w = 256, h = 192;
     const char *sets[2] = {"radius=8", "frequency=0.12"};
     gparams p = params(sets, 2);
-    nprfx_image prev_plate = synth("dolly", 1, w, h);
-    nprfx_image prev = alloc_image(w, h, 1), cur = alloc_image(w, h, 1);
+    nprfx_image prev_plate = th_synth(ctx, "dolly", 1, w, h);
+    nprfx_image prev = th_image(w, h, 1, NULL), cur = th_image(w, h, 1, NULL);
     render(&prev_plate, &p, &prev);
     double rms[48], worst = 0;
     int nf = 0, worst_frame = 0;
     for (int f = 2; f <= 48; f++) {
-        nprfx_image plate = synth("dolly", f, w, h);
+        nprfx_image plate = th_synth(ctx, "dolly", f, w, h);
         render(&plate, &p, &cur);
         nprfx_image vis = visible_mask(&plate, &prev_plate), in = interior_mask(&plate, 8);
-        int cmx = synth_channel("motion_prev.X");
+        int cmx = th_synth_channel("motion_prev.X");
         double s2 = 0;
         long long n = 0;
         for (int y = 0; y < h; y++)

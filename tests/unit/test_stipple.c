@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
 #include "nprfx/filter.h"
@@ -27,16 +28,6 @@ static void default_params(nprfx_stipple_params *p)
     p->sequence = seq;
 }
 
-static nprfx_image make_image(int w, int h, int ch)
-{
-    nprfx_image im;
-    if (nprfx_image_alloc(NULL, nprfx_rect_make(0, 0, w, h), ch, &im) != NPRFX_OK) {
-        fprintf(stderr, "allocation failed\n");
-        exit(2);
-    }
-    return im;
-}
-
 static nprfx_stipple_inputs plain_inputs(const nprfx_image *tone)
 {
     nprfx_stipple_inputs in = {tone, NULL, NULL, tone->bounds};
@@ -51,7 +42,7 @@ static double tone_psnr(nprfx_context *ctx, const nprfx_stipple_params *p, const
                         double sigma)
 {
     int w = nprfx_rect_width(tone->bounds), h = nprfx_rect_height(tone->bounds);
-    nprfx_image out = make_image(w, h, 4), bl = make_image(w, h, 1);
+    nprfx_image out = th_image(w, h, 4, NULL), bl = th_image(w, h, 1, NULL);
     nprfx_stipple_inputs in = plain_inputs(tone);
     double psnr = 0;
     CHECK_OK(nprfx_stipple_render(ctx, p, &in, tone->bounds, &out));
@@ -68,7 +59,7 @@ static double tone_psnr(nprfx_context *ctx, const nprfx_stipple_params *p, const
 static void test_tone(void)
 {
     const int w = 384, h = 160;
-    nprfx_image tone = make_image(w, h, 1);
+    nprfx_image tone = th_image(w, h, 1, NULL);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
             nprfx_image_at(&tone, x, y)[0] = (float)x / (w - 1);
@@ -117,7 +108,7 @@ static void test_tone(void)
 static void test_blue_noise(void)
 {
     const int n = 256;
-    nprfx_image tone = make_image(n, n, 1);
+    nprfx_image tone = th_image(n, n, 1, NULL);
     float t = 0.75f;
     nprfx_image_fill(&tone, &t);
     nprfx_stipple_params p;
@@ -144,7 +135,7 @@ static void test_blue_noise(void)
     CHECK(norm >= 0.5);
 
     /* radially averaged power spectrum of the dot impulses: little energy below the peak */
-    nprfx_image imp = make_image(n, n, 1);
+    nprfx_image imp = th_image(n, n, 1, NULL);
     for (size_t i = 0; i < count; i++) {
         int x = (int)floor(list[i].x + 0.5), y = (int)floor(list[i].y + 0.5);
         if (x >= 0 && x < n && y >= 0 && y < n) nprfx_image_at(&imp, x, y)[0] += 1.0f;
@@ -180,7 +171,7 @@ static void test_exactly_once(void)
     /* identity mapping, constant tone: the kept samples are exactly the indices below i_max
      * whose position falls in the frame's pixel squares, each once, where the sequence puts it */
     const int w = 200, h = 150;
-    nprfx_image tone = make_image(w, h, 1);
+    nprfx_image tone = th_image(w, h, 1, NULL);
     float t = 0.7f;
     nprfx_image_fill(&tone, &t);
     nprfx_stipple_params p;
@@ -234,7 +225,7 @@ typedef struct scene {
 
 static scene make_scene(int w, int h)
 {
-    scene s = {make_image(w, h, 1), make_image(w, h, 2), make_image(w, h, 1)};
+    scene s = {th_image(w, h, 1, NULL), th_image(w, h, 2, NULL), th_image(w, h, 1, NULL)};
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             double cx = x - 0.5 * w, cy = y - 0.5 * h;
@@ -310,7 +301,7 @@ static void test_no_duplicates(void)
 static double band_ratio(int seam)
 {
     const int w = 240, h = 160, edge = w / 2;
-    scene s = {make_image(w, h, 1), make_image(w, h, 2), make_image(w, h, 1)};
+    scene s = {th_image(w, h, 1, NULL), th_image(w, h, 2, NULL), th_image(w, h, 1, NULL)};
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             /* object 1 left of the edge, object 2 (or a second chart of object 1) right of it,
@@ -361,16 +352,6 @@ static void test_silhouettes(void)
 static const nprfx_node_desc *node;
 static void *node_state; /* the instance cache, as the CLI keeps it */
 
-static int PI(const char *name)
-{
-    int i = nprfx_node_param_index(node, name);
-    if (i < 0) {
-        fprintf(stderr, "stipple has no param %s\n", name);
-        exit(2);
-    }
-    return i;
-}
-
 static nprfx_result node_render(nprfx_context *ctx, const nprfx_image *inputs,
                                 const nprfx_value *params, nprfx_image *out, nprfx_rect window)
 {
@@ -402,11 +383,11 @@ static void test_determinism(void)
     nprfx_value pv[16];
     CHECK(node->num_params <= 16);
     nprfx_node_defaults(node, pv);
-    pv[PI("coverage")].v[0] = 1;
-    pv[PI("tile")].v[0] = 0.1;
+    pv[th_param(node, "coverage")].v[0] = 1;
+    pv[th_param(node, "tile")].v[0] = 0.1;
     for (int mode = 0; mode < 3; mode++) {
-        pv[PI("mode")].v[0] = mode;
-        nprfx_image ref = make_image(w, h, 5), b = make_image(w, h, 5);
+        pv[th_param(node, "mode")].v[0] = mode;
+        nprfx_image ref = th_image(w, h, 5, NULL), b = th_image(w, h, 5, NULL);
         CHECK_OK(node_render(ctx1, inputs, pv, &ref, ref.bounds));
         CHECK_OK(node_render(ctx4, inputs, pv, &b, b.bounds));
         CHECK(memcmp(ref.data, b.data, sizeof(float) * 5 * w * h) == 0);
@@ -443,7 +424,7 @@ static void test_determinism(void)
 static void test_modes(void)
 {
     const int n = 128;
-    nprfx_image tone = make_image(n, n, 1);
+    nprfx_image tone = th_image(n, n, 1, NULL);
     float t = 0.5f;
     nprfx_image_fill(&tone, &t);
     nprfx_stipple_inputs in = plain_inputs(&tone);
@@ -508,7 +489,7 @@ static void test_disc_area(void)
     /* sparse dots, far apart and away from the frame edges: the ink laid down sums to their
      * areas, wherever they sit relative to the pixel grid */
     const int n = 256;
-    nprfx_image tone = make_image(n, n, 1), out = make_image(n, n, 5);
+    nprfx_image tone = th_image(n, n, 1, NULL), out = th_image(n, n, 5, NULL);
     for (int y = 0; y < n; y++)
         for (int x = 0; x < n; x++)
             nprfx_image_at(&tone, x, y)[0] =
@@ -611,7 +592,8 @@ static void test_sequence(void)
     default_params(&p);
     p.tile = 0.1;
     p.coverage_channel = 1;
-    nprfx_image r1 = make_image(w, h, 5), r2 = make_image(w, h, 5), r3 = make_image(w, h, 5);
+    nprfx_image r1 = th_image(w, h, 5, NULL), r2 = th_image(w, h, 5, NULL),
+                r3 = th_image(w, h, 5, NULL);
     CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r1.bounds, &r1));
     p.sequence = s2;
     CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r2.bounds, &r2));
@@ -649,9 +631,9 @@ static void test_sequence(void)
         nprfx_image inputs[3] = {sc.tone, sc.uv, sc.id};
         nprfx_value pv[16];
         nprfx_node_defaults(node, pv);
-        pv[PI("coverage")].v[0] = 1;
-        pv[PI("tile")].v[0] = 0.1;
-        nprfx_image ref = make_image(w, h, 5), got = make_image(w, h, 5);
+        pv[th_param(node, "coverage")].v[0] = 1;
+        pv[th_param(node, "tile")].v[0] = 0.1;
+        nprfx_image ref = th_image(w, h, 5, NULL), got = th_image(w, h, 5, NULL);
         CHECK_OK(node_render(ctx1, inputs, pv, &ref, ref.bounds));
         for (int round = 0; round < 3; round++) {
             void *fresh = NULL;
@@ -700,7 +682,7 @@ static void test_export(void)
     node = nprfx_node_find("stipple");
     if (!node) return;
     const int w = 64, h = 48;
-    nprfx_image tone = make_image(w, h, 1);
+    nprfx_image tone = th_image(w, h, 1, NULL);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
             nprfx_image_at(&tone, x, y)[0] = (float)x / w;
@@ -718,7 +700,7 @@ static void test_export(void)
     a.inputs = inputs;
     a.params = pv;
     a.state = &node_state;
-    pv[PI("tone_correction")].v[0] = 0; /* compared with the plain core call below */
+    pv[th_param(node, "tone_correction")].v[0] = 0; /* compared with the plain core call below */
     char *csv = NULL, *svg = NULL;
     size_t len = 0;
     CHECK_OK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len));
@@ -754,17 +736,17 @@ static void test_export(void)
     nprfx_image none[3] = {{0}, {0}, {0}};
     a.inputs = none;
     CHECK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len) == NPRFX_ERR_MISSING_INPUT);
-    nprfx_image out = make_image(w, h, 4);
+    nprfx_image out = th_image(w, h, 4, NULL);
     CHECK(node_render(ctx1, none, pv, &out, out.bounds) == NPRFX_ERR_MISSING_INPUT);
-    pv[PI("mode")].v[0] = NPRFX_STIPPLE_MULTITONE;
-    pv[PI("tones")].s = "0.5, banana";
+    pv[th_param(node, "mode")].v[0] = NPRFX_STIPPLE_MULTITONE;
+    pv[th_param(node, "tones")].s = "0.5, banana";
     CHECK(node_render(ctx1, inputs, pv, &out, out.bounds) == NPRFX_ERR_PARSE);
     printf("bad tones: %s\n", nprfx_last_error(ctx1));
-    pv[PI("tones")].s = "0.5, 0.3";
+    pv[th_param(node, "tones")].s = "0.5, 0.3";
     CHECK(node_render(ctx1, inputs, pv, &out, out.bounds) == NPRFX_ERR_OUT_OF_RANGE);
-    pv[PI("tones")].s = "0.5, 1";
+    pv[th_param(node, "tones")].s = "0.5, 1";
     CHECK_OK(node_render(ctx1, inputs, pv, &out, out.bounds));
-    nprfx_image bad = make_image(w, h, 3);
+    nprfx_image bad = th_image(w, h, 3, NULL);
     CHECK(node_render(ctx1, inputs, pv, &bad, bad.bounds) == NPRFX_ERR_INVALID_ARGUMENT);
     nprfx_image_free(&bad);
     nprfx_image_free(&out);

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "node_harness.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
 #include "nprfx/filter.h"
@@ -18,15 +19,6 @@ static int W = 256, H = 192;
 static nprfx_context *ctx;
 static nprfx_stipple_sequence *seq; /* reused across calls */
 
-static int channel(const char *name)
-{
-    const char *const *names = nprfx_synth_channel_names();
-    for (int i = 0; names[i]; i++)
-        if (strcmp(names[i], name) == 0) return i;
-    fprintf(stderr, "synth has no channel %s\n", name);
-    exit(2);
-}
-
 typedef struct plate {
     nprfx_image im;
     nprfx_image tone, uv, id, motion_next, coverage;
@@ -37,11 +29,11 @@ static void render_plate(const char *scene, int frame, plate *pl)
     CHECK_OK(
         nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), nprfx_synth_channel_count(), &pl->im));
     CHECK_OK(nprfx_synth_render(ctx, scene, frame, &pl->im));
-    pl->tone = nprfx_image_channels(&pl->im, channel("diffuse"), 1);
-    pl->uv = nprfx_image_channels(&pl->im, channel("UV.U"), 2);
-    pl->id = nprfx_image_channels(&pl->im, channel("id"), 1);
-    pl->motion_next = nprfx_image_channels(&pl->im, channel("motion_next.X"), 2);
-    pl->coverage = nprfx_image_channels(&pl->im, channel("coverage"), 1);
+    pl->tone = nprfx_image_channels(&pl->im, th_synth_channel("diffuse"), 1);
+    pl->uv = nprfx_image_channels(&pl->im, th_synth_channel("UV.U"), 2);
+    pl->id = nprfx_image_channels(&pl->im, th_synth_channel("id"), 1);
+    pl->motion_next = nprfx_image_channels(&pl->im, th_synth_channel("motion_next.X"), 2);
+    pl->coverage = nprfx_image_channels(&pl->im, th_synth_channel("coverage"), 1);
 }
 
 static int cmp_key(const void *pa, const void *pb)
