@@ -78,6 +78,9 @@ for m in uniform radius multitone 2d; do
   "$NPRFX" diff -q --fail 0 --warn 0 shipped/golden/stipple_$m.0001.exr generated/golden/stipple_$m.0001.exr > /dev/null \
     && pass || fail "stipple $m: the shipped sequence and the generated one render differently"
 done
+# the runner really looks beside itself: a copy of it with a broken share/nprfx/ivs.bin fails
+mkdir -p layout/share/nprfx && cp "$NPRFX" layout/nprfx && cp bad.ivs layout/share/nprfx/ivs.bin
+expect 1 "layout/share/nprfx/ivs.bin: ivs: checksum mismatch" layout/nprfx run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir broken
 # a broken data file is an error that names it (a bad install must not pass silently)
 mkdir -p data && cp bad.ivs data/ivs.bin
 expect 1 "data/ivs.bin: ivs: checksum mismatch" env NPRFX_DATA_DIR="$W/data" "$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir broken
