@@ -70,6 +70,13 @@ void nprfx_cli_env_free(nprfx_cli_env *env)
     memset(env, 0, sizeof *env);
 }
 
+const char *nprfx_cli_message(const nprfx_context *ctx)
+{
+    static _Thread_local char buf[2048];
+    nprfx_context_last_error(ctx, buf, sizeof buf);
+    return buf;
+}
+
 double nprfx_cli_peak_mib(void)
 {
     struct rusage ru;

@@ -13,14 +13,17 @@ int nprfx_cli_threads(int requested);
 const char *nprfx_cli_data_dir(char *buf, size_t size);
 
 /* A context whose executor is a pthread pool of `threads` threads, and the data directory. Errors
- * are not printed as they are raised (layers wrap them with more context); commands print
- * nprfx_last_error once. */
+ * are not printed as they are raised: layers add what they know through scoped contexts, and
+ * commands print the finished message once (nprfx_cli_message). */
 typedef struct nprfx_cli_env {
     nprfx_context *ctx;
     nprfx_pool *pool;
 } nprfx_cli_env;
 int nprfx_cli_env_init(nprfx_cli_env *env, int threads);
 void nprfx_cli_env_free(nprfx_cli_env *env);
+
+/* The last message raised through ctx, copied (valid until the next call from this thread). */
+const char *nprfx_cli_message(const nprfx_context *ctx);
 
 /* Peak resident memory of this process in MiB. */
 double nprfx_cli_peak_mib(void);

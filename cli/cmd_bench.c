@@ -104,7 +104,7 @@ int nprfx_cmd_bench(int argc, char **argv)
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL, NULL}; /* plates are big */
     if (nprfx_graph_parse(env.ctx, json, ".", &opt, &g)) {
-        fprintf(stderr, "nprfx bench: %s\n", nprfx_last_error(env.ctx));
+        fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -112,7 +112,7 @@ int nprfx_cmd_bench(int argc, char **argv)
         char buf[512];
         snprintf(buf, sizeof buf, "bench.%s", sets[i]);
         if (nprfx_graph_set(g, buf)) {
-            fprintf(stderr, "nprfx bench: %s\n", nprfx_last_error(env.ctx));
+            fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
             status = 2;
             goto done;
         }
@@ -124,7 +124,7 @@ int nprfx_cmd_bench(int argc, char **argv)
         nprfx_graph_take_render_seconds(g);
         nprfx_graph_take_render_items(g);
         if (nprfx_graph_eval(g, "bench", 1 + f, &out)) {
-            fprintf(stderr, "nprfx bench: %s\n", nprfx_last_error(env.ctx));
+            fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
             status = 1;
             goto done;
         }

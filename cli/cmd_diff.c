@@ -88,7 +88,8 @@ static void usage(FILE *f)
         "4 file error (a missing or unreadable file or frame). Usage errors exit 2.\n");
 }
 
-static void print_error(void *user, nprfx_result code, const char *message)
+static void print_error(void *user, const nprfx_context *ctx, nprfx_result code,
+                        const char *message)
 {
     (void)user;
     (void)code;

@@ -21,7 +21,8 @@ static void usage(FILE *f)
                "Exit status: 0 all files read, 2 usage error, 4 a file could not be read.\n");
 }
 
-static void print_error(void *user, nprfx_result code, const char *message)
+static void print_error(void *user, const nprfx_context *ctx, nprfx_result code,
+                        const char *message)
 {
     (void)code;
     fprintf(stderr, "nprfx %s: %s\n", (const char *)user, message);

@@ -10,6 +10,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "io.h"
 #include "nprfx/ivs.h"
@@ -73,7 +74,7 @@ static int generate(nprfx_context *ctx, long long n, unsigned long long seed, co
     if (nprfx_ivs_generate(ctx, seed, (int)n, xy, NULL) != NPRFX_OK ||
         nprfx_ivs_encode(ctx, seed, (int)n, xy, buf, size) != NPRFX_OK ||
         nprfx_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
-        fprintf(stderr, "nprfx ivs: %s\n", nprfx_last_error(ctx));
+        fprintf(stderr, "nprfx ivs: %s\n", nprfx_cli_message(ctx));
         status = IVS_FAILED;
         goto done;
     }
@@ -175,7 +176,7 @@ static int check(nprfx_context *ctx, const char *path)
     nprfx_result r = nprfx_ivs_decode(ctx, buf, size, &seed, &n, &xy);
     free(buf);
     if (r != NPRFX_OK) {
-        fprintf(stderr, "nprfx ivs: %s: %s\n", path, nprfx_last_error(ctx));
+        fprintf(stderr, "nprfx ivs: %s: %s\n", path, nprfx_cli_message(ctx));
         return IVS_FAILED;
     }
     printf("%s: %d points, seed %llu, %zu bytes, checksum ok\n", path, n, (unsigned long long)seed,

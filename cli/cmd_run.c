@@ -101,7 +101,7 @@ int nprfx_cmd_run(int argc, char **argv)
     nprfx_ofx_host *ofx = NULL;
     if (ofx_bundle) {
         if (nprfx_ofx_host_open(env.ctx, ofx_bundle, &ofx)) {
-            fprintf(stderr, "nprfx run: %s\n", nprfx_last_error(env.ctx));
+            fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
             status = 2;
             goto done;
         }
@@ -111,7 +111,7 @@ int nprfx_cmd_run(int argc, char **argv)
                     ofx_bundle);
     }
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
-        fprintf(stderr, "nprfx run: %s\n", nprfx_last_error(env.ctx));
+        fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -123,12 +123,12 @@ int nprfx_cmd_run(int argc, char **argv)
     }
     for (int i = 0; i < nsets; i++)
         if (nprfx_graph_set(g, sets[i])) {
-            fprintf(stderr, "nprfx run: %s\n", nprfx_last_error(env.ctx));
+            fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
             status = 2;
             goto done;
         }
     if (nprfx_graph_frames(g, frames, &fl)) {
-        fprintf(stderr, "nprfx run: %s\n", nprfx_last_error(env.ctx));
+        fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -141,7 +141,7 @@ int nprfx_cmd_run(int argc, char **argv)
         if (nprfx_graph_render_frame(g, fl.frames[k], &written)) {
             if (tty) fputc('\n', stderr);
             fprintf(stderr, "nprfx run: frame %d failed: %s\n", fl.frames[k],
-                    nprfx_last_error(env.ctx));
+                    nprfx_cli_message(env.ctx));
             failed++;
             if (!keep_going) break;
             continue;

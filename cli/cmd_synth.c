@@ -118,7 +118,7 @@ int nprfx_cmd_synth(int argc, char **argv)
     nprfx_image im = {0};
     int status = SYNTH_OK;
     if (nprfx_seq_parse_frames(env.ctx, frames_spec, &frames) != NPRFX_OK) {
-        fprintf(stderr, "nprfx synth: --frames: %s\n", nprfx_last_error(env.ctx));
+        fprintf(stderr, "nprfx synth: --frames: %s\n", nprfx_cli_message(env.ctx));
         status = SYNTH_USAGE;
         goto done;
     }
@@ -132,7 +132,7 @@ int nprfx_cmd_synth(int argc, char **argv)
     }
     if (nprfx_image_alloc(env.ctx, nprfx_rect_make(0, 0, w, h), nprfx_synth_channel_count(), &im) !=
         NPRFX_OK) {
-        fprintf(stderr, "nprfx synth: %s\n", nprfx_last_error(env.ctx));
+        fprintf(stderr, "nprfx synth: %s\n", nprfx_cli_message(env.ctx));
         status = SYNTH_FAILED;
         goto done;
     }
@@ -144,7 +144,7 @@ int nprfx_cmd_synth(int argc, char **argv)
             nprfx_synth_render(env.ctx, scene, frame, &im) != NPRFX_OK ||
             nprfx_io_write(env.ctx, path, &im, nprfx_synth_channel_names(), NULL, &opt) !=
                 NPRFX_OK) {
-            fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, nprfx_last_error(env.ctx));
+            fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, nprfx_cli_message(env.ctx));
             status = SYNTH_FAILED;
             goto done;
         }

@@ -44,6 +44,7 @@ typedef struct gnode {
     char **param_text; /* owned copies of STRING values */
     void *state;
     void *instance; /* the render hook's per-node slot */
+    nprfx_context *ctx; /* raises through the graph's with "node 'NAME'" before the message */
     /* read / write / synth */
     char *path, *preview, *colorspace, *vectors, *compression, *scene;
     char *display, *view;
@@ -75,6 +76,7 @@ struct nprfx_graph {
     long long render_items; /* what nodes counted (nprfx_render_args.items) */
     nprfx_render_hook hook;
     int has_hook;
+    nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
 };
 
 static char *xstrdup(const char *s)
@@ -126,8 +128,8 @@ static nprfx_result set_value_json(nprfx_graph *g, gnode *n, int pi, const cJSON
     if (cJSON_IsString(j)) {
         free(n->param_text[pi]);
         n->param_text[pi] = xstrdup(j->valuestring);
-        nprfx_result r = nprfx_param_parse(g->ctx, n->desc, p, n->param_text[pi], &v);
-        if (r) return nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
+        nprfx_result r = nprfx_param_parse(n->ctx, n->desc, p, n->param_text[pi], &v);
+        if (r) return r;
     } else if (cJSON_IsBool(j)) {
         v.v[0] = cJSON_IsTrue(j) ? 1 : 0;
     } else if (cJSON_IsNumber(j)) {
@@ -155,8 +157,8 @@ static nprfx_result set_value_json(nprfx_graph *g, gnode *n, int pi, const cJSON
                            n->name, n->desc->id, p->name);
     }
     if (p->type != NPRFX_PARAM_STRING && !cJSON_IsString(j)) {
-        nprfx_result r = nprfx_param_check(g->ctx, n->desc, p, &v);
-        if (r) return nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
+        nprfx_result r = nprfx_param_check(n->ctx, n->desc, p, &v);
+        if (r) return r;
     }
     n->params[pi] = v;
     return NPRFX_OK;
@@ -434,6 +436,12 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     int i = 0;
     for (const cJSON *e = nodes->child; e; e = e->next, i++) {
         g->nodes[i].name = xstrdup(e->string);
+        char scope[512];
+        snprintf(scope, sizeof scope, "node '%s'", e->string);
+        if (nprfx_context_create_scoped(ctx, scope, &g->nodes[i].ctx)) {
+            r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+            goto done;
+        }
         if ((r = parse_node(g, &g->nodes[i], e))) goto done;
     }
     if (g->frames_text) {
@@ -483,8 +491,14 @@ nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_
         *slash = 0;
     else
         strcpy(dir, ".");
-    nprfx_result r = nprfx_graph_parse(ctx, text, dir, opt, out);
-    if (r) nprfx_error(ctx, r, "%s: %s", path, nprfx_last_error(ctx));
+    /* Every message of this graph, at load and at render, names its file first. */
+    nprfx_context *gctx = NULL;
+    nprfx_result r = nprfx_context_create_scoped(ctx, path, &gctx);
+    if (!r) r = nprfx_graph_parse(gctx, text, dir, opt, out);
+    if (!r)
+        (*out)->owned_ctx = gctx;
+    else
+        nprfx_context_destroy(gctx);
     free(dir);
     free(text);
     return r;
@@ -522,6 +536,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->param_text);
         free(n->params);
         free(n->name);
+        nprfx_context_destroy(n->ctx);
         free(n->path);
         free(n->preview);
         free(n->colorspace);
@@ -532,6 +547,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->view);
     }
     free(g->nodes);
+    nprfx_context_destroy(g->owned_ctx);
     free(g->frames_text);
     free(g->base_dir);
     free(g->out_dir);
@@ -756,8 +772,8 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
     nprfx_plate plate;
     memset(&plate, 0, sizeof plate);
-    nprfx_result r = nprfx_io_read(g->ctx, file, &plate);
-    if (r) return nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
+    nprfx_result r = nprfx_io_read(n->ctx, file, &plate);
+    if (r) return r;
     if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, &plate))) {
         nprfx_plate_free(&plate);
         return r;
@@ -769,11 +785,14 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
                                   3, bad, sizeof bad, &amb) == 3 &&
             idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
             nprfx_image rgb = nprfx_plate_view(&plate, idx[0], 3);
-            r = nprfx_io_convert_colorspace(g->ctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+            nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
+            r = nprfx_context_create_scoped(n->ctx, file, &fctx);
+            if (!r)
+                r = nprfx_io_convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+            nprfx_context_destroy(fctx);
             if (r) {
                 nprfx_plate_free(&plate);
-                return nprfx_error(g->ctx, r, "node '%s': %s: %s", n->name, file,
-                                   nprfx_last_error(g->ctx));
+                return r;
             }
         }
     }
@@ -796,9 +815,9 @@ static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image 
     int nc = nprfx_synth_channel_count();
     nprfx_result r = nprfx_image_alloc(g->ctx, nprfx_rect_make(0, 0, n->width, n->height), nc, im);
     if (r) return r;
-    if ((r = nprfx_synth_render(g->ctx, n->scene, frame, im))) {
+    if ((r = nprfx_synth_render(n->ctx, n->scene, frame, im))) {
         nprfx_image_free(im);
-        return nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
+        return r;
     }
     *names = names_dup(nprfx_synth_channel_names(), nc);
     return *names ? NPRFX_OK : nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
@@ -966,12 +985,19 @@ static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_arg
         char *text = NULL;
         size_t len = 0;
         a->window = a->frame;
-        nprfx_result r = d->export_text(a, path, &text, &len);
-        if (!r) r = nprfx_io_write_text(g->ctx, path, text, len);
+        char what[4200];
+        snprintf(what, sizeof what, "export to %s", path);
+        nprfx_context *ectx = NULL;
+        nprfx_result r = nprfx_context_create_scoped(n->ctx, what, &ectx);
+        if (!r) {
+            a->ctx = ectx;
+            r = nprfx_node_export(a, path, &text, &len);
+            a->ctx = n->ctx;
+        }
+        if (!r) r = nprfx_io_write_text(ectx, path, text, len);
+        nprfx_context_destroy(ectx);
         free(text);
-        if (r)
-            return nprfx_error(g->ctx, r, "node '%s': export to %s: %s", n->name, path,
-                               nprfx_last_error(g->ctx));
+        if (r) return r;
     }
     return NPRFX_OK;
 }
@@ -1022,15 +1048,12 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
         frame_rect = nprfx_rect_make(0, 0, w, h);
     }
     nprfx_output_info oi;
-    if ((r = nprfx_node_output_info(g->ctx, d, n->params, in_ch, &oi))) {
-        nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
-        goto done;
-    }
+    if ((r = nprfx_node_output_info(n->ctx, d, n->params, in_ch, &oi))) goto done;
     if ((r = nprfx_image_alloc(g->ctx, frame_rect, oi.channels, im))) goto done;
     nprfx_render_args a;
     memset(&a, 0, sizeof a);
     a.size = sizeof a;
-    a.ctx = g->ctx;
+    a.ctx = n->ctx;
     a.node = d;
     a.time = frame;
     a.render_scale = 1.0;
@@ -1051,13 +1074,11 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             a.window = nprfx_rect_intersect(
                 frame_rect, nprfx_rect_make(tx, ty, tx + (tile < (1 << 29) ? tile : frame_rect.x1),
                                             ty + (tile < (1 << 29) ? tile : frame_rect.y1)));
-            r = g->has_hook ? g->hook.render(g->hook.user, &a, &n->instance) : d->render(&a);
+            r = g->has_hook ? g->hook.render(g->hook.user, &a, &n->instance) : nprfx_node_render(&a);
         }
     g->render_seconds += now_seconds() - t0;
     if (!r) r = export_node(g, n, &a, frame);
-    if (r) {
-        nprfx_error(g->ctx, r, "node '%s' (%s) at frame %d: %s", n->name, d->id, frame,
-                    nprfx_last_error(g->ctx));
+    if (r) { /* the message went out through n->ctx, naming the node */
         nprfx_image_free(im);
         goto done;
     }
@@ -1171,8 +1192,7 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
     }
     if (!r) {
         nprfx_write_options wo = {sizeof wo, n->compression ? n->compression : "zip", n->half};
-        r = nprfx_io_write(g->ctx, path, &view, (const char *const *)names, NULL, &wo);
-        if (r) nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
+        r = nprfx_io_write(n->ctx, path, &view, (const char *const *)names, NULL, &wo);
     }
     if (!r && n->preview) {
         nprfx_image pv;
@@ -1183,8 +1203,7 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
         if (!r) {
             nprfx_preview_options po = {sizeof po,  g->ocio, n->colorspace,
                                         n->display, n->view, n->raw};
-            r = nprfx_io_write_preview(g->ctx, path, &pv, &po);
-            if (r) nprfx_error(g->ctx, r, "node '%s': %s", n->name, nprfx_last_error(g->ctx));
+            r = nprfx_io_write_preview(n->ctx, path, &pv, &po);
         }
         free(pscratch);
     }

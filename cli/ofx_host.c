@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli_util.h"
 #include "ofx/ofx_api.h"
 #include "ofx/ofx_names.h"
 #include "ofx_host.h"
@@ -705,7 +706,7 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
             st = kOfxStatFailed;
         } else if (!a->fetch || a->fetch(a->fetch_user, k, time, &view) != NPRFX_OK) {
             snprintf(h->message, sizeof h->message, "clip %s: no image at frame %g: %s", c->name,
-                     time, nprfx_last_error(a->ctx));
+                     time, nprfx_cli_message(a->ctx));
             st = kOfxStatFailed;
         }
     }

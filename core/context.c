@@ -13,7 +13,10 @@ struct nprfx_context {
     void *user;
     const nprfx_executor *executor;
     char *data_dir;
-    pthread_mutex_t lock; /* guards last_error: render threads may raise errors concurrently */
+    nprfx_context *parent; /* scoped contexts: where messages go on, with `prefix` before them */
+    char *prefix;
+    pthread_mutex_t lock; /* guards last_*: render threads may raise errors concurrently */
+    nprfx_result last_code;
     char last_error[NPRFX_MESSAGE_MAX];
 };
 
@@ -46,11 +49,32 @@ nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context 
     return NPRFX_OK;
 }
 
+nprfx_result nprfx_context_create_scoped(nprfx_context *parent, const char *prefix,
+                                         nprfx_context **out)
+{
+    if (!out) return NPRFX_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!parent || !prefix) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = calloc(1, sizeof *ctx);
+    size_t n = strlen(prefix) + 1;
+    if (!ctx || !(ctx->prefix = malloc(n))) {
+        free(ctx);
+        return NPRFX_ERR_OUT_OF_MEMORY;
+    }
+    memcpy(ctx->prefix, prefix, n);
+    ctx->parent = parent;
+    ctx->executor = parent->executor;
+    pthread_mutex_init(&ctx->lock, NULL);
+    *out = ctx;
+    return NPRFX_OK;
+}
+
 void nprfx_context_destroy(nprfx_context *ctx)
 {
     if (!ctx) return;
     pthread_mutex_destroy(&ctx->lock);
     free(ctx->data_dir);
+    free(ctx->prefix);
     free(ctx);
 }
 
@@ -69,6 +93,8 @@ static const nprfx_executor serial_executor = {sizeof(nprfx_executor), NULL, ser
 
 const char *nprfx_context_data_dir(const nprfx_context *ctx)
 {
+    while (ctx && ctx->parent)
+        ctx = ctx->parent;
     return ctx ? ctx->data_dir : NULL;
 }
 
@@ -77,15 +103,31 @@ const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx)
     return ctx && ctx->executor ? ctx->executor : &serial_executor;
 }
 
+/* Keep msg as ctx's last message, then hand it on: to the parent with ctx's prefix, or at the
+ * root to the handler, which so sees each message once, finished. `raised` is the context the
+ * error was raised on. */
+static void deliver(nprfx_context *ctx, const nprfx_context *raised, nprfx_result code,
+                    const char *msg)
+{
+    pthread_mutex_lock(&ctx->lock);
+    snprintf(ctx->last_error, sizeof ctx->last_error, "%s", msg);
+    ctx->last_code = code;
+    pthread_mutex_unlock(&ctx->lock);
+    if (ctx->parent) {
+        char longer[NPRFX_MESSAGE_MAX];
+        snprintf(longer, sizeof longer, "%s: %s", ctx->prefix, msg);
+        deliver(ctx->parent, raised, code, longer);
+    } else if (ctx->handler) {
+        ctx->handler(ctx->user, raised, code, msg);
+    }
+}
+
 nprfx_result nprfx_verror(nprfx_context *ctx, nprfx_result code, const char *fmt, va_list ap)
 {
     if (!ctx) return code;
     char msg[NPRFX_MESSAGE_MAX];
     vsnprintf(msg, sizeof msg, fmt, ap);
-    pthread_mutex_lock(&ctx->lock);
-    memcpy(ctx->last_error, msg, sizeof msg);
-    pthread_mutex_unlock(&ctx->lock);
-    if (ctx->handler) ctx->handler(ctx->user, code, msg);
+    deliver(ctx, ctx, code, msg);
     return code;
 }
 
@@ -98,7 +140,15 @@ nprfx_result nprfx_error(nprfx_context *ctx, nprfx_result code, const char *fmt,
     return r;
 }
 
-const char *nprfx_last_error(const nprfx_context *ctx)
+nprfx_result nprfx_context_last_error(const nprfx_context *ctx, char *buf, size_t size)
 {
-    return ctx ? ctx->last_error : "";
+    if (buf && size) buf[0] = 0;
+    if (!ctx) return NPRFX_OK;
+    /* The lock is not const, the message is: cast only to take it. */
+    nprfx_context *c = (nprfx_context *)ctx;
+    pthread_mutex_lock(&c->lock);
+    if (buf && size) snprintf(buf, size, "%s", c->last_error);
+    nprfx_result code = c->last_code;
+    pthread_mutex_unlock(&c->lock);
+    return code;
 }

@@ -231,7 +231,10 @@ nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *n
     memset(out, 0, sizeof *out);
     if (node->output) {
         nprfx_result r = node->output(params, input_channels, out);
-        if (r) return nprfx_error(ctx, r, "%s: cannot determine the output channels", node->id);
+        if (r)
+            return nprfx_error(ctx, r, "%s: %s", node->id,
+                               out->problem ? out->problem
+                                            : "cannot determine the output channels");
     } else if (node->output_channels > 0) {
         out->channels = node->output_channels;
     } else {
@@ -255,4 +258,336 @@ void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *val
         if (node->params[i].flags & NPRFX_PARAM_PIXELS) values[i].v[0] *= render_scale;
         if (node->params[i].flags & NPRFX_PARAM_AREA) values[i].v[0] *= render_scale * render_scale;
     }
+}
+
+/* ---- rendering through the descriptor ------------------------------------------------------- */
+
+/* Typed params structs of every node fit here; a larger one is allocated. Aligned for doubles and
+ * pointers, the widest fields a struct holds. */
+#define BIND_INLINE_BYTES 1024
+/* Inputs a node may declare (the checks keep their channel counts on the stack). */
+#define NPRFX_MAX_INPUTS_CHECKED 32
+
+/* Check every value and store it at its param's offset in `typed`. */
+static nprfx_result bind_params(nprfx_context *ctx, const nprfx_node_desc *node,
+                                const nprfx_value *values, void *typed)
+{
+    for (int i = 0; i < node->num_params; i++) {
+        const nprfx_param_desc *p = &node->params[i];
+        nprfx_result r = nprfx_param_check(ctx, node, p, &values[i]);
+        if (r) return r;
+        if (!typed) continue;
+        unsigned char *field = (unsigned char *)typed + p->offset;
+        switch (p->type) {
+        case NPRFX_PARAM_DOUBLE:
+            memcpy(field, &values[i].v[0], sizeof(double));
+            break;
+        case NPRFX_PARAM_INT:
+        case NPRFX_PARAM_BOOL:
+        case NPRFX_PARAM_CHOICE: {
+            int k = (int)values[i].v[0]; /* whole and in range: checked above */
+            memcpy(field, &k, sizeof k);
+            break;
+        }
+        case NPRFX_PARAM_COLOR:
+            memcpy(field, values[i].v, 4 * sizeof(double));
+            break;
+        case NPRFX_PARAM_STRING: {
+            const char *s = values[i].s ? values[i].s : "";
+            memcpy(field, &s, sizeof s);
+            break;
+        }
+        }
+    }
+    return NPRFX_OK;
+}
+
+/* The shared checks of nprfx_node_render/export; on success *a is a full-size copy of args. */
+static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args *a)
+{
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    if (args->size < NPRFX_RENDER_ARGS_SIZE_V1)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "render arguments of %zu bytes are older than any nprfx release",
+                           args->size);
+    memset(a, 0, sizeof *a);
+    memcpy(a, args, args->size < sizeof *a ? args->size : sizeof *a);
+    a->size = sizeof *a;
+    const nprfx_node_desc *d = a->node;
+    if (!d || !d->render)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "render arguments name no node");
+    if ((d->num_inputs > 0 && !a->inputs) || (d->num_params > 0 && !a->params) || !a->output ||
+        !a->output->data)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s: incomplete render arguments (inputs, params or output missing)",
+                           d->id);
+    /* Tiles at the edges may reach past the image: a node writes only what exists. */
+    a->window = nprfx_rect_intersect(a->window, a->output->bounds);
+    int ich[NPRFX_MAX_INPUTS_CHECKED];
+    if (d->num_inputs > NPRFX_MAX_INPUTS_CHECKED)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: more than %d inputs", d->id,
+                           NPRFX_MAX_INPUTS_CHECKED);
+    for (int i = 0; i < d->num_inputs; i++) {
+        const nprfx_input_desc *in = &d->inputs[i];
+        const nprfx_image *im = &a->inputs[i];
+        ich[i] = im->data ? im->channels : 0;
+        if (!im->data) {
+            if (!(in->flags & NPRFX_INPUT_OPTIONAL))
+                return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "%s: input '%s' is not connected",
+                                   d->id, in->name);
+            continue;
+        }
+        if (in->channels > 0 && im->channels != in->channels)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "%s: input '%s' has %d channels, expected %d", d->id, in->name,
+                               im->channels, in->channels);
+    }
+    nprfx_output_info oi;
+    nprfx_result r = nprfx_node_output_info(ctx, d, a->params, ich, &oi);
+    if (r) return r;
+    if (a->output->channels != oi.channels)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s: output has %d channels, expected %d", d->id, a->output->channels,
+                           oi.channels);
+    return NPRFX_OK;
+}
+
+typedef nprfx_result (*bound_call)(const nprfx_render_args *a, const void *typed, void *user);
+
+/* Check args, bind params into a typed struct (on the stack when it fits) and call `call`. */
+static nprfx_result with_bound_params(const nprfx_render_args *args, bound_call call, void *user)
+{
+    nprfx_render_args a;
+    nprfx_result r = check_args(args, &a);
+    if (r) return r;
+    const nprfx_node_desc *d = a.node;
+    union {
+        unsigned char bytes[BIND_INLINE_BYTES];
+        double align_d;
+        void *align_p;
+        long long align_l;
+    } inline_buf;
+    void *typed = NULL;
+    if (d->params_size > sizeof inline_buf) {
+        if (!(typed = calloc(1, d->params_size)))
+            return nprfx_error(a.ctx, NPRFX_ERR_OUT_OF_MEMORY, "%s: out of memory", d->id);
+    } else if (d->params_size > 0) {
+        memset(&inline_buf, 0, d->params_size);
+        typed = &inline_buf;
+    }
+    r = bind_params(a.ctx, d, a.params, typed);
+    if (!r) r = call(&a, typed, user);
+    if (typed != (void *)&inline_buf) free(typed);
+    return r;
+}
+
+static nprfx_result call_render(const nprfx_render_args *a, const void *typed, void *user)
+{
+    (void)user;
+    if (nprfx_rect_empty(a->window)) return NPRFX_OK;
+    return a->node->render(a, typed);
+}
+
+nprfx_result nprfx_node_render(const nprfx_render_args *args)
+{
+    return with_bound_params(args, call_render, NULL);
+}
+
+typedef struct export_call {
+    const char *path;
+    char **text;
+    size_t *len;
+} export_call;
+
+static nprfx_result call_export(const nprfx_render_args *a, const void *typed, void *user)
+{
+    export_call *e = user;
+    return a->node->export_text(a, typed, e->path, e->text, e->len);
+}
+
+nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path, char **text,
+                               size_t *len)
+{
+    if (!args || !text || !len) return NPRFX_ERR_INVALID_ARGUMENT;
+    *text = NULL;
+    *len = 0;
+    if (args->node && !args->node->export_text)
+        return nprfx_error(args->ctx, NPRFX_ERR_UNSUPPORTED, "%s: the node has no text export",
+                           args->node->id);
+    export_call e = {path, text, len};
+    return with_bound_params(args, call_export, &e);
+}
+
+/* ---- descriptor lint ------------------------------------------------------------------------ */
+
+/* Identifiers are what graphs, --set and OFX use: lower-case letters, digits, '_' ('-' in node
+ * ids), starting with a letter. */
+static int good_name(const char *s, int dash)
+{
+    if (!s || !(*s >= 'a' && *s <= 'z')) return 0;
+    for (; *s; s++)
+        if (!((*s >= 'a' && *s <= 'z') || (*s >= '0' && *s <= '9') || *s == '_' ||
+              (dash && *s == '-')))
+            return 0;
+    return 1;
+}
+
+static int has_text(const char *s)
+{
+    return s && *s;
+}
+
+static size_t field_size(nprfx_param_type t)
+{
+    switch (t) {
+    case NPRFX_PARAM_DOUBLE:
+        return sizeof(double);
+    case NPRFX_PARAM_COLOR:
+        return 4 * sizeof(double);
+    case NPRFX_PARAM_STRING:
+        return sizeof(const char *);
+    default:
+        return sizeof(int);
+    }
+}
+
+static size_t field_align(nprfx_param_type t)
+{
+    switch (t) {
+    case NPRFX_PARAM_DOUBLE:
+    case NPRFX_PARAM_COLOR:
+        return _Alignof(double);
+    case NPRFX_PARAM_STRING:
+        return _Alignof(const char *);
+    default:
+        return _Alignof(int);
+    }
+}
+
+static nprfx_result lint_param(nprfx_context *ctx, const nprfx_node_desc *d, int i)
+{
+    const nprfx_param_desc *p = &d->params[i];
+    const char *id = d->id;
+    if (!good_name(p->name, 0))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: param %d has a bad name '%s'", id,
+                           i, p->name ? p->name : "(null)");
+    for (int k = 0; k < i; k++)
+        if (!strcmp(d->params[k].name, p->name))
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: two params named '%s'", id,
+                               p->name);
+    if (!has_text(p->label) || !has_text(p->help))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s.%s: label or help missing", id,
+                           p->name);
+    if ((unsigned)p->type > NPRFX_PARAM_STRING)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s.%s: unknown type %d", id, p->name,
+                           (int)p->type);
+    if (p->type == NPRFX_PARAM_CHOICE) {
+        int n = choice_count(p);
+        if (n < 1)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s.%s: a choice without options",
+                               id, p->name);
+        if (p->hard_min != 0 || p->hard_max != n - 1 || p->soft_min != 0 || p->soft_max != n - 1)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "%s.%s: %d options but the range is [%g, %g] (use "
+                               "NPRFX_CHOICE_RANGE)",
+                               id, p->name, n, p->hard_min, p->hard_max);
+        for (int k = 0; p->choice_help && k < n; k++)
+            if (!has_text(p->choice_help[k]))
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "%s.%s: option '%s' has no help line", id, p->name,
+                                   p->choices[k]);
+        for (int k = 0; k < n; k++)
+            for (int m = 0; m < k; m++)
+                if (!strcmp(p->choices[k], p->choices[m]))
+                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                       "%s.%s: two options named '%s'", id, p->name,
+                                       p->choices[k]);
+    } else if (p->choices) {
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s.%s: options on a non-choice param",
+                           id, p->name);
+    }
+    if (p->type != NPRFX_PARAM_STRING && p->type != NPRFX_PARAM_CHOICE &&
+        p->type != NPRFX_PARAM_BOOL) {
+        if (!(p->hard_min <= p->soft_min && p->soft_min <= p->soft_max &&
+              p->soft_max <= p->hard_max))
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "%s.%s: ranges out of order (hard [%g, %g], soft [%g, %g])", id,
+                               p->name, p->hard_min, p->hard_max, p->soft_min, p->soft_max);
+    }
+    if (p->type == NPRFX_PARAM_STRING && (p->flags & NPRFX_PARAM_EXPORT) && !d->export_text)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s.%s: an export param on a node without export_text", id, p->name);
+    nprfx_value v;
+    memcpy(v.v, p->def, sizeof v.v);
+    v.s = p->def_string ? p->def_string : "";
+    if (nprfx_param_check(NULL, d, p, &v) != NPRFX_OK)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s.%s: the default is outside the param's range or type", id, p->name);
+    if (d->params_size > 0) {
+        size_t sz = field_size(p->type), al = field_align(p->type);
+        if (p->offset + sz > d->params_size || p->offset % al)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "%s.%s: field at offset %zu does not fit a %s in a %zu-byte struct",
+                               id, p->name, p->offset, nprfx_param_type_name(p->type),
+                               d->params_size);
+        for (int k = 0; k < i; k++) {
+            const nprfx_param_desc *q = &d->params[k];
+            size_t qs = field_size(q->type);
+            if (p->offset < q->offset + qs && q->offset < p->offset + sz)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "%s: params '%s' and '%s' share bytes of the typed struct", id,
+                                   q->name, p->name);
+        }
+    }
+    return NPRFX_OK;
+}
+
+nprfx_result nprfx_node_lint(nprfx_context *ctx, const nprfx_node_desc *d)
+{
+    if (!d) return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "no descriptor");
+    if (d->size != sizeof *d)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: size is %zu, not %zu",
+                           d->id ? d->id : "?", d->size, sizeof *d);
+    if (!good_name(d->id, 1))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "a node has a bad id '%s'",
+                           d->id ? d->id : "(null)");
+    if (!has_text(d->label) || !has_text(d->group) || !has_text(d->help) || !d->render)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s: label, group, help or render missing", d->id);
+    if (d->version_major < 1 || d->version_minor < 0)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: version %d.%d (starts at 1.0)",
+                           d->id, d->version_major, d->version_minor);
+    if (d->num_inputs < 0 || d->num_inputs > NPRFX_MAX_INPUTS_CHECKED || d->num_params < 0)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: %d inputs, %d params", d->id,
+                           d->num_inputs, d->num_params);
+    int mains = 0;
+    for (int i = 0; i < d->num_inputs; i++) {
+        const nprfx_input_desc *in = &d->inputs[i];
+        if (!good_name(in->name, 0) || !has_text(in->label) || !has_text(in->help))
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "%s: input %d: bad name, or label or help missing", d->id, i);
+        for (int k = 0; k < i; k++)
+            if (!strcmp(d->inputs[k].name, in->name))
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: two inputs named '%s'",
+                                   d->id, in->name);
+        if (in->channels < 0 || in->channels > NPRFX_MAX_CHANNELS)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: input '%s' wants %d channels",
+                               d->id, in->name, in->channels);
+        if ((in->flags & NPRFX_INPUT_TEMPORAL) && !(d->flags & NPRFX_NODE_TEMPORAL))
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "%s: input '%s' is temporal but the node is not", d->id, in->name);
+        mains += (in->flags & NPRFX_INPUT_MAIN) != 0;
+    }
+    if (mains > 1)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: %d main inputs (at most one)",
+                           d->id, mains);
+    if (d->num_params > 0 && !d->params_size)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s: params without a typed struct (params_size)", d->id);
+    for (int i = 0; i < d->num_params; i++) {
+        nprfx_result r = lint_param(ctx, d, i);
+        if (r) return r;
+    }
+    return NPRFX_OK;
 }

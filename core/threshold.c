@@ -2,6 +2,7 @@
 #include <math.h>
 
 #include "nprfx/threshold.h"
+#include "nprfx/exec.h"
 
 #define NPRFX_INV_SQRT_PI 0.56418958354775628695
 
@@ -131,4 +132,114 @@ void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, floa
         double top = (1.0 - fx) * p01[c] + fx * p11[c];
         out[c] = (float)((1.0 - fy) * bottom + fy * top);
     }
+}
+
+/* ---- the threshold-map node over an image ---------------------------------------------------- */
+
+nprfx_result nprfx_threshold_output_channels(int mode, int pattern_channels, int map_channels,
+                                             int *channels)
+{
+    int pch = pattern_channels > 0 ? pattern_channels : 1;
+    *channels = pch;
+    if (mode == NPRFX_THRESHOLD_MAP) {
+        if (map_channels <= 0) return NPRFX_ERR_MISSING_INPUT;
+        if (map_channels > 1) {
+            if (pch > 1) return NPRFX_ERR_INVALID_ARGUMENT;
+            *channels = map_channels;
+        }
+    }
+    return NPRFX_OK;
+}
+
+static const float zeros[NPRFX_MAX_CHANNELS];
+
+/* Outside its data window an input reads as 0 (the OpenEXR convention). */
+static const float *pixel_or_zero(const nprfx_image *im, int x, int y)
+{
+    return nprfx_rect_contains(im->bounds, x, y) ? nprfx_image_at(im, x, y) : zeros;
+}
+
+typedef struct tm_job {
+    const nprfx_threshold_params *p;
+    nprfx_rect window;
+    const nprfx_image *pattern, *tone_in, *map; /* tone_in, map: NULL when not connected */
+    nprfx_image *out;
+} tm_job;
+
+static void tm_rows(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const tm_job *j = user;
+    const nprfx_threshold_params *pp = j->p;
+    /* The builtin step position is a pure function of the tone: remember the last one, since
+     * neighbouring pixels (and every pixel, with no tone input) share it. */
+    double last_tone = -1.0, mu = pp->mu;
+    for (int y = j->window.y0 + begin; y < j->window.y0 + end; y++) {
+        for (int x = j->window.x0; x < j->window.x1; x++) {
+            const float *p = pixel_or_zero(j->pattern, x, y);
+            float *o = nprfx_image_at(j->out, x, y);
+            int nout = j->out->channels;
+            double tone = j->tone_in ? pixel_or_zero(j->tone_in, x, y)[0] : pp->tone;
+            tone = nprfx_threshold_quantize(tone * pp->tone_gain, pp->steps);
+            if (pp->mode == NPRFX_THRESHOLD_MAP) {
+                if (j->map->channels == 1) {
+                    for (int c = 0; c < nout; c++)
+                        nprfx_threshold_map_lookup(j->map, p[c], tone, &o[c]);
+                } else {
+                    nprfx_threshold_map_lookup(j->map, p[0], tone, o);
+                }
+            } else {
+                /* builtin is the erf threshold at the position mu(tone) */
+                if (pp->mode == NPRFX_THRESHOLD_BUILTIN && tone != last_tone) {
+                    mu = nprfx_threshold_builtin_mu(tone, pp->sigma);
+                    last_tone = tone;
+                }
+                for (int c = 0; c < nout; c++)
+                    o[c] = (float)nprfx_threshold_erf(p[c], pp->sigma, mu);
+            }
+            if (pp->invert)
+                for (int c = 0; c < nout; c++)
+                    o[c] = 1.0f - o[c];
+        }
+    }
+}
+
+nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_params *p,
+                                    const nprfx_image *pattern, const nprfx_image *tone,
+                                    const nprfx_image *map, nprfx_rect window, nprfx_image *out)
+{
+    if (!p || !pattern || !pattern->data || !out)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "threshold-map: no pattern or output");
+    if (p->mode < 0 || p->mode >= NPRFX_THRESHOLD_MODE_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "threshold-map.mode: no mode with index %d",
+                           p->mode);
+    if (!(p->sigma > 0.0))
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "threshold-map.sigma: %g is not positive",
+                           p->sigma);
+    if (map && !map->data) map = NULL;
+    if (tone && !tone->data) tone = NULL;
+    if (p->mode == NPRFX_THRESHOLD_MAP) {
+        if (!map)
+            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                               "threshold-map: mode 'map' needs the 'map' input (an X-toon map "
+                               "image, e.g. samples/maps/soft_step.exr)");
+        if (nprfx_rect_empty(map->bounds))
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "threshold-map: input 'map' is empty");
+    }
+    int want = 0;
+    if (nprfx_threshold_output_channels(p->mode, pattern->channels, map ? map->channels : 0,
+                                        &want) != NPRFX_OK)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "threshold-map: a %d-channel map needs a 1-channel pattern "
+                           "(input 'pattern' has %d); pick one channel of the pattern",
+                           map ? map->channels : 0, pattern->channels);
+    if (out->channels != want)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "threshold-map: output has %d channels, expected %d", out->channels,
+                           want);
+    if (nprfx_rect_empty(window)) return NPRFX_OK;
+    tm_job j = {p, window, pattern, tone, map, out};
+    nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(window), 8, tm_rows, &j);
+    return NPRFX_OK;
 }

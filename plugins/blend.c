@@ -218,7 +218,7 @@ static int channels_fit(int have, int nch, int ncol)
     return have == 1 || have == ncol || have == nch || (ncol == 3 && have == 4);
 }
 
-static nprfx_result blend_render(const nprfx_render_args *args)
+static nprfx_result blend_render(const nprfx_render_args *args, const void *typed)
 {
     if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params ||
         !args->output)

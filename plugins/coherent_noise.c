@@ -761,7 +761,7 @@ static void cn_copy_window(const nprfx_render_args *args, const nprfx_image *src
             contrast);
 }
 
-static nprfx_result cn_render(const nprfx_render_args *args)
+static nprfx_result cn_render(const nprfx_render_args *args, const void *typed)
 {
     if (!args || args->size < sizeof(nprfx_render_args) || !args->params || !args->output ||
         !args->inputs || !args->state)

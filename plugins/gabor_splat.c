@@ -308,7 +308,7 @@ static nprfx_result gabor_output(const nprfx_value *pv, const int *ich, nprfx_ou
     return NPRFX_OK;
 }
 
-static nprfx_result gabor_render(const nprfx_render_args *args)
+static nprfx_result gabor_render(const nprfx_render_args *args, const void *typed)
 {
     if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params ||
         !args->output)
@@ -371,11 +371,11 @@ static nprfx_result gabor_render(const nprfx_render_args *args)
     gi.id = in[IN_ID].data ? &in[IN_ID] : NULL;
     gi.orientation = in[IN_ORIENTATION].data ? &in[IN_ORIENTATION] : NULL;
     gi.frequency = in[IN_FREQUENCY].data ? &in[IN_FREQUENCY] : NULL;
-    long long *items = nprfx_render_items(args);
+    long long *items = args->items;
     nprfx_gabor_stats stats;
     nprfx_result r =
         nprfx_gabor_render(ctx, &p, &gi, args->window, args->output, items ? &stats : NULL);
-    if (r) return nprfx_error(ctx, r, "gabor-splat: %s", nprfx_last_error(ctx));
+    if (r) return r; /* core's message names the node ("gabor: ...") */
     if (items) *items += stats.kernels;
     return NPRFX_OK;
 }

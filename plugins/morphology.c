@@ -119,7 +119,7 @@ static void morph_pass(nprfx_context *ctx, const nprfx_image *src, nprfx_image *
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(area), 8, morph_rows, &j);
 }
 
-static nprfx_result morph_render(const nprfx_render_args *args)
+static nprfx_result morph_render(const nprfx_render_args *args, const void *typed)
 {
     if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params ||
         !args->output)

@@ -275,18 +275,24 @@ static nprfx_result st_preload(nprfx_context *ctx, nprfx_stipple_sequence *seq)
         uint64_t seed = 0;
         int n = 0;
         float *xy = NULL;
-        r = nprfx_ivs_decode(ctx, buf, size, &seed, &n, &xy);
+        /* Decode on a private context, so that the caller's handler hears one message that
+         * says which file and what to do, not the decoder's alone. */
+        nprfx_context *quiet = NULL;
+        r = nprfx_context_create(NULL, &quiet);
+        if (r == NPRFX_OK) r = nprfx_ivs_decode(quiet, buf, size, &seed, &n, &xy);
         if (r != NPRFX_OK) {
             char why[512];
-            snprintf(why, sizeof why, "%s", nprfx_last_error(ctx));
+            nprfx_context_last_error(quiet, why, sizeof why);
             r = nprfx_error(ctx, r, "stipple: %s: %s (rebuild it with `nprfx ivs`, or remove it)",
                             path, why);
-        } else if (seed != NPRFX_IVS_DEFAULT_SEED)
+        }
+        nprfx_context_destroy(quiet);
+        if (r == NPRFX_OK && seed != NPRFX_IVS_DEFAULT_SEED)
             r = nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                             "stipple: %s holds the sequence of seed %llu, not the node's %u "
                             "(rebuild it with `nprfx ivs`, or remove it)",
                             path, (unsigned long long)seed, NPRFX_IVS_DEFAULT_SEED);
-        else
+        else if (r == NPRFX_OK)
             r = nprfx_stipple_sequence_preload(ctx, seq, xy, n);
         free(xy);
     }
@@ -420,7 +426,7 @@ static nprfx_stipple_inputs st_inputs(const nprfx_render_args *args)
     return in;
 }
 
-static nprfx_result st_render(const nprfx_render_args *args)
+static nprfx_result st_render(const nprfx_render_args *args, const void *typed)
 {
     nprfx_result r = st_check(args);
     if (r != NPRFX_OK) return r;
@@ -430,7 +436,7 @@ static nprfx_result st_render(const nprfx_render_args *args)
     float curve[NPRFX_STIPPLE_CURVE_SIZE];
     if ((r = st_params_full(args, &p, curve)) != NPRFX_OK) return r;
     nprfx_stipple_inputs in = st_inputs(args);
-    p.count = nprfx_render_items(args);
+    p.count = args->items;
     return nprfx_stipple_render(args->ctx, &p, &in, args->window, args->output);
 }
 
@@ -454,7 +460,8 @@ nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
 }
 
 /* The descriptor's export hook: the format from the path's extension (case-insensitive). */
-static nprfx_result st_export_text(const nprfx_render_args *args, const char *path, char **text,
+static nprfx_result st_export_text(const nprfx_render_args *args, const void *typed,
+                                   const char *path, char **text,
                                    size_t *len)
 {
     if (!text)

@@ -1,6 +1,6 @@
 /* The threshold-map node: the cookbook's erf threshold, X-toon threshold maps given as an image,
  * and a built-in map whose step follows the tone. The math lives in core/threshold.c; this
- * file is the descriptor and the per-pixel glue. */
+ * file is the descriptor and the call into it. */
 #include <stddef.h>
 #include <string.h>
 
@@ -9,7 +9,8 @@
 
 enum { IN_PATTERN, IN_TONE, IN_MAP, IN_COUNT };
 enum { P_MODE, P_SIGMA, P_MU, P_TONE, P_TONE_GAIN, P_STEPS, P_INVERT, P_COUNT };
-enum { MODE_ERF, MODE_MAP, MODE_BUILTIN, MODE_COUNT };
+enum { MODE_COUNT = NPRFX_THRESHOLD_MODE_COUNT };
+typedef nprfx_threshold_params tp;
 
 static const char *const mode_names[] = {"erf", "map", "builtin", NULL};
 static const char *const mode_help[] = {
@@ -19,7 +20,7 @@ static const char *const mode_help[] = {
     "[0,1] equals the tone",
     NULL};
 _Static_assert(sizeof mode_names / sizeof mode_names[0] == MODE_COUNT + 1,
-               "threshold-map: mode names must follow the MODE_ enum");
+               "threshold-map: mode names must follow nprfx_threshold_mode");
 
 static const nprfx_input_desc inputs[IN_COUNT] = {
     {.name = "pattern",
@@ -46,14 +47,16 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
 
 static const nprfx_param_desc params[P_COUNT] = {
     {.name = "mode",
+     NPRFX_FIELD(tp, mode),
      .label = "Mode",
      .help = "How the pattern becomes a stroke value; see the node help.",
      .type = NPRFX_PARAM_CHOICE,
-     .def = {MODE_ERF},
+     .def = {NPRFX_THRESHOLD_ERF},
      NPRFX_CHOICE_RANGE(MODE_COUNT),
      .choices = mode_names,
      .choice_help = mode_help},
     {.name = "sigma",
+     NPRFX_FIELD(tp, sigma),
      .label = "Sigma",
      .help = "erf and builtin: sharpness of the step (the cookbook's sigma): the step rises from "
              "2% to 98% over about 3 / sigma in pattern units; large values give hard, aliased "
@@ -65,6 +68,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0.01,
      .hard_max = 1e6},
     {.name = "mu",
+     NPRFX_FIELD(tp, mu),
      .label = "Mu",
      .help = "erf: position of the step in pattern units (the cookbook's mu). Values above it go "
              "to 1, below to 0.",
@@ -75,6 +79,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -100,
      .hard_max = 100},
     {.name = "tone",
+     NPRFX_FIELD(tp, tone),
      .label = "Tone",
      .help = "map and builtin: the tone used when the tone input is not connected (0 dark, 1 "
              "light).",
@@ -85,6 +90,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1},
     {.name = "tone_gain",
+     NPRFX_FIELD(tp, tone_gain),
      .label = "Tone Gain",
      .help = "map and builtin: multiplies the tone before it is clamped to [0,1] (e.g. to bring a "
              "diffuse pass into range).",
@@ -95,6 +101,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1000},
     {.name = "steps",
+     NPRFX_FIELD(tp, steps),
      .label = "Tone Steps",
      .help = "map and builtin: 0 or 1 keeps the tone continuous; n >= 2 rounds it to the nearest "
              "of n levels 0, 1/(n-1), ..., 1, giving toon-like tone bands.",
@@ -105,6 +112,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 256},
     {.name = "invert",
+     NPRFX_FIELD(tp, invert),
      .label = "Invert",
      .help = "Output 1 - value on every channel (builtin: ink coverage instead of brightness, mean"
              " 1 - tone).",
@@ -119,128 +127,22 @@ static const nprfx_param_desc params[P_COUNT] = {
 static nprfx_result tm_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
 {
     memset(out, 0, sizeof *out);
-    int pch = ich[IN_PATTERN] > 0 ? ich[IN_PATTERN] : 1;
-    out->channels = pch;
-    if ((int)pv[P_MODE].v[0] == MODE_MAP) {
-        if (ich[IN_MAP] <= 0) return NPRFX_ERR_MISSING_INPUT;
-        if (ich[IN_MAP] > 1) {
-            if (pch > 1) return NPRFX_ERR_INVALID_ARGUMENT;
-            out->channels = ich[IN_MAP];
-        }
-    }
-    return NPRFX_OK;
+    nprfx_result r = nprfx_threshold_output_channels((int)pv[P_MODE].v[0], ich[IN_PATTERN],
+                                                     ich[IN_MAP], &out->channels);
+    if (r == NPRFX_ERR_MISSING_INPUT)
+        out->problem = "mode 'map' needs the 'map' input (an X-toon map image, e.g. "
+                       "samples/maps/soft_step.exr)";
+    else if (r)
+        out->problem = "a map of several channels needs a 1-channel pattern: pick one channel "
+                       "of input 'pattern'";
+    return r;
 }
 
-static const float zeros[NPRFX_MAX_CHANNELS];
-
-/* Outside its data window an input reads as 0 (the OpenEXR convention). */
-static const float *pixel_or_zero(const nprfx_image *im, int x, int y)
+static nprfx_result tm_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_rect_contains(im->bounds, x, y) ? nprfx_image_at(im, x, y) : zeros;
-}
-
-typedef struct tm_job {
-    nprfx_rect window;
-    int mode, steps, invert, pch;
-    double sigma, mu, tone, tone_gain;
-    const nprfx_image *pattern, *tone_in, *map; /* tone_in, map: NULL when not connected */
-    nprfx_image *out;
-} tm_job;
-
-static void tm_rows(void *user, int begin, int end, int worker)
-{
-    (void)worker;
-    const tm_job *j = user;
-    /* The builtin step position is a pure function of the tone: remember the last one, since
-     * neighbouring pixels (and every pixel, with no tone input) share it. */
-    double last_tone = -1.0, mu = j->mu;
-    for (int y = j->window.y0 + begin; y < j->window.y0 + end; y++) {
-        for (int x = j->window.x0; x < j->window.x1; x++) {
-            const float *p = pixel_or_zero(j->pattern, x, y);
-            float *o = nprfx_image_at(j->out, x, y);
-            int nout = j->out->channels;
-            double tone = j->tone_in ? pixel_or_zero(j->tone_in, x, y)[0] : j->tone;
-            tone = nprfx_threshold_quantize(tone * j->tone_gain, j->steps);
-            if (j->mode == MODE_MAP) {
-                if (j->map->channels == 1) {
-                    for (int c = 0; c < nout; c++)
-                        nprfx_threshold_map_lookup(j->map, p[c], tone, &o[c]);
-                } else {
-                    nprfx_threshold_map_lookup(j->map, p[0], tone, o);
-                }
-            } else {
-                /* builtin is the erf threshold at the position mu(tone) */
-                if (j->mode == MODE_BUILTIN && tone != last_tone) {
-                    mu = nprfx_threshold_builtin_mu(tone, j->sigma);
-                    last_tone = tone;
-                }
-                for (int c = 0; c < nout; c++)
-                    o[c] = (float)nprfx_threshold_erf(p[c], j->sigma, mu);
-            }
-            if (j->invert)
-                for (int c = 0; c < nout; c++)
-                    o[c] = 1.0f - o[c];
-        }
-    }
-}
-
-static nprfx_result tm_render(const nprfx_render_args *args)
-{
-    if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params ||
-        !args->output)
-        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
-                           "threshold-map: incomplete render arguments");
-    nprfx_context *ctx = args->ctx;
-    const nprfx_image *in = args->inputs;
-    const nprfx_value *pv = args->params;
-    tm_job j = {0};
-    j.window = args->window;
-    j.out = args->output;
-    j.mode = (int)pv[P_MODE].v[0];
-    j.sigma = pv[P_SIGMA].v[0];
-    j.mu = pv[P_MU].v[0];
-    j.tone = pv[P_TONE].v[0];
-    j.tone_gain = pv[P_TONE_GAIN].v[0];
-    j.steps = (int)pv[P_STEPS].v[0];
-    j.invert = pv[P_INVERT].v[0] != 0.0;
-    if (j.mode < 0 || j.mode >= MODE_COUNT)
-        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "threshold-map.mode: no mode with index %d",
-                           j.mode);
-    if (!(j.sigma > 0.0))
-        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "threshold-map.sigma: %g is not positive",
-                           j.sigma);
-    if (!in[IN_PATTERN].data)
-        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                           "threshold-map: input 'pattern' is not connected");
-    j.pattern = &in[IN_PATTERN];
-    j.tone_in = in[IN_TONE].data ? &in[IN_TONE] : NULL;
-    j.map = in[IN_MAP].data ? &in[IN_MAP] : NULL;
-    j.pch = j.pattern->channels;
-    int want = j.pch;
-    if (j.mode == MODE_MAP) {
-        if (!j.map)
-            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                               "threshold-map: mode 'map' needs the 'map' input (an X-toon map "
-                               "image, e.g. samples/maps/soft_step.exr)");
-        if (nprfx_rect_empty(j.map->bounds))
-            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                               "threshold-map: input 'map' is empty");
-        if (j.map->channels > 1) {
-            if (j.pch > 1)
-                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                   "threshold-map: a %d-channel map needs a 1-channel pattern "
-                                   "(input 'pattern' has %d); pick one channel of the pattern",
-                                   j.map->channels, j.pch);
-            want = j.map->channels;
-        }
-    }
-    if (j.out->channels != want)
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "threshold-map: output has %d channels, expected %d", j.out->channels,
-                           want);
-    if (nprfx_rect_empty(j.window)) return NPRFX_OK;
-    nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(j.window), 8, tm_rows, &j);
-    return NPRFX_OK;
+    return nprfx_threshold_render(a->ctx, params, &a->inputs[IN_PATTERN],
+                                  nprfx_render_input(a, IN_TONE), nprfx_render_input(a, IN_MAP),
+                                  a->window, a->output);
 }
 
 const nprfx_node_desc nprfx_node_threshold_map = {
@@ -285,4 +187,6 @@ const nprfx_node_desc nprfx_node_threshold_map = {
     .num_params = P_COUNT,
     .output = tm_output,
     .render = tm_render,
+    .params_size = sizeof(tp),
+    .version_major = 1,
 };

@@ -31,7 +31,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 100000},
 };
 
-static nprfx_result time_offset_render(const nprfx_render_args *args)
+static nprfx_result time_offset_render(const nprfx_render_args *args, const void *typed)
 {
     nprfx_context *ctx = args->ctx;
     int offset = (int)args->params[P_OFFSET].v[0];

@@ -106,7 +106,7 @@ static void warp_rows(void *user, int begin, int end, int worker)
         }
 }
 
-static nprfx_result warp_render(const nprfx_render_args *args)
+static nprfx_result warp_render(const nprfx_render_args *args, const void *typed)
 {
     if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params ||
         !args->output)

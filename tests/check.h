@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nprfx/context.h"
+
 static int check_passed, check_failed;
 
 #define CHECK(cond)                                                                              \
@@ -49,6 +51,14 @@ static inline int check_finish(void)
 {
     printf("%d passed, %d failed\n", check_passed, check_failed);
     return check_failed ? 1 : 0;
+}
+
+/* The last message raised on ctx, copied (valid until the next call; tests are one thread). */
+static inline const char *th_error(const nprfx_context *ctx)
+{
+    static char buf[2048];
+    nprfx_context_last_error(ctx, buf, sizeof buf);
+    return buf;
 }
 
 #endif

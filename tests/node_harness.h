@@ -37,7 +37,7 @@ static inline nprfx_image th_synth(nprfx_context *ctx, const char *scene, int fr
 {
     nprfx_image im = th_image(w, h, nprfx_synth_channel_count(), NULL);
     if (nprfx_synth_render(ctx, scene, frame, &im) != NPRFX_OK) {
-        fprintf(stderr, "test: synth %s failed: %s\n", scene, nprfx_last_error(ctx));
+        fprintf(stderr, "test: synth %s failed: %s\n", scene, th_error(ctx));
         exit(2);
     }
     return im;
@@ -61,7 +61,7 @@ static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *
     a.inputs = inputs;
     a.params = params;
     a.output = out;
-    return node->render(&a);
+    return nprfx_node_render(&a);
 }
 
 static inline int th_param(const nprfx_node_desc *node, const char *name)

@@ -12,11 +12,9 @@
 extern "C" {
 #endif
 
-typedef struct nprfx_context nprfx_context;
-
 typedef struct nprfx_context_init {
     size_t size;                       /* sizeof(nprfx_context_init) */
-    nprfx_error_handler error_handler; /* NULL: messages are only kept for nprfx_last_error */
+    nprfx_error_handler error_handler; /* NULL: messages are only kept (nprfx_context_last_error) */
     void *error_user;
     const nprfx_executor *executor; /* NULL: run serially on the calling thread */
     /* Directory of the library's data files (the stipple node's dot sequence, ivs.bin); copied.
@@ -33,15 +31,23 @@ typedef struct nprfx_context_init {
 nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context **out);
 void nprfx_context_destroy(nprfx_context *ctx);
 
+/* A context that raises its errors through `parent` with `prefix` and ": " before the message
+ * ("node 'toon'" gives "node 'toon': blend: input 'layer' is not connected"), so a layer adds
+ * what it knows without catching and re-raising. It shares the parent's executor and data
+ * directory; the prefix is copied. Destroy it before the parent. */
+nprfx_result nprfx_context_create_scoped(nprfx_context *parent, const char *prefix,
+                                         nprfx_context **out);
+
 /* The data directory given at creation, or NULL. */
 const char *nprfx_context_data_dir(const nprfx_context *ctx);
 
 /* The executor given at creation (never NULL: a serial one when none was given). */
 const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);
 
-/* Raise an error: formats the message, hands it to the handler, keeps a copy for
- * nprfx_last_error, and returns `code` so callers can write `return nprfx_error(ctx, ...)`.
- * ctx may be NULL (the message is then dropped). Safe from several threads. */
+/* Raise an error: formats the message, hands it to the handler once (through the scopes' prefixes
+ * up to the root context), keeps a copy in each context it passes, and returns `code` so callers
+ * can write `return nprfx_error(ctx, ...)`. ctx may be NULL (the message is then dropped). Safe
+ * from several threads. */
 nprfx_result nprfx_error(nprfx_context *ctx, nprfx_result code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
@@ -49,8 +55,10 @@ nprfx_result nprfx_error(nprfx_context *ctx, nprfx_result code, const char *fmt,
     ;
 nprfx_result nprfx_verror(nprfx_context *ctx, nprfx_result code, const char *fmt, va_list ap);
 
-/* The last message raised through ctx ("" when none). Valid until the next error on ctx. */
-const char *nprfx_last_error(const nprfx_context *ctx);
+/* Copy the last message raised through ctx (with the prefixes of ctx and its parents as far as
+ * ctx; "" when none) into buf (size bytes, always terminated); returns that error's code, or
+ * NPRFX_OK when none was raised. Safe from several threads. */
+nprfx_result nprfx_context_last_error(const nprfx_context *ctx, char *buf, size_t size);
 
 #ifdef __cplusplus
 }

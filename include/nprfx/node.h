@@ -43,7 +43,15 @@ typedef struct nprfx_param_desc {
     const char *const *choice_help; /* CHOICE: optional, one line per option (formula, meaning) */
     const char *def_string;         /* STRING default */
     unsigned flags;
+    /* Where the value goes in the node's typed params struct (desc->params_size bytes), which
+     * nprfx_node_render fills, checked, before it calls the node: DOUBLE -> double, INT, BOOL
+     * and CHOICE -> int, COLOR -> double[4] (RGBA), STRING -> const char * (never NULL). Write
+     * it with NPRFX_FIELD(struct, member). */
+    size_t offset;
 } nprfx_param_desc;
+
+/* In a param's initializer: the field of the node's typed params struct that receives it. */
+#define NPRFX_FIELD(type, member) .offset = offsetof(type, member)
 
 /* Input flags. */
 #define NPRFX_INPUT_OPTIONAL 0x1u
@@ -79,6 +87,9 @@ typedef struct nprfx_value {
 typedef struct nprfx_output_info {
     int channels;
     const char *names[NPRFX_MAX_CHANNELS]; /* NULL entries get default names */
+    /* When the callback fails: why, in words that name the input or param ("mode 'map' needs
+     * the 'map' input"); NULL gives a generic message. */
+    const char *problem;
 } nprfx_output_info;
 
 /* Fetch input `input` at frame `time`. The view stays valid until the render call returns or
@@ -106,12 +117,20 @@ typedef struct nprfx_render_args {
     void *fetch_user;
     void **state; /* per-instance slot, NULL at first; the node owns what it stores */
     /* NULL, or where a node that counts what it makes (desc->item_name) adds how many it made
-     * for the window (stipples drawn, kernels splatted), for benchmarks and logs. Nodes read it
-     * only when args->size covers it (older callers pass a shorter struct). */
+     * for the window (stipples drawn, kernels splatted), for benchmarks and logs. Appended after
+     * the first release: nprfx_node_render gives nodes NULL here when the caller's struct is
+     * the shorter NPRFX_RENDER_ARGS_SIZE_V1 one. */
     long long *items;
 } nprfx_render_args;
 
-typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args);
+/* Render args as the first release defined them, without `items`: callers built against that
+ * header pass this size, and nprfx_node_render still accepts it. */
+#define NPRFX_RENDER_ARGS_SIZE_V1 offsetof(nprfx_render_args, items)
+
+/* A node's render function. nprfx_node_render calls it after the shared checks (see there), with
+ * a full-size copy of the caller's args and `params`, the node's typed params struct filled from
+ * args->params (NULL when the node declares no params_size). */
+typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args, const void *params);
 
 /* In a CHOICE param's initializer: the range of its n options, 0 .. n - 1, soft and hard alike. */
 #define NPRFX_CHOICE_RANGE(n) .soft_min = 0, .soft_max = (n)-1, .hard_min = 0, .hard_max = (n)-1
@@ -144,19 +163,50 @@ struct nprfx_node_desc {
     /* Optional: a vector/text export of the frame (e.g. stipples as CSV or SVG). Called by the
      * front end after the whole frame rendered, with the same args (window = frame) and `path`,
      * the NPRFX_PARAM_EXPORT param's value expanded for this frame, whose extension picks the
-     * format. *text is malloc'd; the caller writes it (core does no file I/O). */
-    nprfx_result (*export_text)(const nprfx_render_args *args, const char *path, char **text,
-                                size_t *len);
+     * format. *text is malloc'd; the caller writes it (the library does no file I/O). Called
+     * through nprfx_node_export, which binds `params` as for render. */
+    nprfx_result (*export_text)(const nprfx_render_args *args, const void *params,
+                                const char *path, char **text, size_t *len);
     /* Optional: what the node counts into args->items, a plural noun ("stipples"). */
     const char *item_name;
+    /* Size of the node's typed params struct (0: the node reads args->params itself). */
+    size_t params_size;
+    /* The node's version, major.minor: hosts see it as the OpenFX plug-in version. The minor
+     * number goes up when the node's pixels change for the same params, the major one when a
+     * param or input is removed or changes meaning (a host then keeps the old one apart). */
+    int version_major, version_minor;
 };
 
-/* The args' item counter, or NULL when the caller gave none or an older, shorter struct. */
-static inline long long *nprfx_render_items(const nprfx_render_args *args)
+/* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
+static inline const nprfx_image *nprfx_render_input(const nprfx_render_args *args, int i)
 {
-    return args->size >= offsetof(nprfx_render_args, items) + sizeof args->items ? args->items
-                                                                                 : NULL;
+    return args->inputs[i].data ? &args->inputs[i] : NULL;
 }
+
+/* ---- rendering through the descriptor (core/node.c) ---- */
+
+/* Render args->window of a node: the one way front ends (runner, OpenFX adapter, tests, library
+ * users) run a node. Before the node sees them it checks, once for every node:
+ *  - args: args->size at least NPRFX_RENDER_ARGS_SIZE_V1 (older, shorter structs are accepted:
+ *    the fields they lack read as 0/NULL), node, inputs, params and output present;
+ *  - the window is cut to the output's bounds (an empty one renders nothing);
+ *  - every input without NPRFX_INPUT_OPTIONAL is connected, and an input that declares a channel
+ *    count has it;
+ *  - the output has the channels nprfx_node_output_info gives for these params and inputs;
+ *  - every param value has its type and lies in its hard range;
+ * and fills the node's typed params struct. Errors name the node, input or param. */
+nprfx_result nprfx_node_render(const nprfx_render_args *args);
+
+/* The node's text export of a whole frame (desc->export_text), with the same checks and binding
+ * as nprfx_node_render. NPRFX_ERR_UNSUPPORTED when the node has none. */
+nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path, char **text,
+                               size_t *len);
+
+/* Check a descriptor for mistakes a compiler cannot see: names unique and well formed, help and
+ * labels present, defaults inside the hard range and the soft range inside it, choice lists that
+ * match their range, typed fields inside params_size and not overlapping. The first problem is
+ * raised on ctx. */
+nprfx_result nprfx_node_lint(nprfx_context *ctx, const nprfx_node_desc *node);
 
 /* ---- descriptor helpers (core/node.c) ---- */
 

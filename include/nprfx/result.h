@@ -35,9 +35,14 @@ enum nprfx_result_code {
 /* A short stable name for a code ("missing-input"); never NULL. */
 const char *nprfx_result_name(nprfx_result code);
 
-/* Receives every error message raised through a context. Called from the thread that raised it;
- * the handler must be thread-safe when the context is shared by several threads. */
-typedef void (*nprfx_error_handler)(void *user, nprfx_result code, const char *message);
+typedef struct nprfx_context nprfx_context;
+
+/* Receives every error message raised through a context, once, finished: `ctx` is the context it
+ * was raised on (a scoped one's prefixes already applied), `message` the whole text. Called from
+ * the thread that raised it; the handler must be thread-safe when the context is shared by
+ * several threads. */
+typedef void (*nprfx_error_handler)(void *user, const nprfx_context *ctx, nprfx_result code,
+                                    const char *message);
 
 #ifdef __cplusplus
 }

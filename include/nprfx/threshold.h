@@ -23,6 +23,7 @@
 #ifndef NPRFX_THRESHOLD_H
 #define NPRFX_THRESHOLD_H
 
+#include "nprfx/context.h"
 #include "nprfx/image.h"
 
 #ifdef __cplusplus
@@ -51,6 +52,38 @@ double nprfx_threshold_quantize(double tone, int steps);
 /* Bilinear lookup of every channel of the map at (u, v) with the orientation above. out
  * receives map->channels floats. The map must be non-empty. */
 void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, float *out);
+
+/* ---- the threshold-map node over an image ---- */
+
+typedef enum nprfx_threshold_mode {
+    NPRFX_THRESHOLD_ERF = 0,
+    NPRFX_THRESHOLD_MAP = 1,
+    NPRFX_THRESHOLD_BUILTIN = 2,
+    NPRFX_THRESHOLD_MODE_COUNT
+} nprfx_threshold_mode;
+
+/* The node's params (its descriptor binds each one here by offset). */
+typedef struct nprfx_threshold_params {
+    int mode;         /* nprfx_threshold_mode */
+    double sigma, mu; /* erf, builtin: sharpness (> 0) and position */
+    double tone;      /* map, builtin: used when there is no tone image */
+    double tone_gain; /* map, builtin: tone multiplier before the clamp to [0,1] */
+    int steps;        /* map, builtin: >= 2 quantises the tone to that many levels */
+    int invert;       /* output 1 - value */
+} nprfx_threshold_params;
+
+/* Channels of the output: the pattern's, or the map's when a map of more than one channel is
+ * applied to a 1-channel pattern. NPRFX_ERR_MISSING_INPUT when map mode has no map (map_channels
+ * 0), NPRFX_ERR_INVALID_ARGUMENT for a many-channel map on a many-channel pattern. */
+nprfx_result nprfx_threshold_output_channels(int mode, int pattern_channels, int map_channels,
+                                             int *channels);
+
+/* Threshold `window` of the pattern into out (which has the channels above). tone and map may be
+ * NULL (map mode needs a non-empty map). Inputs read as 0 outside their data windows. Runs on
+ * ctx's executor; bit-identical for any thread count and window split. */
+nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_params *p,
+                                    const nprfx_image *pattern, const nprfx_image *tone,
+                                    const nprfx_image *map, nprfx_rect window, nprfx_image *out);
 
 #ifdef __cplusplus
 }

@@ -574,7 +574,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
             pthread_mutex_lock(&inst->lock);
             locked = 1;
         }
-        r = d->render(&a);
+        r = nprfx_node_render(&a);
         if (locked) pthread_mutex_unlock(&inst->lock);
         locked = 0;
         if (r) goto done;
@@ -590,7 +590,11 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 
 done:
     if (r && status == kOfxStatOK) status = kOfxStatFailed;
-    if (r) nprfx_ofx_post_error(inst->fx, nprfx_last_error(rc.ctx));
+    if (r) {
+        char msg[1024];
+        nprfx_context_last_error(rc.ctx, msg, sizeof msg);
+        nprfx_ofx_post_error(inst->fx, msg);
+    }
     for (int i = 0; i < RING; i++)
         fetched_release(&rc.ring[i]);
     for (int k = 0; rc.cur && k < d->num_inputs; k++)

@@ -186,7 +186,7 @@ static void test_broadcast(nprfx_context *ctx)
     in[II("layer")] = th_image(1, 1, 2, l2);
     out = run(ctx, 1, 1, &r);
     CHECK(r == NPRFX_ERR_INVALID_ARGUMENT);
-    CHECK(strstr(nprfx_last_error(ctx), "layer") != NULL);
+    CHECK(strstr(th_error(ctx), "layer") != NULL);
     nprfx_image_free(&out);
 
     /* A missing layer is reported as such */

@@ -221,7 +221,7 @@ static nprfx_result render(scene *s, nprfx_context *ctx, const nprfx_value *pv, 
     a.fetch = scene_fetch;
     a.fetch_user = s;
     a.state = state;
-    nprfx_result r = node->render(&a);
+    nprfx_result r = nprfx_node_render(&a);
     arena_clear(s);
     return r;
 }
@@ -436,7 +436,7 @@ static void stationarity_case(nprfx_context *ctx, const char *label, scene *s, i
     nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, s->W, s->H), 1, &a);
     nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, s->W, s->H), 1, &b);
     nprfx_result r0 = render_full(s, ctx, pv, F0, F0, F1, &state, &a);
-    if (r0) fprintf(stderr, "render: %s\n", nprfx_last_error(ctx));
+    if (r0) fprintf(stderr, "render: %s\n", th_error(ctx));
     CHECK_OK(r0);
     if (symmetric) {
         CHECK_OK(render_full(s, ctx, pv, F1, F0, F1, &state, &b));
@@ -1018,16 +1018,16 @@ static void test_errors(nprfx_context *ctx)
     void *state = NULL;
     set_param(pv, "mode", 1); /* symmetric without motion_next */
     CHECK(render_full(&s, ctx, pv, 2, 1, 5, &state, &o) == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "motion_next") != NULL);
+    CHECK(strstr(th_error(ctx), "motion_next") != NULL);
     set_param(pv, "mode", 0);
     set_param(pv, "noise", 1);
     set_param(pv, "sigma_lo", 3);
     set_param(pv, "sigma_hi", 2);
     CHECK(render_full(&s, ctx, pv, 2, 1, 5, &state, &o) == NPRFX_ERR_OUT_OF_RANGE);
-    CHECK(strstr(nprfx_last_error(ctx), "sigma_hi") != NULL);
+    CHECK(strstr(th_error(ctx), "sigma_hi") != NULL);
     set_param(pv, "noise", 2);
     CHECK(render_full(&s, ctx, pv, 2, 1, 5, &state, &o) == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "source") != NULL);
+    CHECK(strstr(th_error(ctx), "source") != NULL);
     /* descriptor facts the runner relies on */
     CHECK(strcmp(node->inputs[IN_DEPTH].aov, "Z|depth.Z|Depth.Z") == 0);
     CHECK(strcmp(node->inputs[IN_MPREV].aov, "motion_prev.X,motion_prev.Y") == 0);

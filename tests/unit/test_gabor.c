@@ -28,7 +28,7 @@ static void set(nprfx_value *pv, const char *name, const char *text)
 {
     int i = th_param(node, name);
     if (nprfx_param_parse(ctx, node, &node->params[i], text, &pv[i]) != NPRFX_OK) {
-        fprintf(stderr, "bad value %s for %s: %s\n", text, name, nprfx_last_error(ctx));
+        fprintf(stderr, "bad value %s for %s: %s\n", text, name, th_error(ctx));
         exit(2);
     }
 }
@@ -67,7 +67,7 @@ static nprfx_result render_with(nprfx_context *c, const gin *g, const nprfx_valu
     a.inputs = g->in;
     a.params = pv;
     a.output = out;
-    return node->render(&a);
+    return nprfx_node_render(&a);
 }
 
 static nprfx_result render(const gin *g, const nprfx_value *pv, nprfx_image *out)
@@ -206,15 +206,15 @@ static void test_errors(void)
     gin none = g;
     none.in[th_input(node, "anchor")].data = NULL;
     CHECK(render(&none, pv, &out) == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "anchor") != NULL);
+    CHECK(strstr(th_error(ctx), "anchor") != NULL);
     none = g;
     none.in[th_input(node, "depth")].data = NULL;
     CHECK(render(&none, pv, &out) == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "depth") != NULL);
+    CHECK(strstr(th_error(ctx), "depth") != NULL);
     /* a 3D anchor space with a 2-channel anchor */
     gin uv = plate_inputs(&plate, 1, 1);
     CHECK(render(&uv, pv, &out) == NPRFX_ERR_INVALID_ARGUMENT);
-    CHECK(strstr(nprfx_last_error(ctx), "anchor") != NULL);
+    CHECK(strstr(th_error(ctx), "anchor") != NULL);
     set(pv, "anchor_space", "uv");
     CHECK_OK(render(&uv, pv, &out));
     /* the points channel needs a 2-channel output */

@@ -75,8 +75,8 @@ static void render(const nprfx_image *plate, const gparams *p, nprfx_image *out)
     a.inputs = in;
     a.params = p->v;
     a.output = out;
-    if (node->render(&a) != NPRFX_OK) {
-        fprintf(stderr, "render failed: %s\n", nprfx_last_error(ctx));
+    if (nprfx_node_render(&a) != NPRFX_OK) {
+        fprintf(stderr, "render failed: %s\n", th_error(ctx));
         exit(2);
     }
 }

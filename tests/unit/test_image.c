@@ -27,11 +27,52 @@ static void test_rects(void)
 
 static int last_code;
 static char last_message[256];
-static void on_error(void *user, nprfx_result code, const char *message)
+static const nprfx_context *last_ctx;
+static void on_error(void *user, const nprfx_context *ctx, nprfx_result code,
+                     const char *message)
 {
     (*(int *)user)++;
     last_code = code;
+    last_ctx = ctx;
     strncpy(last_message, message, sizeof last_message - 1);
+}
+
+/* Scoped contexts: a message raised on a scope reaches the root's handler once, finished, with
+ * every scope's prefix, and names the context it was raised on; each scope keeps it as far as
+ * itself; nothing is re-raised. */
+static void test_scoped(void)
+{
+    int calls = 0;
+    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
+    init.error_handler = on_error;
+    init.error_user = &calls;
+    init.data_dir = "/data";
+    nprfx_context *root = NULL, *graph = NULL, *node = NULL;
+    CHECK_OK(nprfx_context_create(&init, &root));
+    CHECK_OK(nprfx_context_create_scoped(root, "shot.json", &graph));
+    CHECK_OK(nprfx_context_create_scoped(graph, "node 'toon'", &node));
+    nprfx_context *bad = root;
+    CHECK(nprfx_context_create_scoped(NULL, "x", &bad) == NPRFX_ERR_INVALID_ARGUMENT && !bad);
+    CHECK(strcmp(nprfx_context_data_dir(node), "/data") == 0);
+    CHECK(nprfx_context_executor(node) == nprfx_context_executor(root));
+    CHECK(nprfx_error(node, NPRFX_ERR_MISSING_INPUT, "blend: input '%s' is not connected",
+                      "layer") == NPRFX_ERR_MISSING_INPUT);
+    CHECK(calls == 1 && last_ctx == node && last_code == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strcmp(last_message, "shot.json: node 'toon': blend: input 'layer' is not connected") ==
+          0);
+    char buf[256];
+    CHECK(nprfx_context_last_error(root, buf, sizeof buf) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strcmp(buf, last_message) == 0);
+    CHECK(nprfx_context_last_error(node, buf, sizeof buf) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strcmp(buf, "blend: input 'layer' is not connected") == 0);
+    CHECK(nprfx_context_last_error(graph, buf, 12) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strcmp(buf, "node 'toon'") == 0); /* cut to the buffer, terminated */
+    /* an error on the root itself carries no prefix */
+    nprfx_error(root, NPRFX_ERR_IO, "plain");
+    CHECK(calls == 2 && last_ctx == root && strcmp(last_message, "plain") == 0);
+    nprfx_context_destroy(node);
+    nprfx_context_destroy(graph);
+    nprfx_context_destroy(root);
 }
 
 static void test_alloc(void)
@@ -42,7 +83,7 @@ static void test_alloc(void)
     init.error_user = &calls;
     nprfx_context *ctx = NULL;
     CHECK_OK(nprfx_context_create(&init, &ctx));
-    CHECK(strcmp(nprfx_last_error(ctx), "") == 0);
+    CHECK(strcmp(th_error(ctx), "") == 0);
 
     nprfx_image im;
     CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(-3, 10, 4, 15), 3, &im));
@@ -59,11 +100,11 @@ static void test_alloc(void)
     CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 0, 0), 1, &e));
     nprfx_image_free(&e);
     CHECK(e.data == NULL && e.channels == 0);
-    /* errors go to the handler and to nprfx_last_error, with the code returned */
+    /* errors go to the handler and to nprfx_context_last_error, with the code returned */
     CHECK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 4, 4), 0, &e) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(calls == 1 && last_code == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(last_message, "0 channels") != NULL);
-    CHECK(strcmp(nprfx_last_error(ctx), last_message) == 0);
+    CHECK(strcmp(th_error(ctx), last_message) == 0);
     CHECK(e.data == NULL);
     CHECK(nprfx_image_alloc(ctx, nprfx_rect_make(4, 0, 0, 4), 1, &e) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(calls == 2);
@@ -78,7 +119,7 @@ static void test_alloc(void)
     /* a NULL context drops the message but still returns the code */
     CHECK(nprfx_image_alloc(NULL, nprfx_rect_make(0, 0, 1, 1), -1, &e) ==
           NPRFX_ERR_INVALID_ARGUMENT);
-    CHECK(strcmp(nprfx_last_error(NULL), "") == 0);
+    CHECK(strcmp(th_error(NULL), "") == 0);
 }
 
 static void test_views(void)
@@ -159,6 +200,7 @@ int main(void)
 {
     test_rects();
     test_alloc();
+    test_scoped();
     test_views();
     test_context();
     return check_finish();

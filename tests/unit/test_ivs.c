@@ -230,17 +230,17 @@ static void test_codec(nprfx_context *ctx, const float *xy)
     back[NPRFX_IVS_HEADER_SIZE + 1234] ^= 0x10;
     dec = NULL;
     CHECK(nprfx_ivs_decode(ctx, back, size, &seed, &m, &dec) == NPRFX_ERR_PARSE);
-    CHECK(dec == NULL && strstr(nprfx_last_error(ctx), "corrupt") != NULL);
-    printf("corrupt file: %s\n", nprfx_last_error(ctx));
+    CHECK(dec == NULL && strstr(th_error(ctx), "corrupt") != NULL);
+    printf("corrupt file: %s\n", th_error(ctx));
 
     CHECK(nprfx_ivs_decode(ctx, buf, size - 6, &seed, &m, &dec) == NPRFX_ERR_PARSE);
-    CHECK(strstr(nprfx_last_error(ctx), "truncated") != NULL);
-    printf("truncated file: %s\n", nprfx_last_error(ctx));
+    CHECK(strstr(th_error(ctx), "truncated") != NULL);
+    printf("truncated file: %s\n", th_error(ctx));
 
     memcpy(back, buf, size);
     back[0] = 'X';
     CHECK(nprfx_ivs_decode(ctx, back, size, &seed, &m, &dec) == NPRFX_ERR_PARSE);
-    CHECK(strstr(nprfx_last_error(ctx), "not an IVS") != NULL);
+    CHECK(strstr(th_error(ctx), "not an IVS") != NULL);
 
     memcpy(back, buf, size);
     back[8] = 2;

@@ -192,7 +192,7 @@ static void test_warp(nprfx_context *ctx)
     nprfx_image one = nprfx_image_channels(&ins[1], 0, 1);
     nprfx_image bad_ins[2] = {ins[0], one};
     CHECK(run(ctx, n, bad_ins, pv, &out, r) == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "offset") != NULL);
+    CHECK(strstr(th_error(ctx), "offset") != NULL);
     nprfx_image_free(&ins[0]);
     nprfx_image_free(&ins[1]);
     nprfx_image_free(&out);

@@ -369,7 +369,7 @@ static nprfx_result node_render(nprfx_context *ctx, const nprfx_image *inputs,
     a.params = params;
     a.output = out;
     a.state = &node_state;
-    return node->render(&a);
+    return nprfx_node_render(&a);
 }
 
 static void test_determinism(void)
@@ -557,7 +557,7 @@ static void *render_thread(void *user)
     a.params = rj->pv;
     a.output = rj->out;
     a.state = rj->state;
-    rj->r = node->render(&a);
+    rj->r = nprfx_node_render(&a);
     nprfx_context_destroy(c);
     return NULL;
 }
@@ -741,7 +741,7 @@ static void test_export(void)
     pv[th_param(node, "mode")].v[0] = NPRFX_STIPPLE_MULTITONE;
     pv[th_param(node, "tones")].s = "0.5, banana";
     CHECK(node_render(ctx1, inputs, pv, &out, out.bounds) == NPRFX_ERR_PARSE);
-    printf("bad tones: %s\n", nprfx_last_error(ctx1));
+    printf("bad tones: %s\n", th_error(ctx1));
     pv[th_param(node, "tones")].s = "0.5, 0.3";
     CHECK(node_render(ctx1, inputs, pv, &out, out.bounds) == NPRFX_ERR_OUT_OF_RANGE);
     pv[th_param(node, "tones")].s = "0.5, 1";

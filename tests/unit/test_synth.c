@@ -78,7 +78,7 @@ static void test_channels_and_scenes(void)
     nprfx_image im;
     CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 8, 8), 23, &im));
     CHECK(nprfx_synth_render(ctx, "nope", 1, &im) == NPRFX_ERR_INVALID_ARGUMENT);
-    CHECK(strstr(nprfx_last_error(ctx), "nope") != NULL);
+    CHECK(strstr(th_error(ctx), "nope") != NULL);
     nprfx_image few = nprfx_image_channels(&im, 0, 4);
     CHECK(nprfx_synth_render(ctx, "orbit", 1, &few) == NPRFX_ERR_INVALID_ARGUMENT);
     nprfx_image_free(&im);

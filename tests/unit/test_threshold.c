@@ -264,7 +264,7 @@ static void test_node_erf(nprfx_context *ctx)
     nprfx_image_free(&in[II("pattern")]);
     out = run(ctx, 2, 1, 1, &r);
     CHECK(r == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "pattern") != NULL);
+    CHECK(strstr(th_error(ctx), "pattern") != NULL);
     nprfx_image_free(&out);
 }
 
@@ -337,14 +337,14 @@ static void test_node_map(nprfx_context *ctx)
     CHECK(out_channels() == -1);
     out = run(ctx, 1, 1, 3, &r);
     CHECK(r == NPRFX_ERR_INVALID_ARGUMENT);
-    CHECK(strstr(nprfx_last_error(ctx), "pattern") != NULL);
+    CHECK(strstr(th_error(ctx), "pattern") != NULL);
     nprfx_image_free(&out);
     /* map mode without a map */
     nprfx_image_free(&in[II("map")]);
     CHECK(out_channels() == -1);
     out = run(ctx, 1, 1, 2, &r);
     CHECK(r == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(nprfx_last_error(ctx), "map") != NULL);
+    CHECK(strstr(th_error(ctx), "map") != NULL);
     nprfx_image_free(&out);
 }
 
