@@ -8,13 +8,12 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "graph.h"
-#include "ofx_host.h"
 
-static void usage(FILE *f)
+static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
 {
     fprintf(
         f,
-        "usage: nprfx run GRAPH.json [options]\n\n"
+        "usage: %s run GRAPH.json [options]\n\n"
         "Renders a node graph: every write node's sequence over the frames.\n\n"
         "options:\n"
         "  --frames SPEC       frames to render: 12, 1-24, 1-24x2, 24-1, 1,5,9-12 (default:\n"
@@ -26,8 +25,7 @@ static void usage(FILE *f)
         "  --cache-mb N        memory for cached node results (default 2048)\n"
         "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
         "  --keep-going        render the remaining frames after a failed one, exit 1\n"
-        "  --ofx BUNDLE        render every node through the OpenFX plug-ins of BUNDLE\n"
-        "                      (nprfx.ofx.bundle) in a minimal test host; same pixels\n"
+        "%s"
         "  --quiet             no progress output\n\n"
         "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
         "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
@@ -39,7 +37,8 @@ static void usage(FILE *f)
         "  REF:   \"node\" or \"node:channels\", e.g. \"plate:Depth.Z\", \"plate:Vector.XY\"\n"
         "Read paths are relative to the graph file, write paths to the current directory.\n"
         "Files are written under a temporary name and renamed, so a failed frame never leaves\n"
-        "a partial file. See 'nprfx list' and 'nprfx help NODE' for the node types.\n");
+        "a partial file. See 'nprfx list' and 'nprfx help NODE' for the node types.\n",
+        prog, ext && ext->options_usage ? ext->options_usage : "");
 }
 
 static double now_seconds(void)
@@ -51,15 +50,21 @@ static double now_seconds(void)
 
 int nprfx_cmd_run(int argc, char **argv)
 {
-    const char *graph_path = NULL, *frames = NULL, *outdir = NULL, *ofx_bundle = NULL;
+    return nprfx_cmd_run_extended(argc, argv, NULL);
+}
+
+int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext)
+{
+    const char *prog = ext && ext->program ? ext->program : "nprfx";
+    const char *graph_path = NULL, *frames = NULL, *outdir = NULL;
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        int has = i + 1 < argc;
+        int has = i + 1 < argc, took = 0;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            usage(stdout);
+            usage(stdout, prog, ext);
             return 0;
         } else if (!strcmp(a, "--frames") && has)
             frames = argv[++i];
@@ -73,22 +78,23 @@ int nprfx_cmd_run(int argc, char **argv)
             cache_mb = atol(argv[++i]);
         else if (!strcmp(a, "--output-dir") && has)
             outdir = argv[++i];
-        else if (!strcmp(a, "--ofx") && has)
-            ofx_bundle = argv[++i];
         else if (!strcmp(a, "--keep-going"))
             keep_going = 1;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = 1;
         else if (a[0] != '-' && !graph_path)
             graph_path = a;
+        else if (ext && ext->option &&
+                 (took = ext->option(ext->user, a, has ? argv[i + 1] : NULL)) > 0)
+            i += took - 1;
         else {
-            fprintf(stderr, "nprfx run: unexpected argument '%s'\n\n", a);
-            usage(stderr);
+            fprintf(stderr, "%s run: unexpected argument '%s'\n\n", prog, a);
+            usage(stderr, prog, ext);
             return 2;
         }
     }
     if (!graph_path) {
-        usage(stderr);
+        usage(stderr, prog, ext);
         return 2;
     }
     if (cache_mb < 16) cache_mb = 16;
@@ -98,37 +104,30 @@ int nprfx_cmd_run(int argc, char **argv)
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
     int status = 0;
-    nprfx_ofx_host *ofx = NULL;
-    if (ofx_bundle) {
-        if (nprfx_ofx_host_open(env.ctx, ofx_bundle, &ofx)) {
-            fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
-            status = 2;
-            goto done;
-        }
-        opt.hook = nprfx_ofx_host_hook(ofx);
-        if (!quiet)
-            fprintf(stderr, "ofx: %d plug-ins in %s\n", nprfx_ofx_host_plugin_count(ofx),
-                    ofx_bundle);
+    if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
     }
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
-        fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
     }
     if (!nprfx_graph_write_count(g)) {
-        fprintf(stderr, "nprfx run: %s: the graph has no write node, so it would produce nothing\n",
-                graph_path);
+        fprintf(stderr, "%s run: %s: the graph has no write node, so it would produce nothing\n",
+                prog, graph_path);
         status = 2;
         goto done;
     }
     for (int i = 0; i < nsets; i++)
         if (nprfx_graph_set(g, sets[i])) {
-            fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
+            fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
             status = 2;
             goto done;
         }
     if (nprfx_graph_frames(g, frames, &fl)) {
-        fprintf(stderr, "nprfx run: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -140,7 +139,7 @@ int nprfx_cmd_run(int argc, char **argv)
         int written = 0;
         if (nprfx_graph_render_frame(g, fl.frames[k], &written)) {
             if (tty) fputc('\n', stderr);
-            fprintf(stderr, "nprfx run: frame %d failed: %s\n", fl.frames[k],
+            fprintf(stderr, "%s run: frame %d failed: %s\n", prog, fl.frames[k],
                     nprfx_cli_message(env.ctx));
             failed++;
             if (!keep_going) break;
@@ -159,7 +158,7 @@ int nprfx_cmd_run(int argc, char **argv)
     if (tty) fputc('\n', stderr);
     if (failed) {
         status = 1;
-        fprintf(stderr, "nprfx run: %d of %d frames failed\n", failed, fl.count);
+        fprintf(stderr, "%s run: %d of %d frames failed\n", prog, failed, fl.count);
     }
     if (files && !quiet) {
         char buf[4096];
@@ -170,7 +169,7 @@ int nprfx_cmd_run(int argc, char **argv)
 done:
     nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
-    nprfx_ofx_host_close(ofx); /* after the graph, which destroys the instances */
+    if (ext && ext->close) ext->close(ext->user); /* after the graph, which releases the hook */
     nprfx_cli_env_free(&env);
     return status;
 }

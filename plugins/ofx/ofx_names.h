@@ -1,6 +1,6 @@
 /* nprfx — how a node descriptor maps onto OpenFX names: plug-in identifiers, clip names,
  * channel-selector params and their options. Everything is derived from the descriptor, never
- * written a second time; the adapter (plugins/ofx/) and the test host (cli/ofx_host.c) include
+ * written a second time; the adapter (plugins/ofx/) and the test host (tests/ofxhost/) include
  * this one header so both sides agree on the derivation. */
 #ifndef NPRFX_OFX_NAMES_H
 #define NPRFX_OFX_NAMES_H

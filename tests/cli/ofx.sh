@@ -2,13 +2,16 @@
 # The OpenFX path (issue 7): the bundle exports exactly OfxGetNumberOfPlugins and OfxGetPlugin,
 # holds one plug-in per node of `nprfx list`, and every test graph (and every sample graph whose
 # inputs are synthetic or present in the repository) renders bit-identically through the
-# plug-ins (`nprfx run --ofx BUNDLE`, the test host of cli/ofx_host.c) and directly.
+# plug-ins (`nprfx-ofxtest run --ofx BUNDLE`, the test host of tests/ofxhost/) and directly
+# (`nprfx run`).
 # The OFX renders use tiles and 3 threads, so render windows differ from image bounds and the
 # host's multithread suite is exercised.
 #
-# usage: bash ofx.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
+# usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
+# (ctest sets NPRFX_OFXTEST to the nprfx-ofxtest it built)
 set -u
 NPRFX=$1; SRC=$2; W=$3
+OFXTEST=${NPRFX_OFXTEST:-}
 BUNDLE=$(cd "$(dirname "$NPRFX")" && pwd)/plugins/ofx/nprfx.ofx.bundle
 rm -rf "$W"; mkdir -p "$W"
 passes=0; fails=0
@@ -18,6 +21,10 @@ fail() { echo "FAIL: $*"; fails=$((fails+1)); }
 BIN=$(ls "$BUNDLE"/Contents/*/nprfx.ofx 2>/dev/null | head -n 1)
 if [ -z "$BIN" ]; then
   echo "FAIL: no bundle binary under $BUNDLE/Contents/*/nprfx.ofx"
+  exit 1
+fi
+if [ -z "$OFXTEST" ] || [ ! -x "$OFXTEST" ]; then
+  echo "FAIL: no test host: NPRFX_OFXTEST='$OFXTEST' is not an executable nprfx-ofxtest"
   exit 1
 fi
 
@@ -35,10 +42,18 @@ cat > "$W/count.json" <<'EOF'
 {"frames": "1", "nodes": {"p": {"node": "synth", "scene": "translate", "size": "8x8"},
  "w": {"node": "write", "inputs": {"image": "p"}, "path": "count.####.exr"}}}
 EOF
-line=$("$NPRFX" run "$W/count.json" --output-dir "$W/count" --ofx "$BUNDLE" 2>&1 >/dev/null | grep '^ofx: ')
+line=$("$OFXTEST" run "$W/count.json" --output-dir "$W/count" --ofx "$BUNDLE" 2>&1 >/dev/null | grep '^ofx: ')
 plugins=$(echo "$line" | sed -n 's/^ofx: \([0-9]*\) plug-ins.*/\1/p')
 if [ -n "$plugins" ] && [ "$plugins" -eq "$nodes" ] && [ "$nodes" -gt 0 ]; then pass
 else fail "the bundle has '${plugins:-?}' plug-ins, nprfx list has $nodes nodes ($line)"; fi
+
+# --- the shipped runner holds no OpenFX host: no --ofx option, none of the host's code ----------
+"$NPRFX" run "$W/count.json" --output-dir "$W/count" --ofx "$BUNDLE" > "$W/runner.out" 2>&1
+rc=$?
+if [ $rc -eq 2 ] && grep -q "unexpected argument '--ofx'" "$W/runner.out"; then pass
+else fail "nprfx run --ofx: exit $rc, want 2 and 'unexpected argument' (the host is nprfx-ofxtest's)"; fi
+host_syms=$(nm "$NPRFX" 2>/dev/null | grep -ci 'ofx')
+if [ "$host_syms" -eq 0 ]; then pass; else fail "nm $NPRFX shows $host_syms OpenFX symbols"; fi
 
 # --- graphs -----------------------------------------------------------------------------------
 # A sample graph qualifies when every read node's files exist for the graph's frames.
@@ -86,7 +101,7 @@ for g in $graphs; do
   if ! "$NPRFX" run "$g" $limit --output-dir "$out/direct" --quiet; then
     fail "$g: direct render"; continue
   fi
-  if ! "$NPRFX" run "$g" $limit --output-dir "$out/ofx" --quiet --ofx "$BUNDLE" --tile 37 --threads 3; then
+  if ! "$OFXTEST" run "$g" $limit --output-dir "$out/ofx" --quiet --ofx "$BUNDLE" --tile 37 --threads 3; then
     fail "$g: render through $BUNDLE"; continue
   fi
   ngraphs=$((ngraphs+1))

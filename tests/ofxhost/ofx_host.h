@@ -1,14 +1,15 @@
-/* nprfx CLI — a minimal OpenFX host that runs graph nodes through the plug-in bundle instead of
- * calling their render functions: `nprfx run GRAPH --ofx build/plugins/ofx/nprfx.ofx.bundle`.
+/* nprfx OpenFX test host — a minimal OpenFX host that runs graph nodes through the plug-in
+ * bundle instead of calling their render functions:
+ * `nprfx-ofxtest run GRAPH --ofx build/plugins/ofx/nprfx.ofx.bundle`.
  *
  * It proves the OFX path (the adapter in plugins/ofx/) gives the same pixels as the direct path;
  * it is not a substitute for real hosts. It loads the bundle with dlopen, describes every plug-in
  * (checking that each param's type, default and ranges match the node's descriptor), creates
  * one instance per graph node, sets params and channel selectors from the graph, serves clip
  * images from the runner's inputs (at other times through the runner's fetch), and copies the
- * rendered window back. */
-#ifndef NPRFX_CLI_OFX_HOST_H
-#define NPRFX_CLI_OFX_HOST_H
+ * rendered window back. It is a test program, never part of the shipped runner. */
+#ifndef NPRFX_TESTS_OFX_HOST_H
+#define NPRFX_TESTS_OFX_HOST_H
 
 #include "graph.h"
 #include "nprfx/nprfx.h"

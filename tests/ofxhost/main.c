@@ -1,0 +1,76 @@
+/* nprfx-ofxtest — the OpenFX test host's command line: `nprfx-ofxtest run GRAPH.json --ofx BUNDLE
+ * [options of nprfx run]` is the runner's own run command (cli/cmd_run.c, from the nprfx_runner
+ * library) with a render hook that drives every node through the plug-ins of BUNDLE, so the two
+ * programs differ only in how nodes render (tests/cli/ofx.sh requires the same pixels). A test
+ * program, kept out of the shipped runner and never installed. */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "ofx_host.h"
+
+typedef struct ofx_run {
+    const char *bundle; /* --ofx */
+    nprfx_ofx_host *host;
+} ofx_run;
+
+static int ofx_option(void *user, const char *arg, const char *next)
+{
+    ofx_run *o = user;
+    if (strcmp(arg, "--ofx") || !next) return 0;
+    o->bundle = next;
+    return 2;
+}
+
+static nprfx_result ofx_open(void *user, nprfx_context *ctx, int quiet,
+                             const nprfx_render_hook **hook)
+{
+    ofx_run *o = user;
+    if (!o->bundle)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "--ofx BUNDLE is required (e.g. build/plugins/ofx/nprfx.ofx.bundle)");
+    nprfx_result r = nprfx_ofx_host_open(ctx, o->bundle, &o->host);
+    if (r) return r;
+    *hook = nprfx_ofx_host_hook(o->host);
+    if (!quiet)
+        fprintf(stderr, "ofx: %d plug-ins in %s\n", nprfx_ofx_host_plugin_count(o->host),
+                o->bundle);
+    return NPRFX_OK;
+}
+
+static void ofx_close(void *user)
+{
+    ofx_run *o = user;
+    nprfx_ofx_host_close(o->host); /* the runner calls this after freeing the graph */
+    o->host = NULL;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f, "nprfx-ofxtest — the nprfx runner with every node rendered through the plug-ins of "
+               "an OpenFX\nbundle, in a minimal test host\n\n"
+               "usage: nprfx-ofxtest run GRAPH.json --ofx BUNDLE [options of nprfx run]\n\n"
+               "'nprfx-ofxtest run --help' lists the options.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    if (strcmp(argv[1], "run")) {
+        fprintf(stderr, "nprfx-ofxtest: unknown command '%s' (the only one is run)\n", argv[1]);
+        return 2;
+    }
+    ofx_run o = {NULL, NULL};
+    const nprfx_run_extension ext = {
+        "nprfx-ofxtest",
+        "  --ofx BUNDLE        render every node through the OpenFX plug-ins of BUNDLE\n"
+        "                      (nprfx.ofx.bundle) in a minimal test host; same pixels (required)\n",
+        ofx_option,
+        ofx_open,
+        ofx_close,
+        &o};
+    return nprfx_cmd_run_extended(argc - 1, argv + 1, &ext);
+}

@@ -1,0 +1,202 @@
+/* nprfx OpenFX test host — what its files share, never used outside tests/ofxhost/: the objects
+ * behind the handles, the host and the per-graph-node instance, and the functions one file
+ * defines for the others (prefixed internal_). ofx_host.h is the host's interface; props.c has
+ * the property sets, image_effect.c the objects and the image effect suite, params.c the
+ * parameter suite, host_suites.c the other suites, bundle.c the loading and describing of the
+ * plug-ins, render.c the instances and the graph's render hook, main.c the command line.
+ *
+ * Objects. Every handle the plug-in sees points at an hprops (a property set) or at a struct
+ * that starts with one, tagged with a kind, so a wrong handle is caught instead of read as
+ * garbage: effects (plug-in descriptors, context descriptors, instances) double as param sets,
+ * and clips, params and images carry their own properties.
+ *
+ * Strictness. The host is lenient where hosts differ (unknown properties may be set) and strict
+ * where a mistake in the adapter would go unnoticed in a real host: getting a property of the
+ * wrong type, describing params that do not match the node descriptor, fetching a frame the
+ * plug-in did not declare in getFramesNeeded, a region of definition other than the frame, or
+ * an image not released by the end of an action all fail. */
+#ifndef NPRFX_TESTS_OFX_HOST_INTERNAL_H
+#define NPRFX_TESTS_OFX_HOST_INTERNAL_H
+
+#include <pthread.h>
+#include <stdint.h>
+
+#include "ofx/ofx_api.h"
+#include "ofx/ofx_names.h"
+#include "ofx_host.h"
+
+/* ---- property sets (props.c) ----------------------------------------------------------------- */
+
+typedef enum pkind { K_PLAIN = 1, K_EFFECT, K_CLIP, K_PARAM, K_IMAGE } pkind;
+typedef enum ptype { PT_INT, PT_DOUBLE, PT_STRING, PT_POINTER } ptype;
+
+typedef struct prop {
+    char *name;
+    ptype type;
+    int dim;
+    union {
+        int *i;
+        double *d;
+        char **s;
+        void **p;
+    } v;
+} prop;
+
+#define PROPS_MAGIC 0x6e70f0f0u /* "np" and a pattern: tags every live object */
+typedef struct hprops {
+    uint32_t magic;
+    pkind kind;
+    prop *items;
+    int count, cap;
+} hprops;
+
+void internal_props_init(hprops *p, pkind kind);
+void internal_props_free(hprops *p); /* the values; not p itself */
+/* The property set behind a handle, or NULL when it is none. */
+hprops *internal_props_of(OfxPropertySetHandle h);
+/* Copy every property of src into dst (dst's own values of the same names are replaced). */
+OfxStatus internal_props_copy(hprops *dst, const hprops *src);
+
+/* The property suite's functions, also called directly. */
+OfxStatus internal_set_pointer(OfxPropertySetHandle h, const char *name, int i, void *v);
+OfxStatus internal_set_string(OfxPropertySetHandle h, const char *name, int i, const char *v);
+OfxStatus internal_set_double(OfxPropertySetHandle h, const char *name, int i, double v);
+OfxStatus internal_set_int(OfxPropertySetHandle h, const char *name, int i, int v);
+OfxStatus internal_set_double_n(OfxPropertySetHandle h, const char *name, int n, const double *v);
+OfxStatus internal_set_int_n(OfxPropertySetHandle h, const char *name, int n, const int *v);
+OfxStatus internal_get_string(OfxPropertySetHandle h, const char *name, int i, char **v);
+OfxStatus internal_get_double(OfxPropertySetHandle h, const char *name, int i, double *v);
+OfxStatus internal_get_int(OfxPropertySetHandle h, const char *name, int i, int *v);
+OfxStatus internal_get_double_n(OfxPropertySetHandle h, const char *name, int n, double *v);
+
+/* Value i of a property, or the fallback when it is absent or of another type; its dimension. */
+const char *internal_pstr(hprops *p, const char *name, int i, const char *fallback);
+int internal_pint(hprops *p, const char *name, int i, int fallback);
+int internal_pdim(hprops *p, const char *name);
+
+extern const OfxPropertySuiteV1 internal_property_suite;
+
+/* ---- effects, clips, params, images (image_effect.c) ----------------------------------------- */
+
+struct node_inst;
+struct hplugin;
+
+typedef struct hparam {
+    hprops props; /* first: the param's handle is also its property set */
+    char *name, *type;
+    int i;
+    double d[4];
+    char *s;
+} hparam;
+
+typedef struct hclip {
+    hprops props;
+    char *name;
+    struct heffect *fx;
+    int input; /* node input index; -1 Output; -2 another clip (Mask) */
+} hclip;
+
+typedef struct heffect {
+    hprops props; /* first: getPropertySet and the param set's property set */
+    struct hplugin *pl;
+    hclip **clips;
+    int nclips;
+    hparam **params;
+    int nparams;
+    struct node_inst *ni; /* instances only */
+} heffect;
+
+typedef struct himage {
+    hprops props;
+    float *pixels;        /* owned; NULL for the output image, which points into its node's */
+    struct node_inst *ni; /* whose render handed it out */
+} himage;
+
+/* The object behind a handle, or NULL when it is none or of another kind. */
+heffect *internal_effect_of(const void *h);
+hparam *internal_param_of(const void *h);
+
+heffect *internal_effect_new(struct hplugin *pl, const char *type);
+void internal_effect_free(heffect *e); /* with its clips and params; NULL is ignored */
+/* The clip or param of that name, or NULL. */
+hclip *internal_effect_clip(const heffect *e, const char *name);
+hparam *internal_effect_param(const heffect *e, const char *name);
+/* A new clip or param of the effect (NULL: out of memory). */
+hclip *internal_clip_add(heffect *e, const char *name);
+hparam *internal_param_add(heffect *e, const char *type, const char *name);
+
+/* OFX pixel rectangle of an nprfx rectangle, flipped with y_up = f - y_down. */
+OfxRectI internal_ofx_rect(nprfx_rect r, int f);
+
+extern const OfxImageEffectSuiteV1 internal_image_effect_suite;
+
+/* ---- parameter suite (params.c) -------------------------------------------------------------- */
+
+/* Whether the param has OFX type t (kOfxParamType...). */
+int internal_type_is(const hparam *p, const char *t);
+/* Number of values (0: strings, pages, groups, buttons); *is_int: they are ints. */
+int internal_param_dims(const hparam *p, int *is_int);
+
+extern const OfxParameterSuiteV1 internal_parameter_suite;
+
+/* ---- the host (bundle.c) --------------------------------------------------------------------- */
+
+typedef struct hplugin {
+    OfxPlugin *p;
+    const nprfx_node_desc *desc; /* the node of this binary with the same identifier, or NULL */
+    int loaded;
+    heffect *descriptor, *general, *filter;
+} hplugin;
+
+struct nprfx_ofx_host {
+    nprfx_context *ctx;
+    const nprfx_executor *exec;
+    char *bundle, *binary;
+    void *dl;
+    int nplugins;
+    hplugin *plugins;
+    hprops props;
+    OfxHost ofx;
+    nprfx_render_hook hook;
+    pthread_mutex_t lock; /* clip image requests: the runner's fetch is not thread-safe */
+    char message[1024];   /* the plug-in's last error message */
+    int instances;
+};
+
+/* Suite functions get no user pointer: they reach the host through this, and one host per
+ * process keeps that unambiguous. */
+extern nprfx_ofx_host *internal_g_host; /* bundle.c */
+
+/* Per graph node: the instance and what the render in flight needs. */
+typedef struct node_inst {
+    nprfx_ofx_host *h;
+    hplugin *pl;
+    heffect *fx;
+    const nprfx_node_desc *desc;
+    const nprfx_render_args *args; /* set while the runner renders this node */
+    int frame_flip;                /* y_up = frame_flip - y_down for frame-aligned images */
+    double *need_lo, *need_hi;     /* per input: the frames getFramesNeeded declared */
+    int began;                     /* beginSequenceRender sent */
+    int *in_comps;                 /* per input clip: 4 RGBA, 1 Alpha */
+    int out_comps;                 /* Output clip components: 4 RGBA, 1 Alpha */
+    float *out_pixels;             /* the output image of the render in flight */
+    OfxRectI out_bounds;
+    int out_row_bytes;
+    int images; /* images handed out and not yet released */
+} node_inst;
+
+/* Send an action to a plug-in. */
+OfxStatus internal_call(hplugin *pl, const char *action, const void *handle, hprops *in,
+                        hprops *out);
+
+/* ---- suites (host_suites.c) and the render hook (render.c) ----------------------------------- */
+
+/* The host's fetchSuite. */
+const void *internal_fetch_suite(OfxPropertySetHandle host, const char *name, int version);
+
+/* The hook's functions (nprfx_render_hook): render a window of a graph node through its plug-in
+ * instance, created at its first render; destroy the instance. */
+nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void **slot);
+void internal_hook_release(void *user, const nprfx_node_desc *node, void *instance);
+
+#endif

@@ -1,0 +1,483 @@
+/* nprfx OpenFX test host — render driving, the graph's render hook: a plug-in instance per graph
+ * node created at its first render, params and channel selectors synced from the graph with the
+ * instance-changed actions of an edit, clip preferences, the region and frame queries a host
+ * makes, begin/endSequenceRender, then render of the window into a whole-frame output image
+ * that is copied back; release destroys the instance. */
+#define _POSIX_C_SOURCE 200809L /* strdup */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ofx_host_internal.h"
+
+/* ---- instances ------------------------------------------------------------------------------- */
+
+static void inst_free(node_inst *ni)
+{
+    if (!ni) return;
+    internal_effect_free(ni->fx);
+    free(ni->in_comps);
+    free(ni->need_lo);
+    free(ni->need_hi);
+    free(ni);
+}
+
+static hplugin *find_plugin(nprfx_ofx_host *h, const nprfx_node_desc *d)
+{
+    char id[NPRFX_OFX_NAME_MAX];
+    nprfx_ofx_plugin_id(d, id, sizeof id);
+    for (int i = 0; i < h->nplugins; i++)
+        if (h->plugins[i].p->pluginIdentifier && !strcmp(h->plugins[i].p->pluginIdentifier, id))
+            return &h->plugins[i];
+    return NULL;
+}
+
+/* The instance of a graph node, created at its first render from the General context: clips
+ * connected as the graph connects the node's inputs, params at their defaults. */
+static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, node_inst **out)
+{
+    const nprfx_node_desc *d = a->node;
+    hplugin *pl = find_plugin(h, d);
+    if (!pl || !pl->general)
+        return nprfx_error(a->ctx, NPRFX_ERR_UNKNOWN_NODE, "the bundle %s has no plug-in for %s",
+                           h->bundle, d->id);
+    node_inst *ni = calloc(1, sizeof *ni);
+    size_t ni_n = (size_t)d->num_inputs + 1;
+    if (!ni || !(ni->need_lo = calloc(ni_n, sizeof(double))) ||
+        !(ni->need_hi = calloc(ni_n, sizeof(double))) ||
+        !(ni->in_comps = calloc(ni_n, sizeof(int))) ||
+        !(ni->fx = internal_effect_new(pl, kOfxTypeImageEffectInstance))) {
+        inst_free(ni);
+        return nprfx_error(a->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    ni->h = h;
+    ni->pl = pl;
+    ni->desc = d;
+    ni->out_comps = 4;
+    /* The Filter context when the plug-in offers it and only the main input is connected (as
+     * a host would for a plain filter), so both contexts get exercised; General otherwise. */
+    int main = nprfx_ofx_main_input(d), filter = pl->filter != NULL;
+    for (int k = 0; k < d->num_inputs; k++)
+        filter &= k == main || !a->inputs[k].data;
+    heffect *e = ni->fx, *src = filter ? pl->filter : pl->general;
+    OfxStatus st = internal_props_copy(&e->props, &src->props);
+    OfxPropertySetHandle ep = (OfxPropertySetHandle)&e->props;
+    int w = nprfx_rect_width(a->frame), hgt = nprfx_rect_height(a->frame);
+    double s = a->render_scale;
+    internal_set_string(ep, kOfxPropType, 0, kOfxTypeImageEffectInstance);
+    internal_set_string(ep, kOfxImageEffectPropContext, 0,
+                        filter ? kOfxImageEffectContextFilter : kOfxImageEffectContextGeneral);
+    internal_set_pointer(ep, kOfxPropInstanceData, 0, NULL);
+    internal_set_pointer(ep, kOfxImageEffectPropPluginHandle, 0, pl->descriptor);
+    internal_set_double(ep, kOfxImageEffectPropProjectSize, 0, w / s);
+    internal_set_double(ep, kOfxImageEffectPropProjectSize, 1, hgt / s);
+    internal_set_double(ep, kOfxImageEffectPropProjectOffset, 0, a->frame.x0 / s);
+    internal_set_double(ep, kOfxImageEffectPropProjectOffset, 1, a->frame.y0 / s);
+    internal_set_double(ep, kOfxImageEffectPropProjectExtent, 0, a->frame.x1 / s);
+    internal_set_double(ep, kOfxImageEffectPropProjectExtent, 1, a->frame.y1 / s);
+    internal_set_double(ep, kOfxImageEffectPropProjectPixelAspectRatio, 0, 1.0);
+    internal_set_double(ep, kOfxImageEffectInstancePropEffectDuration, 0,
+                        (double)(a->last_frame - a->first_frame + 1));
+    internal_set_double(ep, kOfxImageEffectPropFrameRate, 0, 24.0);
+    internal_set_int(ep, kOfxPropIsInteractive, 0, 0);
+    e->ni = ni;
+    char name[NPRFX_OFX_NAME_MAX];
+    for (int i = 0; st == kOfxStatOK && i < src->nclips; i++) {
+        hclip *c = internal_clip_add(e, src->clips[i]->name);
+        if (!c || internal_props_copy(&c->props, &src->clips[i]->props) != kOfxStatOK) {
+            st = kOfxStatErrMemory;
+            break;
+        }
+        int connected = 0, alpha = 0;
+        if (!strcmp(c->name, NPRFX_OFX_OUTPUT_CLIP)) {
+            c->input = -1;
+            connected = 1;
+        }
+        for (int k = 0; k < d->num_inputs && c->input == -2; k++) {
+            nprfx_ofx_clip_name(d, k, name, sizeof name);
+            if (!strcmp(name, c->name)) {
+                c->input = k;
+                connected = a->inputs[k].data != NULL;
+                /* A 1-channel main input comes as Alpha, the other inputs as RGBA: both kinds
+                 * of host image reach the adapter, and a 1-channel result goes out as Alpha. */
+                alpha = connected && k == nprfx_ofx_main_input(d) && a->inputs[k].channels == 1;
+                ni->in_comps[k] = alpha ? 1 : 4;
+            }
+        }
+        OfxPropertySetHandle cp = (OfxPropertySetHandle)&c->props;
+        internal_set_int(cp, kOfxImageClipPropConnected, 0, connected);
+        const char *comps = !connected ? kOfxImageComponentNone
+                            : alpha    ? kOfxImageComponentAlpha
+                                       : kOfxImageComponentRGBA;
+        internal_set_string(cp, kOfxImageEffectPropComponents, 0, comps);
+        internal_set_string(cp, kOfxImageClipPropUnmappedComponents, 0, comps);
+        internal_set_string(cp, kOfxImageEffectPropPixelDepth, 0,
+                            connected ? kOfxBitDepthFloat : kOfxBitDepthNone);
+        internal_set_string(cp, kOfxImageClipPropUnmappedPixelDepth, 0,
+                            connected ? kOfxBitDepthFloat : kOfxBitDepthNone);
+        internal_set_string(cp, kOfxImageEffectPropPreMultiplication, 0, kOfxImageUnPreMultiplied);
+        internal_set_double(cp, kOfxImagePropPixelAspectRatio, 0, 1.0);
+        internal_set_double(cp, kOfxImageEffectPropFrameRate, 0, 24.0);
+        internal_set_double(cp, kOfxImageEffectPropUnmappedFrameRate, 0, 24.0);
+        internal_set_double(cp, kOfxImageEffectPropFrameRange, 0, a->first_frame);
+        internal_set_double(cp, kOfxImageEffectPropFrameRange, 1, a->last_frame);
+        internal_set_double(cp, kOfxImageEffectPropUnmappedFrameRange, 0, a->first_frame);
+        internal_set_double(cp, kOfxImageEffectPropUnmappedFrameRange, 1, a->last_frame);
+        internal_set_string(cp, kOfxImageClipPropFieldOrder, 0, kOfxImageFieldNone);
+        internal_set_int(cp, kOfxImageClipPropContinuousSamples, 0, 0);
+    }
+    for (int i = 0; st == kOfxStatOK && i < src->nparams; i++) {
+        const hparam *sp = src->params[i];
+        hparam *p = internal_param_add(e, sp->type, sp->name);
+        if (!p || internal_props_copy(&p->props, &sp->props) != kOfxStatOK) {
+            st = kOfxStatErrMemory;
+            break;
+        }
+        OfxPropertySetHandle pp = (OfxPropertySetHandle)&p->props;
+        internal_set_string(pp, kOfxPropType, 0, kOfxTypeParameterInstance);
+        int is_int, n = internal_param_dims(p, &is_int);
+        char *sv;
+        if (internal_type_is(p, kOfxParamTypeString) &&
+            internal_get_string(pp, kOfxParamPropDefault, 0, &sv) == kOfxStatOK) {
+            free(p->s);
+            p->s = strdup(sv);
+        } else if (n == 1 && is_int) {
+            internal_get_int(pp, kOfxParamPropDefault, 0, &p->i);
+        } else {
+            for (int c = 0; c < n; c++)
+                internal_get_double(pp, kOfxParamPropDefault, c, &p->d[c]);
+        }
+    }
+    if (st != kOfxStatOK) {
+        inst_free(ni);
+        return nprfx_error(a->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    ni->args = a;
+    ni->frame_flip = a->frame.y0 + a->frame.y1 - 1;
+    st = internal_call(pl, kOfxActionCreateInstance, e, NULL, NULL);
+    ni->args = NULL;
+    if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+        inst_free(ni);
+        return nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: createInstance failed (%d): %s",
+                           pl->p->pluginIdentifier, st, h->message);
+    }
+    h->instances++;
+    *out = ni;
+    return NPRFX_OK;
+}
+
+/* Set instance param `p` to the graph's value; returns 1 when it changed. */
+static int param_assign(hparam *p, const nprfx_param_desc *pd, const nprfx_value *v)
+{
+    switch (pd->type) {
+    case NPRFX_PARAM_DOUBLE:
+        if (p->d[0] == v->v[0]) return 0;
+        p->d[0] = v->v[0];
+        return 1;
+    case NPRFX_PARAM_COLOR:
+        if (!memcmp(p->d, v->v, sizeof p->d)) return 0;
+        memcpy(p->d, v->v, sizeof p->d);
+        return 1;
+    case NPRFX_PARAM_STRING: {
+        const char *s = v->s ? v->s : "";
+        char *copy;
+        if (!strcmp(p->s, s) || !(copy = strdup(s))) return 0;
+        free(p->s);
+        p->s = copy;
+        return 1;
+    }
+    default:
+        if (p->i == (int)v->v[0]) return 0;
+        p->i = (int)v->v[0];
+        return 1;
+    }
+}
+
+static void set_change_args(hprops *in, const nprfx_render_args *a, const char *type,
+                            const char *name)
+{
+    OfxPropertySetHandle p = (OfxPropertySetHandle)in;
+    internal_set_string(p, kOfxPropChangeReason, 0, kOfxChangeUserEdited);
+    if (!type) return;
+    internal_set_string(p, kOfxPropType, 0, type);
+    internal_set_string(p, kOfxPropName, 0, name);
+    internal_set_double(p, kOfxPropTime, 0, a->time);
+    internal_set_double(p, kOfxImageEffectPropRenderScale, 0, a->render_scale);
+    internal_set_double(p, kOfxImageEffectPropRenderScale, 1, a->render_scale);
+}
+
+/* Params and channel selectors from the graph, with the instance-changed actions a host sends
+ * for edits; then the clip preferences they imply. */
+static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int first)
+{
+    const nprfx_node_desc *d = ni->desc;
+    heffect *e = ni->fx;
+    const char *id = ni->pl->p->pluginIdentifier;
+    char **changed = calloc((size_t)(d->num_params + d->num_inputs) + 1, sizeof *changed);
+    int nchanged = 0;
+    nprfx_result r = NPRFX_OK;
+    if (!changed) return nprfx_error(a->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    for (int i = 0; i < d->num_params; i++) {
+        const nprfx_param_desc *pd = &d->params[i];
+        hparam *p = internal_effect_param(e, pd->name);
+        if (!p) {
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: no param %s", id, pd->name);
+            goto done;
+        }
+        /* The runner's values have the render scale applied; OFX params hold full-resolution
+         * values and the adapter applies the scale itself. */
+        nprfx_value v = a->params[i];
+        if (a->render_scale != 1.0 && (pd->flags & NPRFX_PARAM_PIXELS)) v.v[0] /= a->render_scale;
+        if (a->render_scale != 1.0 && (pd->flags & NPRFX_PARAM_AREA))
+            v.v[0] /= a->render_scale * a->render_scale;
+        if (param_assign(p, pd, &v)) changed[nchanged++] = p->name;
+    }
+    char name[NPRFX_OFX_NAME_MAX];
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (!a->inputs[k].data) continue;
+        int n = a->inputs[k].channels;
+        int opt = nprfx_ofx_selector_find(&d->inputs[k], 0, n);
+        if (n > 4 || opt < 0) {
+            r = nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
+                            "input '%s' has %d channels: an OFX clip carries 1 to 4 (RGBA)",
+                            d->inputs[k].name, n);
+            goto done;
+        }
+        nprfx_ofx_selector_name(d, k, name, sizeof name);
+        hparam *p = internal_effect_param(e, name);
+        if (!p) {
+            int opts[NPRFX_OFX_CHAN_OPTIONS];
+            if (nprfx_ofx_selector_options(&d->inputs[k], opts) > 1) {
+                r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: no selector %s", id, name);
+                goto done;
+            }
+            continue;
+        }
+        if (p->i != opt) {
+            p->i = opt;
+            changed[nchanged++] = p->name;
+        }
+    }
+    if (nchanged) { /* after creation too: as a user editing a fresh node */
+        hprops in;
+        internal_props_init(&in, K_PLAIN);
+        set_change_args(&in, a, NULL, NULL);
+        OfxStatus st = internal_call(ni->pl, kOfxActionBeginInstanceChanged, e, &in, NULL);
+        for (int i = 0; i < nchanged && (st == kOfxStatOK || st == kOfxStatReplyDefault); i++) {
+            set_change_args(&in, a, kOfxTypeParameter, changed[i]);
+            st = internal_call(ni->pl, kOfxActionInstanceChanged, e, &in, NULL);
+        }
+        internal_props_free(&in);
+        internal_props_init(&in, K_PLAIN);
+        set_change_args(&in, a, NULL, NULL);
+        if (st == kOfxStatOK || st == kOfxStatReplyDefault)
+            st = internal_call(ni->pl, kOfxActionEndInstanceChanged, e, &in, NULL);
+        internal_props_free(&in);
+        if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: instanceChanged failed (%d)", id, st);
+            goto done;
+        }
+    }
+    if (nchanged || first) {
+        hprops out;
+        internal_props_init(&out, K_PLAIN);
+        OfxStatus st =
+            internal_call(ni->pl, kOfxImageEffectActionGetClipPreferences, e, NULL, &out);
+        if (st == kOfxStatOK) {
+            char key[NPRFX_OFX_NAME_MAX + 32];
+            snprintf(key, sizeof key, "%s%s", kOfxImageClipPropComponentsPrefix,
+                     NPRFX_OFX_OUTPUT_CLIP);
+            const char *comps = internal_pstr(&out, key, 0, kOfxImageComponentRGBA);
+            ni->out_comps = !strcmp(comps, kOfxImageComponentAlpha) ? 1 : 4;
+            hclip *oc = internal_effect_clip(e, NPRFX_OFX_OUTPUT_CLIP);
+            internal_set_string((OfxPropertySetHandle)&oc->props, kOfxImageEffectPropComponents, 0,
+                                ni->out_comps == 1 ? kOfxImageComponentAlpha
+                                                   : kOfxImageComponentRGBA);
+            internal_set_string((OfxPropertySetHandle)&oc->props,
+                                kOfxImageEffectPropPreMultiplication, 0,
+                                internal_pstr(&out, kOfxImageEffectPropPreMultiplication, 0,
+                                              kOfxImageUnPreMultiplied));
+        } else if (st != kOfxStatReplyDefault) {
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: getClipPreferences failed (%d)", id,
+                            st);
+        }
+        internal_props_free(&out);
+    }
+done:
+    free(changed);
+    return r;
+}
+
+/* getRegionOfDefinition must give the runner's frame; getFramesNeeded bounds what the render
+ * may fetch; getRegionsOfInterest is asked as a host would. */
+static nprfx_result query_regions(node_inst *ni, const nprfx_render_args *a)
+{
+    const nprfx_node_desc *d = ni->desc;
+    const char *id = ni->pl->p->pluginIdentifier;
+    heffect *e = ni->fx;
+    double s = a->render_scale;
+    hprops in, out;
+    internal_props_init(&in, K_PLAIN);
+    internal_props_init(&out, K_PLAIN);
+    OfxPropertySetHandle ip = (OfxPropertySetHandle)&in;
+    internal_set_double(ip, kOfxPropTime, 0, a->time);
+    internal_set_double(ip, kOfxImageEffectPropRenderScale, 0, s);
+    internal_set_double(ip, kOfxImageEffectPropRenderScale, 1, s);
+    nprfx_result r = NPRFX_OK;
+    OfxStatus st = internal_call(ni->pl, kOfxImageEffectActionGetRegionOfDefinition, e, &in, &out);
+    double rod[4];
+    OfxRectI fr = internal_ofx_rect(a->frame, ni->frame_flip);
+    if (st != kOfxStatOK ||
+        internal_get_double_n((OfxPropertySetHandle)&out, kOfxImageEffectPropRegionOfDefinition, 4,
+                              rod) ||
+        rod[0] * s != fr.x1 || rod[1] * s != fr.y1 || rod[2] * s != fr.x2 || rod[3] * s != fr.y2) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL,
+                        "%s: getRegionOfDefinition (status %d) does not give the frame %d,%d-%d,%d",
+                        id, st, fr.x1, fr.y1, fr.x2, fr.y2);
+        goto done;
+    }
+    internal_props_free(&out);
+    internal_props_init(&out, K_PLAIN);
+    double roi[4] = {fr.x1 / s, fr.y1 / s, fr.x2 / s, fr.y2 / s};
+    internal_set_double_n(ip, kOfxImageEffectPropRegionOfInterest, 4, roi);
+    st = internal_call(ni->pl, kOfxImageEffectActionGetRegionsOfInterest, e, &in, &out);
+    if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: getRegionsOfInterest failed (%d)", id, st);
+        goto done;
+    }
+    internal_props_free(&out);
+    internal_props_init(&out, K_PLAIN);
+    st = internal_call(ni->pl, kOfxImageEffectActionGetFramesNeeded, e, &in, &out);
+    if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: getFramesNeeded failed (%d)", id, st);
+        goto done;
+    }
+    char key[NPRFX_OFX_NAME_MAX + 32], name[NPRFX_OFX_NAME_MAX];
+    for (int k = 0; k < d->num_inputs; k++) {
+        nprfx_ofx_clip_name(d, k, name, sizeof name);
+        snprintf(key, sizeof key, "%s%s", kOfxImageClipPropFrameRangePrefix, name);
+        int n = st == kOfxStatOK ? internal_pdim(&out, key) : 0;
+        ni->need_lo[k] = ni->need_hi[k] = a->time; /* the default: the frame itself */
+        for (int j = 0; j + 1 < n; j += 2) {
+            double lo = a->time, hi = a->time;
+            internal_get_double((OfxPropertySetHandle)&out, key, j, &lo);
+            internal_get_double((OfxPropertySetHandle)&out, key, j + 1, &hi);
+            if (lo < ni->need_lo[k]) ni->need_lo[k] = lo;
+            if (hi > ni->need_hi[k]) ni->need_hi[k] = hi;
+        }
+    }
+done:
+    internal_props_free(&in);
+    internal_props_free(&out);
+    return r;
+}
+
+nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void **slot)
+{
+    nprfx_ofx_host *h = user;
+    node_inst *ni = *slot;
+    nprfx_result r;
+    int first = 0;
+    if (!ni) {
+        if ((r = inst_create(h, a, &ni))) return r;
+        *slot = ni;
+        first = 1;
+    }
+    const char *id = ni->pl->p->pluginIdentifier;
+    h->message[0] = 0;
+    ni->args = a;
+    ni->frame_flip = a->frame.y0 + a->frame.y1 - 1;
+    if ((r = sync_params(ni, a, first)) || (r = query_regions(ni, a))) goto done;
+    double s = a->render_scale;
+    hprops in;
+    internal_props_init(&in, K_PLAIN);
+    OfxPropertySetHandle ip = (OfxPropertySetHandle)&in;
+    internal_set_double(ip, kOfxImageEffectPropRenderScale, 0, s);
+    internal_set_double(ip, kOfxImageEffectPropRenderScale, 1, s);
+    internal_set_int(ip, kOfxPropIsInteractive, 0, 0);
+    if (!ni->began) {
+        internal_set_double(ip, kOfxImageEffectPropFrameRange, 0, a->first_frame);
+        internal_set_double(ip, kOfxImageEffectPropFrameRange, 1, a->last_frame);
+        internal_set_double(ip, kOfxImageEffectPropFrameStep, 0, 1.0);
+        OfxStatus st =
+            internal_call(ni->pl, kOfxImageEffectActionBeginSequenceRender, ni->fx, &in, NULL);
+        if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+            internal_props_free(&in);
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: beginSequenceRender failed (%d)", id,
+                            st);
+            goto done;
+        }
+        ni->began = 1;
+    }
+    /* The output image covers the whole frame while the window may be one tile, so the adapter
+     * meets bounds that differ from the render window. */
+    OfxRectI ob = internal_ofx_rect(a->frame, ni->frame_flip);
+    OfxRectI win = internal_ofx_rect(a->window, ni->frame_flip);
+    int w = ob.x2 - ob.x1, hgt = ob.y2 - ob.y1;
+    ni->out_bounds = ob;
+    ni->out_row_bytes = w * ni->out_comps * (int)sizeof(float);
+    ni->out_pixels =
+        calloc((size_t)w * (size_t)(hgt > 0 ? hgt : 1) * (size_t)ni->out_comps, sizeof(float));
+    if (!ni->out_pixels) {
+        internal_props_free(&in);
+        r = nprfx_error(a->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        goto done;
+    }
+    int wv[4] = {win.x1, win.y1, win.x2, win.y2};
+    internal_set_double(ip, kOfxPropTime, 0, a->time);
+    internal_set_string(ip, kOfxImageEffectPropFieldToRender, 0, kOfxImageFieldNone);
+    internal_set_int_n(ip, kOfxImageEffectPropRenderWindow, 4, wv);
+    internal_set_int(ip, kOfxImageEffectPropSequentialRenderStatus, 0, 1);
+    internal_set_int(ip, kOfxImageEffectPropInteractiveRenderStatus, 0, 0);
+    ni->images = 0;
+    OfxStatus st = internal_call(ni->pl, kOfxImageEffectActionRender, ni->fx, &in, NULL);
+    internal_props_free(&in);
+    if (st != kOfxStatOK) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s render failed (OFX status %d)%s%s", id, st,
+                        h->message[0] ? ": " : "", h->message);
+        goto done;
+    }
+    if (ni->images) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: %d clip images not released by render", id,
+                        ni->images);
+        goto done;
+    }
+    int nout = a->output->channels;
+    if (ni->out_comps == 1 && nout != 1) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: Alpha output for %d channels", id, nout);
+        goto done;
+    }
+    for (int y = a->window.y0; y < a->window.y1; y++)
+        for (int x = a->window.x0; x < a->window.x1; x++) {
+            const float *s_px = ni->out_pixels + ((size_t)(ni->frame_flip - y - ob.y1) * (size_t)w +
+                                                  (size_t)(x - ob.x1)) *
+                                                     (size_t)ni->out_comps;
+            float *d_px = nprfx_image_at(a->output, x, y);
+            for (int c = 0; c < nout && c < 4; c++)
+                d_px[c] = s_px[c];
+        }
+done:
+    free(ni->out_pixels);
+    ni->out_pixels = NULL;
+    ni->args = NULL;
+    (void)first;
+    return r;
+}
+
+void internal_hook_release(void *user, const nprfx_node_desc *node, void *instance)
+{
+    (void)node;
+    nprfx_ofx_host *h = user;
+    node_inst *ni = instance;
+    if (!ni) return;
+    if (ni->began) {
+        hprops in;
+        internal_props_init(&in, K_PLAIN);
+        internal_set_int((OfxPropertySetHandle)&in, kOfxPropIsInteractive, 0, 0);
+        (void)internal_call(ni->pl, kOfxImageEffectActionEndSequenceRender, ni->fx, &in, NULL);
+        internal_props_free(&in);
+    }
+    (void)internal_call(ni->pl, kOfxActionDestroyInstance, ni->fx, NULL, NULL);
+    h->instances--;
+    inst_free(ni);
+}
