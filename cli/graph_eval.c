@@ -1,0 +1,527 @@
+/* nprfx CLI — graph evaluation: the per-(node, frame) result cache with its byte bound and
+ * least-recently-used eviction, reading plates (with motion-vector conventions), synthetic
+ * plates, and running processing nodes through nprfx_node_render (or the render hook), with
+ * temporal inputs fetched through the same cache and pinned while a render call uses them. */
+#define _DEFAULT_SOURCE
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "channels.h"
+#include "graph.h"
+#include "io.h"
+#include "nprfx/nprfx.h"
+#include "seq.h"
+#include "internal_graph.h"
+
+/* ---------------------------------------------------------------- cache ---- */
+
+static void cache_unlink(nprfx_graph *g, centry *e)
+{
+    if (e->prev)
+        e->prev->next = e->next;
+    else
+        g->head = e->next;
+    if (e->next) e->next->prev = e->prev;
+    e->prev = e->next = NULL;
+}
+
+static void cache_push_front(nprfx_graph *g, centry *e)
+{
+    e->prev = NULL;
+    e->next = g->head;
+    if (g->head) g->head->prev = e;
+    g->head = e;
+}
+
+static centry *cache_find(nprfx_graph *g, int node, int frame)
+{
+    for (centry *e = g->head; e; e = e->next)
+        if (e->node == node && e->frame == frame) {
+            cache_unlink(g, e);
+            cache_push_front(g, e);
+            return e;
+        }
+    return NULL;
+}
+
+static void cache_evict(nprfx_graph *g)
+{
+    centry *e = g->head;
+    while (e && e->next)
+        e = e->next; /* least recently used is last */
+    while (e && g->cache_bytes > g->cache_limit) {
+        centry *prev = e->prev;
+        if (e->pins == 0 && e != g->head) {
+            cache_unlink(g, e);
+            g->cache_bytes -= e->bytes;
+            internal_graph_centry_free(e);
+        }
+        e = prev;
+    }
+}
+
+/* Take ownership of im and names (names: nc malloc'd strings). */
+static centry *cache_insert(nprfx_graph *g, int node, int frame, nprfx_image *im, char **names)
+{
+    centry *e = calloc(1, sizeof *e);
+    if (!e) return NULL;
+    e->node = node;
+    e->frame = frame;
+    e->im = *im;
+    e->names = names;
+    e->bytes = (size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
+               (size_t)im->channels * sizeof(float);
+    memset(im, 0, sizeof *im);
+    cache_push_front(g, e);
+    g->cache_bytes += e->bytes;
+    cache_evict(g);
+    return e;
+}
+
+/* ---------------------------------------------------------------- evaluation ---- */
+
+char **internal_graph_names_dup(const char *const *names, int n)
+{
+    char **d = calloc((size_t)n, sizeof *d);
+    for (int i = 0; d && i < n; i++)
+        d[i] = internal_graph_strdup(names[i] ? names[i] : "C");
+    return d;
+}
+
+void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const char *pattern,
+                                 int frame, char *buf, size_t n)
+{
+    char expanded[4096];
+    if (nprfx_seq_expand(NULL, pattern, frame, expanded, sizeof expanded))
+        snprintf(expanded, sizeof expanded, "%s", pattern);
+    if (expanded[0] == '/' || !dir || !dir[0] || !strcmp(dir, "."))
+        snprintf(buf, n, "%s", expanded);
+    else
+        snprintf(buf, n, "%s/%s", dir, expanded);
+    (void)g;
+}
+
+/* The motion-vector conventions a read node can map onto nprfx's (DESIGN.md §2: pixels, y down,
+ * motion_prev points to where the surface point was at frame-1). */
+typedef struct vec_convention {
+    const char *name;
+    const char *layer; /* channels to look for: prev.x, prev.y, next.x, next.y */
+    double sign[4];    /* multipliers applied to those channels */
+} vec_convention;
+/* Blender's Vector pass (measured on the sample renders, see samples/plates/README.md), image y
+ * up: (X, Y) = position at frame i-1 minus position at i; (Z, W) = position at i minus position
+ * at i+1. So motion_prev = (X, -Y) and motion_next = (-Z, W). Nuke's backward/forward vectors
+ * point from this frame to the previous/next one, y up. */
+static const vec_convention vec_conventions[] = {
+    {"blender", "Vector.X,Vector.Y,Vector.Z,Vector.W", {1, -1, -1, 1}},
+    {"nuke", "backward.u,backward.v,forward.u,forward.v", {1, -1, 1, -1}},
+};
+
+static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *file,
+                                        nprfx_plate *plate)
+{
+    const vec_convention *vc = NULL;
+    for (size_t i = 0; i < sizeof vec_conventions / sizeof vec_conventions[0]; i++)
+        if (!strcmp(n->vectors, vec_conventions[i].name)) vc = &vec_conventions[i];
+    if (!vc)
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
+                           "node '%s': vectors '%s' is not one of: none, blender, nuke", n->name,
+                           n->vectors);
+    int idx[4], amb;
+    char bad[256];
+    if (nprfx_channels_select((const char *const *)plate->names, plate->nchannels, vc->layer, idx,
+                              4, bad, sizeof bad, &amb) != 4)
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "node '%s': %s has no %s channel '%s' for vectors=%s", n->name, file,
+                           amb ? "unique" : "", bad, n->vectors);
+    int nc = plate->nchannels, nn = nc + 4;
+    size_t npix =
+        (size_t)nprfx_rect_width(plate->bounds) * (size_t)nprfx_rect_height(plate->bounds);
+    float *px = malloc(npix * (size_t)nn * sizeof(float));
+    char **names = realloc(plate->names, (size_t)nn * sizeof *names);
+    if (!px || !names) {
+        free(px);
+        if (names) plate->names = names;
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
+    }
+    plate->names = names;
+    static const char *const mnames[4] = {"motion_prev.X", "motion_prev.Y", "motion_next.X",
+                                          "motion_next.Y"};
+    for (int k = 0; k < 4; k++)
+        names[nc + k] = internal_graph_strdup(mnames[k]);
+    for (size_t p = 0; p < npix; p++) {
+        const float *s = plate->pixels + p * (size_t)nc;
+        float *d = px + p * (size_t)nn;
+        memcpy(d, s, (size_t)nc * sizeof(float));
+        for (int k = 0; k < 4; k++) {
+            float v = s[idx[k]] * (float)vc->sign[k];
+            d[nc + k] = isfinite(v) ? v : 0.0f;
+        }
+    }
+    free(plate->pixels);
+    plate->pixels = px;
+    plate->nchannels = nn;
+    return NPRFX_OK;
+}
+
+static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
+{
+    gnode *n = &g->nodes[node];
+    char file[4096];
+    internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
+    nprfx_plate plate;
+    memset(&plate, 0, sizeof plate);
+    nprfx_result r = nprfx_io_read(n->ctx, file, &plate);
+    if (r) return r;
+    if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, &plate))) {
+        nprfx_plate_free(&plate);
+        return r;
+    }
+    if (n->colorspace) {
+        int idx[3], amb;
+        char bad[64];
+        if (nprfx_channels_select((const char *const *)plate.names, plate.nchannels, "R,G,B", idx,
+                                  3, bad, sizeof bad, &amb) == 3 &&
+            idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
+            nprfx_image rgb = nprfx_plate_view(&plate, idx[0], 3);
+            nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
+            r = nprfx_context_create_scoped(n->ctx, file, &fctx);
+            if (!r)
+                r = nprfx_io_convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+            nprfx_context_destroy(fctx);
+            if (r) {
+                nprfx_plate_free(&plate);
+                return r;
+            }
+        }
+    }
+    im->data = plate.pixels;
+    im->channels = plate.nchannels;
+    im->pixel_stride = plate.nchannels;
+    im->row_stride = (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels;
+    im->bounds = plate.bounds;
+    *names = plate.names;
+    plate.pixels = NULL;
+    plate.names = NULL;
+    plate.nchannels = 0;
+    nprfx_plate_free(&plate);
+    return NPRFX_OK;
+}
+
+static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
+{
+    gnode *n = &g->nodes[node];
+    int nc = nprfx_synth_channel_count();
+    nprfx_result r = nprfx_image_alloc(g->ctx, nprfx_rect_make(0, 0, n->width, n->height), nc, im);
+    if (r) return r;
+    if ((r = nprfx_synth_render(n->ctx, n->scene, frame, im))) {
+        nprfx_image_free(im);
+        return r;
+    }
+    *names = internal_graph_names_dup(nprfx_synth_channel_names(), nc);
+    return *names ? NPRFX_OK : nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+}
+
+/* Pick the channels of entry e that input k of node n uses; the view shares e's pixels when
+ * they are adjacent, else points into *scratch (malloc'd, caller frees). */
+nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
+                                         nprfx_image *view, float **scratch)
+{
+    const gref *ref = &n->inputs[k];
+    const nprfx_input_desc *in = n->kind == GK_NODE ? &n->desc->inputs[k] : NULL;
+    const char *iname = in ? in->name : "image";
+    const char *src = g->nodes[ref->src].name;
+    const char *const *names = (const char *const *)e->names;
+    int nc = e->im.channels, idx[256], count = -1;
+    char bad[256];
+    int amb = 0;
+    if (ref->sel) {
+        count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
+        if (count < 0) {
+            char list[1024] = "";
+            for (int c = 0; c < nc && strlen(list) < 900; c++) {
+                if (c) strcat(list, " ");
+                strncat(list, names[c], sizeof list - strlen(list) - 1);
+            }
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': input '%s': '%s' %s in '%s' (channels: %s)", n->name,
+                               iname, bad, amb ? "matches several channels" : "is not a channel",
+                               src, list);
+        }
+    } else if (in && in->aov) {
+        count = nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
+        if (count < 0 && nc <= 4 && (in->channels == 0 || in->channels == nc)) {
+            count = nc;
+            for (int c = 0; c < nc; c++)
+                idx[c] = c;
+        }
+        if (count < 0)
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': input '%s': '%s' has no channel matching %s; name the "
+                               "channels, e.g. \"%s:CHANNELS\"",
+                               n->name, iname, src, in->aov, src);
+    } else if (nc <= 4 || !in) {
+        count = nc < 256 ? nc : 256; /* a write takes everything */
+        for (int c = 0; c < count; c++)
+            idx[c] = c;
+    } else {
+        count = nprfx_channels_from_hint(names, nc, "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx,
+                                         NPRFX_MAX_CHANNELS + 1);
+        if (count < 0)
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': input '%s': '%s' has %d channels and no R,G,B; name "
+                               "the channels to use, e.g. \"%s:R,G,B\"",
+                               n->name, iname, src, nc, src);
+    }
+    if (in) {
+        if (in->channels > 0 && count != in->channels)
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': input '%s' needs %d channel%s, '%s%s%s' gives %d",
+                               n->name, iname, in->channels, in->channels > 1 ? "s" : "", src,
+                               ref->sel ? ":" : "", ref->sel ? ref->sel : "", count);
+        if (in->channels == 0 && count > 4)
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': input '%s' takes 1 to 4 channels, '%s%s%s' gives %d",
+                               n->name, iname, src, ref->sel ? ":" : "", ref->sel ? ref->sel : "",
+                               count);
+    }
+    if (count < 1)
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "node '%s': input '%s' selects no channels", n->name, iname);
+    int contiguous = 1;
+    for (int c = 1; c < count; c++)
+        contiguous &= idx[c] == idx[0] + c;
+    /* A few channels out of a wide plate are packed anyway: nodes then stream through memory
+     * instead of striding over the channels they do not use. */
+    if (contiguous && nc <= 2 * count) {
+        *view = nprfx_image_channels(&e->im, idx[0], count);
+        return NPRFX_OK;
+    }
+    nprfx_image tmp;
+    nprfx_result r = nprfx_image_alloc(g->ctx, e->im.bounds, count, &tmp);
+    if (r) return r;
+    for (int y = tmp.bounds.y0; y < tmp.bounds.y1; y++)
+        for (int x = tmp.bounds.x0; x < tmp.bounds.x1; x++) {
+            const float *s = nprfx_image_at(&e->im, x, y);
+            float *d = nprfx_image_at(&tmp, x, y);
+            for (int c = 0; c < count; c++)
+                d[c] = s[idx[c]];
+        }
+    *scratch = tmp.data;
+    *view = tmp;
+    return NPRFX_OK;
+}
+
+/* Per-render bookkeeping. The node's own inputs at the current frame stay pinned for the whole
+ * render call; frames it fetches go into a ring of NPRFX_FETCH_KEEP * 2 slots, so a long
+ * recursion can fetch any number of frames while the most recent ones stay valid. */
+typedef struct pin_slot {
+    centry *e;
+    float *scratch;
+} pin_slot;
+#define RING (NPRFX_FETCH_KEEP * 2)
+typedef struct render_frame {
+    nprfx_graph *g;
+    int node;
+    pin_slot base[32];
+    int nbase;
+    pin_slot ring[RING];
+    long nfetch;
+} render_frame;
+
+static void slot_release(pin_slot *s)
+{
+    if (s->e) s->e->pins--;
+    free(s->scratch);
+    s->e = NULL;
+    s->scratch = NULL;
+}
+
+static void render_frame_release(render_frame *rf)
+{
+    for (int i = 0; i < rf->nbase; i++)
+        slot_release(&rf->base[i]);
+    for (int i = 0; i < RING; i++)
+        slot_release(&rf->ring[i]);
+    rf->nbase = 0;
+    cache_evict(rf->g);
+}
+
+static nprfx_result fetch_input(render_frame *rf, int k, int frame, int base, nprfx_image *out)
+{
+    nprfx_graph *g = rf->g;
+    const gnode *n = &g->nodes[rf->node];
+    if (k < 0 || k >= n->ninputs || n->inputs[k].src < 0)
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "node '%s': input '%s' is not connected", n->name,
+                           k >= 0 && k < n->ninputs ? n->desc->inputs[k].name : "?");
+    pin_slot *slot = base ? &rf->base[rf->nbase++] : &rf->ring[rf->nfetch++ % RING];
+    slot_release(slot);
+    centry *e;
+    nprfx_result r = internal_graph_eval(g, n->inputs[k].src, frame, &e);
+    if (r) return r;
+    e->pins++;
+    slot->e = e;
+    return internal_graph_select_input(g, n, k, e, out, &slot->scratch);
+}
+
+static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *out)
+{
+    return fetch_input(user, input, (int)(time < 0 ? time - 0.5 : time + 0.5), 0, out);
+}
+
+/* Write the node's per-frame export (NPRFX_PARAM_EXPORT param set, desc->export_text given),
+ * relative to the output directory like write nodes, through a temporary name. */
+static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_args *a, int frame)
+{
+    const nprfx_node_desc *d = n->desc;
+    if (!d->export_text) return NPRFX_OK;
+    for (int i = 0; i < d->num_params; i++) {
+        if (!(d->params[i].flags & NPRFX_PARAM_EXPORT) || !n->params[i].s || !n->params[i].s[0])
+            continue;
+        char path[4096];
+        internal_graph_resolve_path(g, g->out_dir, n->params[i].s, frame, path, sizeof path);
+        char *text = NULL;
+        size_t len = 0;
+        a->window = a->frame;
+        char what[4200];
+        snprintf(what, sizeof what, "export to %s", path);
+        nprfx_context *ectx = NULL;
+        nprfx_result r = nprfx_context_create_scoped(n->ctx, what, &ectx);
+        if (!r) {
+            a->ctx = ectx;
+            r = nprfx_node_export(a, path, &text, &len);
+            a->ctx = n->ctx;
+        }
+        if (!r) r = nprfx_io_write_text(ectx, path, text, len);
+        nprfx_context_destroy(ectx);
+        free(text);
+        if (r) return r;
+    }
+    return NPRFX_OK;
+}
+
+static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
+{
+    gnode *n = &g->nodes[node];
+    const nprfx_node_desc *d = n->desc;
+    render_frame rf;
+    memset(&rf, 0, sizeof rf);
+    rf.g = g;
+    rf.node = node;
+    nprfx_image inputs[32];
+    int in_ch[32];
+    memset(inputs, 0, sizeof inputs);
+    memset(in_ch, 0, sizeof in_ch);
+    nprfx_result r = NPRFX_OK;
+    if (d->num_inputs > 32) return nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "too many inputs");
+    nprfx_rect frame_rect = {0, 0, 0, 0};
+    int have_rect = 0, first_input = -1;
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (n->inputs[k].src < 0) continue;
+        if ((r = fetch_input(&rf, k, frame, 1, &inputs[k]))) goto done;
+        in_ch[k] = inputs[k].channels;
+        if (d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) continue; /* e.g. a lookup map */
+        if (!have_rect) {
+            frame_rect = inputs[k].bounds;
+            have_rect = 1;
+            first_input = k;
+        } else if (!nprfx_rect_equal(frame_rect, inputs[k].bounds)) {
+            r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
+                            "node '%s': input '%s' is %dx%d but input '%s' is %dx%d at frame %d",
+                            n->name, d->inputs[k].name, nprfx_rect_width(inputs[k].bounds),
+                            nprfx_rect_height(inputs[k].bounds), d->inputs[first_input].name,
+                            nprfx_rect_width(frame_rect), nprfx_rect_height(frame_rect), frame);
+            goto done;
+        }
+    }
+    if (!have_rect) {
+        int w = 0, h = 0;
+        if (!g->fmt_text || sscanf(g->fmt_text, "%dx%d", &w, &h) != 2) {
+            r = nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                            "node '%s' has no input connected: give the graph a \"format\": "
+                            "\"WxH\"",
+                            n->name);
+            goto done;
+        }
+        frame_rect = nprfx_rect_make(0, 0, w, h);
+    }
+    nprfx_output_info oi;
+    if ((r = nprfx_node_output_info(n->ctx, d, n->params, in_ch, &oi))) goto done;
+    if ((r = nprfx_image_alloc(g->ctx, frame_rect, oi.channels, im))) goto done;
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = n->ctx;
+    a.node = d;
+    a.time = frame;
+    a.render_scale = 1.0;
+    a.frame = frame_rect;
+    a.first_frame = g->first_frame;
+    a.last_frame = g->last_frame;
+    a.inputs = inputs;
+    a.params = n->params;
+    a.output = im;
+    a.fetch = fetch_cb;
+    a.fetch_user = &rf;
+    a.state = &n->state;
+    a.items = &g->render_items;
+    int tile = g->tile > 0 ? g->tile : 1 << 30;
+    double t0 = internal_graph_now();
+    for (int ty = frame_rect.y0; ty < frame_rect.y1 && !r; ty += tile)
+        for (int tx = frame_rect.x0; tx < frame_rect.x1 && !r; tx += tile) {
+            a.window = nprfx_rect_intersect(
+                frame_rect, nprfx_rect_make(tx, ty, tx + (tile < (1 << 29) ? tile : frame_rect.x1),
+                                            ty + (tile < (1 << 29) ? tile : frame_rect.y1)));
+            r = g->has_hook ? g->hook.render(g->hook.user, &a, &n->instance)
+                            : nprfx_node_render(&a);
+        }
+    g->render_seconds += internal_graph_now() - t0;
+    if (!r) r = export_node(g, n, &a, frame);
+    if (r) { /* the message went out through n->ctx, naming the node */
+        nprfx_image_free(im);
+        goto done;
+    }
+    *names = internal_graph_names_dup(oi.names, oi.channels);
+done:
+    render_frame_release(&rf);
+    return r;
+}
+
+nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out)
+{
+    centry *e = cache_find(g, node, frame);
+    if (e) {
+        *out = e;
+        return NPRFX_OK;
+    }
+    nprfx_image im;
+    memset(&im, 0, sizeof im);
+    char **names = NULL;
+    nprfx_result r;
+    switch (g->nodes[node].kind) {
+    case GK_READ:
+        r = eval_read(g, node, frame, &im, &names);
+        break;
+    case GK_SYNTH:
+        r = eval_synth(g, node, frame, &im, &names);
+        break;
+    case GK_NODE:
+        r = eval_node(g, node, frame, &im, &names);
+        break;
+    default:
+        r = nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "write nodes have no output");
+        break;
+    }
+    if (r) return r;
+    e = cache_insert(g, node, frame, &im, names);
+    if (!e) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    *out = e;
+    return NPRFX_OK;
+}

@@ -1,0 +1,175 @@
+/* nprfx CLI — the graph's outputs: write nodes (EXR and preview through temporary names, never
+ * onto one of the graph's inputs), rendering a frame, and the small queries the runner and bench
+ * use. */
+#define _DEFAULT_SOURCE
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "channels.h"
+#include "graph.h"
+#include "io.h"
+#include "nprfx/nprfx.h"
+#include "seq.h"
+#include "internal_graph.h"
+
+/* Index list of the channels a preview shows: R,G,B,A when present, else the first <= 4. */
+static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **names,
+                                 nprfx_image *view, float **scratch)
+{
+    int idx[4];
+    int k = nprfx_channels_from_hint((const char *const *)names, im->channels,
+                                     "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx, 4);
+    if (k < 0) {
+        k = im->channels < 4 ? im->channels : 3;
+        for (int c = 0; c < k; c++)
+            idx[c] = c;
+    }
+    nprfx_result r = nprfx_image_alloc(g->ctx, im->bounds, k, view);
+    if (r) return r;
+    for (int y = im->bounds.y0; y < im->bounds.y1; y++)
+        for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
+            const float *s = nprfx_image_at(im, x, y);
+            float *d = nprfx_image_at(view, x, y);
+            for (int c = 0; c < k; c++)
+                d[c] = s[idx[c]];
+        }
+    *scratch = view->data;
+    return NPRFX_OK;
+}
+
+/* Refuse to write over a file some read node of the graph takes as input at this frame: inputs
+ * are never overwritten, even by a graph that names the same sequence twice. */
+static nprfx_result check_not_input(nprfx_graph *g, const gnode *w, const char *out, int frame)
+{
+    char in[4096], rin[PATH_MAX], rout[PATH_MAX];
+    if (!realpath(out, rout)) return NPRFX_OK; /* does not exist yet: cannot be an input */
+    for (int i = 0; i < g->count; i++) {
+        if (g->nodes[i].kind != GK_READ) continue;
+        internal_graph_resolve_path(g, g->base_dir, g->nodes[i].path, frame, in, sizeof in);
+        if (realpath(in, rin) && !strcmp(rin, rout))
+            return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "node '%s': refusing to overwrite '%s', the input of read node '%s'",
+                               w->name, out, g->nodes[i].name);
+    }
+    return NPRFX_OK;
+}
+
+static nprfx_result write_node(nprfx_graph *g, int node, int frame)
+{
+    gnode *n = &g->nodes[node];
+    centry *e;
+    nprfx_result r = internal_graph_eval(g, n->inputs[0].src, frame, &e);
+    if (r) return r;
+    e->pins++;
+    nprfx_image view;
+    float *scratch = NULL;
+    r = internal_graph_select_input(g, n, 0, e, &view, &scratch);
+    char **names = e->names;
+    char **sel_names = NULL;
+    if (!r && n->inputs[0].sel) {
+        /* names of the selected channels, in selection order */
+        int idx[256], amb;
+        char bad[64];
+        int k = nprfx_channels_select((const char *const *)e->names, e->im.channels,
+                                      n->inputs[0].sel, idx, 256, bad, sizeof bad, &amb);
+        sel_names = calloc((size_t)(k > 0 ? k : 1), sizeof *sel_names);
+        for (int c = 0; sel_names && c < k; c++)
+            sel_names[c] = e->names[idx[c]];
+        names = sel_names;
+    }
+    char path[4096];
+    if (!r) {
+        internal_graph_resolve_path(g, g->out_dir, n->path, frame, path, sizeof path);
+        r = check_not_input(g, n, path, frame);
+    }
+    if (!r) {
+        nprfx_write_options wo = {sizeof wo, n->compression ? n->compression : "zip", n->half};
+        r = nprfx_io_write(n->ctx, path, &view, (const char *const *)names, NULL, &wo);
+    }
+    if (!r && n->preview) {
+        nprfx_image pv;
+        float *pscratch = NULL;
+        internal_graph_resolve_path(g, g->out_dir, n->preview, frame, path, sizeof path);
+        r = check_not_input(g, n, path, frame);
+        if (!r) r = preview_view(g, &view, names, &pv, &pscratch);
+        if (!r) {
+            nprfx_preview_options po = {sizeof po,  g->ocio, n->colorspace,
+                                        n->display, n->view, n->raw};
+            r = nprfx_io_write_preview(n->ctx, path, &pv, &po);
+        }
+        free(pscratch);
+    }
+    free(sel_names);
+    free(scratch);
+    e->pins--;
+    return r;
+}
+
+nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written)
+{
+    *written = 0;
+    for (int i = 0; i < g->count; i++) {
+        if (g->nodes[i].kind != GK_WRITE) continue;
+        nprfx_result r = write_node(g, i, frame);
+        if (r) return r;
+        (*written)++;
+    }
+    return NPRFX_OK;
+}
+
+void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n)
+{
+    buf[0] = 0;
+    for (int i = 0; i < g->count; i++) {
+        const gnode *w = &g->nodes[i];
+        if (w->kind != GK_WRITE) continue;
+        size_t len = strlen(buf);
+        const char *dir = g->out_dir ? g->out_dir : "";
+        const char *sep = dir[0] ? "/" : "";
+        if (w->preview)
+            snprintf(buf + len, n - len, "  %s%s%s  (previews %s%s%s)\n", dir, sep, w->path, dir,
+                     sep, w->preview);
+        else
+            snprintf(buf + len, n - len, "  %s%s%s\n", dir, sep, w->path);
+    }
+}
+
+long long nprfx_graph_take_render_items(nprfx_graph *g)
+{
+    long long n = g->render_items;
+    g->render_items = 0;
+    return n;
+}
+
+double nprfx_graph_take_render_seconds(nprfx_graph *g)
+{
+    double s = g->render_seconds;
+    g->render_seconds = 0;
+    return s;
+}
+
+int nprfx_graph_write_count(const nprfx_graph *g)
+{
+    int writes = 0;
+    for (int i = 0; i < g->count; i++)
+        writes += g->nodes[i].kind == GK_WRITE;
+    return writes;
+}
+
+nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out)
+{
+    int i = internal_graph_find_node(g, name);
+    if (i < 0 || g->nodes[i].kind == GK_WRITE)
+        return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to evaluate",
+                           name);
+    centry *e;
+    nprfx_result r = internal_graph_eval(g, i, frame, &e);
+    if (!r) *out = e->im;
+    return r;
+}
