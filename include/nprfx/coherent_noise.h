@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "nprfx/image.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -60,12 +61,12 @@ typedef struct nprfx_cn_params {
     double motion_scale; /* motion vectors are multiplied by this (render scale); 1 normally */
 } nprfx_cn_params;
 
-void nprfx_cn_params_default(nprfx_cn_params *p);
+NPRFX_API void nprfx_cn_params_default(nprfx_cn_params *p);
 /* Range checks; the message names the offending field. */
-nprfx_result nprfx_cn_params_check(nprfx_context *ctx, const nprfx_cn_params *p);
+NPRFX_API nprfx_result nprfx_cn_params_check(nprfx_context *ctx, const nprfx_cn_params *p);
 
 /* k(alpha) = sqrt((1 - alpha) / (1 + alpha)) (Eq. 6). */
-double nprfx_cn_k(double alpha);
+NPRFX_API double nprfx_cn_k(double alpha);
 
 /* One pass's state at one frame, covering the whole frame rectangle. */
 typedef struct nprfx_cn_state {
@@ -73,13 +74,13 @@ typedef struct nprfx_cn_state {
     unsigned char *fresh; /* per pixel (row-major over value.bounds): 1 where the pass restarted */
 } nprfx_cn_state;
 
-nprfx_result nprfx_cn_state_alloc(nprfx_context *ctx, nprfx_rect frame, int channels,
-                                  nprfx_cn_state *out);
-void nprfx_cn_state_free(nprfx_cn_state *s);
+NPRFX_API nprfx_result nprfx_cn_state_alloc(nprfx_context *ctx, nprfx_rect frame, int channels,
+                                            nprfx_cn_state *out);
+NPRFX_API void nprfx_cn_state_free(nprfx_cn_state *s);
 /* Row-parallel over ctx's executor. */
-nprfx_result nprfx_cn_state_copy(nprfx_context *ctx, const nprfx_cn_state *src,
-                                 nprfx_cn_state *dst);
-size_t nprfx_cn_state_bytes(nprfx_rect frame, int channels);
+NPRFX_API nprfx_result nprfx_cn_state_copy(nprfx_context *ctx, const nprfx_cn_state *src,
+                                           nprfx_cn_state *dst);
+NPRFX_API size_t nprfx_cn_state_bytes(nprfx_rect frame, int channels);
 
 /* What one step reads (views may have any bounds; reads outside them clamp to the edge). */
 typedef struct nprfx_cn_inputs {
@@ -94,13 +95,13 @@ typedef struct nprfx_cn_inputs {
  * for every pixel of out->bounds, which may reach outside the frame (the noise is an unbounded
  * counter-based field). out->channels channels; channel c is independent of the others. Stream 0 is
  * the paper's w_i; other streams give independent fields. */
-nprfx_result nprfx_cn_noise_fill(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
-                                 uint32_t stream, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_cn_noise_fill(nprfx_context *ctx, const nprfx_cn_params *p,
+                                           int64_t frame, uint32_t stream, nprfx_image *out);
 
 /* The first frame of a pass: u = w (noise) or the source (input mode); fresh everywhere.
  * out must be allocated over the frame with p->channels. */
-nprfx_result nprfx_cn_begin(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
-                            const nprfx_image *source, nprfx_cn_state *out);
+NPRFX_API nprfx_result nprfx_cn_begin(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
+                                      const nprfx_image *source, nprfx_cn_state *out);
 
 /* One recursion step of a pass in `direction` from prev (frame - direction) to `frame`.
  * out and prev must be distinct states over the same frame.
@@ -109,24 +110,24 @@ nprfx_result nprfx_cn_begin(nprfx_context *ctx, const nprfx_cn_params *p, int64_
  * noise is filtered as whole fields first. The result does not depend on the executor, the CPU's
  * vector width or the states' memory layout (vector and scalar code do the same float operations
  * in the same order). */
-nprfx_result nprfx_cn_step(nprfx_context *ctx, const nprfx_cn_params *p, int direction,
-                           int64_t frame, const nprfx_cn_inputs *in, const nprfx_cn_state *prev,
-                           nprfx_cn_state *out);
+NPRFX_API nprfx_result nprfx_cn_step(nprfx_context *ctx, const nprfx_cn_params *p, int direction,
+                                     int64_t frame, const nprfx_cn_inputs *in,
+                                     const nprfx_cn_state *prev, nprfx_cn_state *out);
 
 /* The node's value at `frame` from the passes' states (bwd NULL: causal). Noise: unit variance,
  * C = (u_f + u_b - g w) / sqrt(1 + alpha^2) with g = sqrt(1 - alpha^2), or 2 - sqrt(1 + alpha^2)
  * where both passes restarted (Eq. 11 in unit form, keeping the variance 1 there too).
  * Input mode: (c_f + c_b - (1 - alpha) s) / (1 + alpha), unit gain. out: over the frame. */
-nprfx_result nprfx_cn_combine(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
-                              const nprfx_cn_state *fwd, const nprfx_cn_state *bwd,
-                              const nprfx_image *source, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_cn_combine(nprfx_context *ctx, const nprfx_cn_params *p, int64_t frame,
+                                        const nprfx_cn_state *fwd, const nprfx_cn_state *bwd,
+                                        const nprfx_image *source, nprfx_image *out);
 
 /* Post-smoothing: Gaussian blur of sigma (edge pixels repeated), and for noise the analytic gain
  * that brings a field with the innovation's spectrum back to unit variance. In place. */
-nprfx_result nprfx_cn_smooth(nprfx_context *ctx, const nprfx_cn_params *p, double sigma,
-                             nprfx_image *img);
+NPRFX_API nprfx_result nprfx_cn_smooth(nprfx_context *ctx, const nprfx_cn_params *p, double sigma,
+                                       nprfx_image *img);
 /* The variance of a unit innovation field after a Gaussian blur of sigma (1 when sigma is 0). */
-double nprfx_cn_smoothed_variance(const nprfx_cn_params *p, double sigma);
+NPRFX_API double nprfx_cn_smoothed_variance(const nprfx_cn_params *p, double sigma);
 
 #ifdef __cplusplus
 }

@@ -7,6 +7,7 @@
 
 #include "nprfx/exec.h"
 #include "nprfx/result.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -28,37 +29,38 @@ typedef struct nprfx_context_init {
         sizeof(nprfx_context_init), NULL, NULL, NULL, NULL                                         \
     }
 
-nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context **out);
-void nprfx_context_destroy(nprfx_context *ctx);
+NPRFX_API nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context **out);
+NPRFX_API void nprfx_context_destroy(nprfx_context *ctx);
 
 /* A context that raises its errors through `parent` with `prefix` and ": " before the message
  * ("node 'toon'" gives "node 'toon': blend: input 'layer' is not connected"), so a layer adds
  * what it knows without catching and re-raising. It shares the parent's executor and data
  * directory; the prefix is copied. Destroy it before the parent. */
-nprfx_result nprfx_context_create_scoped(nprfx_context *parent, const char *prefix,
-                                         nprfx_context **out);
+NPRFX_API nprfx_result nprfx_context_create_scoped(nprfx_context *parent, const char *prefix,
+                                                   nprfx_context **out);
 
 /* The data directory given at creation, or NULL. */
-const char *nprfx_context_data_dir(const nprfx_context *ctx);
+NPRFX_API const char *nprfx_context_data_dir(const nprfx_context *ctx);
 
 /* The executor given at creation (never NULL: a serial one when none was given). */
-const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);
+NPRFX_API const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);
 
 /* Raise an error: formats the message, hands it to the handler once (through the scopes' prefixes
  * up to the root context), keeps a copy in each context it passes, and returns `code` so callers
  * can write `return nprfx_error(ctx, ...)`. ctx may be NULL (the message is then dropped). Safe
  * from several threads. */
-nprfx_result nprfx_error(nprfx_context *ctx, nprfx_result code, const char *fmt, ...)
+NPRFX_API nprfx_result nprfx_error(nprfx_context *ctx, nprfx_result code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
-nprfx_result nprfx_verror(nprfx_context *ctx, nprfx_result code, const char *fmt, va_list ap);
+NPRFX_API nprfx_result nprfx_verror(nprfx_context *ctx, nprfx_result code, const char *fmt,
+                                    va_list ap);
 
 /* Copy the last message raised through ctx (with the prefixes of ctx and its parents as far as
  * ctx; "" when none) into buf (size bytes, always terminated); returns that error's code, or
  * NPRFX_OK when none was raised. Safe from several threads. */
-nprfx_result nprfx_context_last_error(const nprfx_context *ctx, char *buf, size_t size);
+NPRFX_API nprfx_result nprfx_context_last_error(const nprfx_context *ctx, char *buf, size_t size);
 
 #ifdef __cplusplus
 }

@@ -7,6 +7,7 @@
 #define NPRFX_EXEC_H
 
 #include "nprfx/result.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -27,15 +28,15 @@ typedef struct nprfx_executor {
 } nprfx_executor;
 
 /* Convenience: ex may be NULL (serial). */
-void nprfx_parallel_for(const nprfx_executor *ex, int count, int grain, nprfx_range_fn fn,
-                        void *user);
-int nprfx_executor_workers(const nprfx_executor *ex);
+NPRFX_API void nprfx_parallel_for(const nprfx_executor *ex, int count, int grain, nprfx_range_fn fn,
+                                  void *user);
+NPRFX_API int nprfx_executor_workers(const nprfx_executor *ex);
 
 /* A pthread pool. threads <= 0 means the number of online CPUs. */
 typedef struct nprfx_pool nprfx_pool;
-nprfx_result nprfx_pool_create(int threads, nprfx_pool **out);
-void nprfx_pool_destroy(nprfx_pool *pool);
-const nprfx_executor *nprfx_pool_executor(nprfx_pool *pool);
+NPRFX_API nprfx_result nprfx_pool_create(int threads, nprfx_pool **out);
+NPRFX_API void nprfx_pool_destroy(nprfx_pool *pool);
+NPRFX_API const nprfx_executor *nprfx_pool_executor(nprfx_pool *pool);
 
 #ifdef __cplusplus
 }

@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "nprfx/image.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -84,7 +85,7 @@ typedef struct nprfx_gabor_params {
 
 /* Defaults: pref anchors, F0 0.1 cycles/px, w0 0, anisotropic, r 16 px, N0 32, seed 0, h0 1,
  * W 4, hard depth test at 5%, no supersampling, uniform amplitudes, unit output, contrast 0.15. */
-void nprfx_gabor_params_default(nprfx_gabor_params *p);
+NPRFX_API void nprfx_gabor_params_default(nprfx_gabor_params *p);
 
 typedef struct nprfx_gabor_inputs {
     size_t size;                    /* sizeof(nprfx_gabor_inputs) */
@@ -104,26 +105,27 @@ typedef struct nprfx_gabor_stats {
 } nprfx_gabor_stats;
 
 /* Kernel bandwidth a for a truncation radius r (pixels). */
-double nprfx_gabor_bandwidth(double radius);
+NPRFX_API double nprfx_gabor_bandwidth(double radius);
 
 /* Theoretical variance of the un-normalised sum at frequency F0 * frequency_scale:
  * lambda E[v^2] (1 / (4 a^2)) (1 + exp(-2 pi F^2 / a^2)) times the truncation factor
  * (1 - 0.05^2) and, with supersampling, the box filter's attenuation of the spectrum. */
-double nprfx_gabor_variance(const nprfx_gabor_params *p, double frequency_scale);
+NPRFX_API double nprfx_gabor_variance(const nprfx_gabor_params *p, double frequency_scale);
 
 /* The level-of-detail rule. mu is the wanted density in points per level-0 cell area
  * (D h0^2 with D = lambda / |det J|); level l has 4^l points per level-0 cell area. Writes the
  * squared weights of levels first, first+1, ... into w2 (at most max) and returns their count
  * (levels past the count have weight 0). sum_l w2 * 4^l = mu for mu up to 4^40. */
-int nprfx_gabor_lod_weights(double mu, int lod_levels, int *first_level, double *w2, int max);
+NPRFX_API int nprfx_gabor_lod_weights(double mu, int lod_levels, int *first_level, double *w2,
+                                      int max);
 
 /* Render the window of out (channel 0 the noise; channel 1 the point weights when p->points;
  * out->channels must be 1 + points). The inputs are read over their bounds; pixels of the
  * window outside them are written as background (0, or 0.5 for unit01). Work is spread over
  * the context's executor. stats may be NULL. */
-nprfx_result nprfx_gabor_render(nprfx_context *ctx, const nprfx_gabor_params *p,
-                                const nprfx_gabor_inputs *in, nprfx_rect window, nprfx_image *out,
-                                nprfx_gabor_stats *stats);
+NPRFX_API nprfx_result nprfx_gabor_render(nprfx_context *ctx, const nprfx_gabor_params *p,
+                                          const nprfx_gabor_inputs *in, nprfx_rect window,
+                                          nprfx_image *out, nprfx_gabor_stats *stats);
 
 #ifdef __cplusplus
 }

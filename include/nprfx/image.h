@@ -11,6 +11,7 @@
 #include <stddef.h>
 
 #include "nprfx/context.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -52,8 +53,8 @@ static inline nprfx_rect nprfx_rect_make(int x0, int y0, int x1, int y1)
     nprfx_rect r = {x0, y0, x1, y1};
     return r;
 }
-nprfx_rect nprfx_rect_intersect(nprfx_rect a, nprfx_rect b);
-int nprfx_rect_equal(nprfx_rect a, nprfx_rect b);
+NPRFX_API nprfx_rect nprfx_rect_intersect(nprfx_rect a, nprfx_rect b);
+NPRFX_API int nprfx_rect_equal(nprfx_rect a, nprfx_rect b);
 
 /* Pointer to channel 0 of pixel (x, y); (x, y) must lie inside bounds. */
 static inline float *nprfx_image_at(const nprfx_image *im, int x, int y)
@@ -63,19 +64,20 @@ static inline float *nprfx_image_at(const nprfx_image *im, int x, int y)
 }
 
 /* Allocate a packed, zeroed image (pixel_stride = channels, row_stride = width * channels). */
-nprfx_result nprfx_image_alloc(nprfx_context *ctx, nprfx_rect bounds, int channels,
-                               nprfx_image *out);
+NPRFX_API nprfx_result nprfx_image_alloc(nprfx_context *ctx, nprfx_rect bounds, int channels,
+                                         nprfx_image *out);
 /* Free pixels from nprfx_image_alloc and reset the view; safe on a zeroed view. */
-void nprfx_image_free(nprfx_image *im);
+NPRFX_API void nprfx_image_free(nprfx_image *im);
 
 /* A view of `count` channels starting at `first` of im (shares pixels). */
-nprfx_image nprfx_image_channels(const nprfx_image *im, int first, int count);
+NPRFX_API nprfx_image nprfx_image_channels(const nprfx_image *im, int first, int count);
 /* A view restricted to rect (must lie inside im->bounds; shares pixels). */
-nprfx_image nprfx_image_crop(const nprfx_image *im, nprfx_rect rect);
+NPRFX_API nprfx_image nprfx_image_crop(const nprfx_image *im, nprfx_rect rect);
 
 /* Copy the overlap of src and dst (channel counts must match). */
-nprfx_result nprfx_image_copy(nprfx_context *ctx, const nprfx_image *src, nprfx_image *dst);
-void nprfx_image_fill(nprfx_image *im, const float *value /* channels values */);
+NPRFX_API nprfx_result nprfx_image_copy(nprfx_context *ctx, const nprfx_image *src,
+                                        nprfx_image *dst);
+NPRFX_API void nprfx_image_fill(nprfx_image *im, const float *value /* channels values */);
 
 /* Border handling for sampling and filtering outside bounds. */
 typedef enum nprfx_border {

@@ -19,6 +19,7 @@
 #include <stdint.h>
 
 #include "nprfx/context.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -34,7 +35,8 @@ extern "C" {
  * k >= ~16, radius[k] * sqrt(k + 1) stays within about [0.75, 0.9].
  *
  * Cost: O(n log n) time, about 150 bytes per point of transient memory. */
-nprfx_result nprfx_ivs_generate(nprfx_context *ctx, uint64_t seed, int n, float *xy, float *radius);
+NPRFX_API nprfx_result nprfx_ivs_generate(nprfx_context *ctx, uint64_t seed, int n, float *xy,
+                                          float *radius);
 
 /* ---- the encoded form (a shipped data file) ----
  *
@@ -53,22 +55,22 @@ nprfx_result nprfx_ivs_generate(nprfx_context *ctx, uint64_t seed, int n, float 
 #define NPRFX_IVS_FORMAT_VERSION 1
 
 /* Bytes nprfx_ivs_encode writes for n points. */
-size_t nprfx_ivs_encoded_size(int n);
+NPRFX_API size_t nprfx_ivs_encoded_size(int n);
 
 /* Encode n points (xy as from nprfx_ivs_generate) into buf, which must hold
  * nprfx_ivs_encoded_size(n) bytes. */
-nprfx_result nprfx_ivs_encode(nprfx_context *ctx, uint64_t seed, int n, const float *xy,
-                              unsigned char *buf, size_t buf_size);
+NPRFX_API nprfx_result nprfx_ivs_encode(nprfx_context *ctx, uint64_t seed, int n, const float *xy,
+                                        unsigned char *buf, size_t buf_size);
 
 /* Round n points (2 * n floats in [0, 1]) to the encoded form's grid, as encoding then decoding
  * them would: q / 2^24 with q the nearest integer to v * 2^24, 1.0 wrapping to 0. */
-void nprfx_ivs_quantize(float *xy, int n);
+NPRFX_API void nprfx_ivs_quantize(float *xy, int n);
 
 /* Decode and validate an encoded sequence (magic, version, bit depth, size, hash). On success
  * *xy_out is a malloc'd array of 2 * *n_out floats the caller frees; seed_out may be NULL. On
  * failure nothing is allocated and the error names what is wrong. */
-nprfx_result nprfx_ivs_decode(nprfx_context *ctx, const unsigned char *buf, size_t size,
-                              uint64_t *seed_out, int *n_out, float **xy_out);
+NPRFX_API nprfx_result nprfx_ivs_decode(nprfx_context *ctx, const unsigned char *buf, size_t size,
+                                        uint64_t *seed_out, int *n_out, float **xy_out);
 
 /* ---- the spatial index ----
  *
@@ -80,13 +82,13 @@ nprfx_result nprfx_ivs_decode(nprfx_context *ctx, const unsigned char *buf, size
 typedef struct nprfx_ivs_index nprfx_ivs_index;
 
 /* Build the index over n points (xy as from nprfx_ivs_generate; copied). */
-nprfx_result nprfx_ivs_index_create(nprfx_context *ctx, const float *xy, int n,
-                                    nprfx_ivs_index **out);
-void nprfx_ivs_index_destroy(nprfx_ivs_index *index);
+NPRFX_API nprfx_result nprfx_ivs_index_create(nprfx_context *ctx, const float *xy, int n,
+                                              nprfx_ivs_index **out);
+NPRFX_API void nprfx_ivs_index_destroy(nprfx_ivs_index *index);
 /* Number of points indexed. */
-int nprfx_ivs_index_count(const nprfx_ivs_index *index);
+NPRFX_API int nprfx_ivs_index_count(const nprfx_ivs_index *index);
 /* Point k (0-based) of the sequence; xy must hold 2 floats. */
-void nprfx_ivs_index_point(const nprfx_ivs_index *index, int k, float *xy);
+NPRFX_API void nprfx_ivs_index_point(const nprfx_ivs_index *index, int k, float *xy);
 
 /* Called once per sample found: its 0-based index and its position (u, v) in the unbounded plane
  * (the torus point plus the integer tile it was found in). Return nonzero to stop the query. */
@@ -96,8 +98,9 @@ typedef int (*nprfx_ivs_visit_fn)(void *user, int index, double u, double v);
  * the plane with period 1, lies in [u0, u1) x [v0, v1). limit is clamped to the indexed count.
  * Samples are visited in a fixed order for a given query (by tile, then cell, then index).
  * Returns the number of samples visited. Thread-safe: the index is read-only. */
-long long nprfx_ivs_index_query(const nprfx_ivs_index *index, int limit, double u0, double v0,
-                                double u1, double v1, nprfx_ivs_visit_fn visit, void *user);
+NPRFX_API long long nprfx_ivs_index_query(const nprfx_ivs_index *index, int limit, double u0,
+                                          double v0, double u1, double v1, nprfx_ivs_visit_fn visit,
+                                          void *user);
 
 /* Samples at most handed to a batch callback at once. */
 #define NPRFX_IVS_BATCH 64
@@ -111,8 +114,9 @@ typedef int (*nprfx_ivs_batch_fn)(void *user, int n, const int32_t *index, const
  * callers whose work per sample is small next to a call (fn may be NULL: count only). The same
  * samples in the same order. Returns the number found, including those of the batch after which
  * fn stopped the query. */
-long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *index, int limit, double u0, double v0,
-                                      double u1, double v1, nprfx_ivs_batch_fn fn, void *user);
+NPRFX_API long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *index, int limit, double u0,
+                                                double v0, double u1, double v1,
+                                                nprfx_ivs_batch_fn fn, void *user);
 
 #ifdef __cplusplus
 }

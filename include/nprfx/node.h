@@ -9,6 +9,7 @@
 #include <stddef.h>
 
 #include "nprfx/image.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -195,55 +196,57 @@ static inline const nprfx_image *nprfx_render_input(const nprfx_render_args *arg
  *  - the output has the channels nprfx_node_output_info gives for these params and inputs;
  *  - every param value has its type and lies in its hard range;
  * and fills the node's typed params struct. Errors name the node, input or param. */
-nprfx_result nprfx_node_render(const nprfx_render_args *args);
+NPRFX_API nprfx_result nprfx_node_render(const nprfx_render_args *args);
 
 /* The node's text export of a whole frame (desc->export_text), with the same checks and binding
  * as nprfx_node_render. NPRFX_ERR_UNSUPPORTED when the node has none. */
-nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path, char **text,
-                               size_t *len);
+NPRFX_API nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path,
+                                         char **text, size_t *len);
 
 /* Check a descriptor for mistakes a compiler cannot see: names unique and well formed, help and
  * labels present, defaults inside the hard range and the soft range inside it, choice lists that
  * match their range, typed fields inside params_size and not overlapping. The first problem is
  * raised on ctx. */
-nprfx_result nprfx_node_lint(nprfx_context *ctx, const nprfx_node_desc *node);
+NPRFX_API nprfx_result nprfx_node_lint(nprfx_context *ctx, const nprfx_node_desc *node);
 
 /* ---- descriptor helpers (core/node.c) ---- */
 
-int nprfx_node_param_index(const nprfx_node_desc *node, const char *name);
-int nprfx_node_input_index(const nprfx_node_desc *node, const char *name);
+NPRFX_API int nprfx_node_param_index(const nprfx_node_desc *node, const char *name);
+NPRFX_API int nprfx_node_input_index(const nprfx_node_desc *node, const char *name);
 
 /* Fill values[num_params] with the defaults. */
-void nprfx_node_defaults(const nprfx_node_desc *node, nprfx_value *values);
+NPRFX_API void nprfx_node_defaults(const nprfx_node_desc *node, nprfx_value *values);
 
 /* Parse text into a value for param p of node, checking type, choice names and hard range.
  * Errors name the node and param ("blend.opacity: 1.5 is outside [0, 1]"). STRING values point
  * into `text`, which must outlive the value. Colours take 1, 3 or 4 numbers separated by ',' or
  * spaces. */
-nprfx_result nprfx_param_parse(nprfx_context *ctx, const nprfx_node_desc *node,
-                               const nprfx_param_desc *p, const char *text, nprfx_value *out);
+NPRFX_API nprfx_result nprfx_param_parse(nprfx_context *ctx, const nprfx_node_desc *node,
+                                         const nprfx_param_desc *p, const char *text,
+                                         nprfx_value *out);
 /* Check a value (e.g. from a JSON number) against the param's type and hard range. */
-nprfx_result nprfx_param_check(nprfx_context *ctx, const nprfx_node_desc *node,
-                               const nprfx_param_desc *p, const nprfx_value *v);
+NPRFX_API nprfx_result nprfx_param_check(nprfx_context *ctx, const nprfx_node_desc *node,
+                                         const nprfx_param_desc *p, const nprfx_value *v);
 /* Format a value as nprfx_param_parse reads it. Returns buf. */
-char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value *v, char *buf, size_t n);
-const char *nprfx_param_type_name(nprfx_param_type t);
+NPRFX_API char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value *v, char *buf,
+                                   size_t n);
+NPRFX_API const char *nprfx_param_type_name(nprfx_param_type t);
 
 /* Output description for params/inputs, applying the output_channels rule and default names
  * (1: Y; 2: R,G; 3: R,G,B; 4: R,G,B,A). */
-nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *node,
-                                    const nprfx_value *params, const int *input_channels,
-                                    nprfx_output_info *out);
+NPRFX_API nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *node,
+                                              const nprfx_value *params, const int *input_channels,
+                                              nprfx_output_info *out);
 
 /* Scale pixel/area params by the render scale (OFX proxies). In-place on values. */
-void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *values,
-                                   double render_scale);
+NPRFX_API void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *values,
+                                             double render_scale);
 
 /* ---- the registry (plugins/, generated list) ---- */
 
-int nprfx_node_count(void);
-const nprfx_node_desc *nprfx_node_at(int index);
-const nprfx_node_desc *nprfx_node_find(const char *id);
+NPRFX_API int nprfx_node_count(void);
+NPRFX_API const nprfx_node_desc *nprfx_node_at(int index);
+NPRFX_API const nprfx_node_desc *nprfx_node_find(const char *id);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,8 @@
 #include <stdarg.h>
 #include <stddef.h>
 
+#include "nprfx/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -33,7 +35,7 @@ enum nprfx_result_code {
 };
 
 /* A short stable name for a code ("missing-input"); never NULL. */
-const char *nprfx_result_name(nprfx_result code);
+NPRFX_API const char *nprfx_result_name(nprfx_result code);
 
 typedef struct nprfx_context nprfx_context;
 

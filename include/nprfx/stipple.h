@@ -35,6 +35,7 @@
 
 #include "nprfx/image.h"
 #include "nprfx/ivs.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -92,11 +93,11 @@ typedef struct nprfx_stipple_params {
 #define NPRFX_STIPPLE_CURVE_SIZE 17
 
 /* Defaults matching the stipple node's. */
-void nprfx_stipple_params_default(nprfx_stipple_params *p);
+NPRFX_API void nprfx_stipple_params_default(nprfx_stipple_params *p);
 
 /* Parse a pen-tone list ("0.3, 0.6, 1") into p->tones / p->num_tones. */
-nprfx_result nprfx_stipple_parse_tones(nprfx_context *ctx, const char *text,
-                                       nprfx_stipple_params *p);
+NPRFX_API nprfx_result nprfx_stipple_parse_tones(nprfx_context *ctx, const char *text,
+                                                 nprfx_stipple_params *p);
 
 /* Tone correction. The paper's thresholds put down ink area g per unit area, but dots that
  * overlap cover less than their summed area, so dark tones come out light (by up to ~0.15 in
@@ -105,8 +106,8 @@ nprfx_result nprfx_stipple_parse_tones(nprfx_context *ctx, const char *text,
  * their ratios kept: the coverage of blue-noise discs is scale-invariant) and writes its
  * inverse: curve[k] = the g for which D(g) = k / (NPRFX_STIPPLE_CURVE_SIZE - 1), 1 where that
  * darkness cannot be reached. About 30 ms; deterministic. p->tone_curve is ignored. */
-nprfx_result nprfx_stipple_tone_curve(nprfx_context *ctx, const nprfx_stipple_params *p,
-                                      float *curve);
+NPRFX_API nprfx_result nprfx_stipple_tone_curve(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                                float *curve);
 
 typedef struct nprfx_stipple_inputs {
     const nprfx_image *tone; /* required: 1 = paper white; 3-4 channels: Rec. 709 luma */
@@ -118,9 +119,9 @@ typedef struct nprfx_stipple_inputs {
 /* Render the pixels of `window` into out (4 channels RGBA, or 5 with coverage_channel). Inputs
  * are read around the window as far as the stipples reaching it need. Parallel through the
  * context's executor. */
-nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params *p,
-                                  const nprfx_stipple_inputs *in, nprfx_rect window,
-                                  nprfx_image *out);
+NPRFX_API nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                            const nprfx_stipple_inputs *in, nprfx_rect window,
+                                            nprfx_image *out);
 
 /* One stipple, as the vector export writes it. */
 typedef struct nprfx_stipple {
@@ -133,9 +134,9 @@ typedef struct nprfx_stipple {
 
 /* The stipples owned by the pixels of `region` (usually the frame), in row-major order of their
  * pixels. *list is malloc'd (NULL when *count is 0); the caller frees it. */
-nprfx_result nprfx_stipple_collect(nprfx_context *ctx, const nprfx_stipple_params *p,
-                                   const nprfx_stipple_inputs *in, nprfx_rect region,
-                                   nprfx_stipple **list, size_t *count);
+NPRFX_API nprfx_result nprfx_stipple_collect(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                             const nprfx_stipple_inputs *in, nprfx_rect region,
+                                             nprfx_stipple **list, size_t *count);
 
 /* Vector export formats for nprfx_stipple_format. Coordinates in both are image-plane pixels
  * with the frame's top-left corner at (0, 0) and y down (a core position x becomes
@@ -151,9 +152,10 @@ typedef enum nprfx_stipple_format_kind {
 /* Format a stipple list as text (malloc'd, NUL-terminated; *len excludes the NUL). ink/paper are
  * RGBA (display-referred values in [0, 1] are expected for SVG; they are clamped). The CLI writes
  * the text to the frame's export path; core does no file I/O. */
-nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
-                                  nprfx_rect frame, nprfx_stipple_format_kind kind,
-                                  const float *ink, const float *paper, char **text, size_t *len);
+NPRFX_API nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list,
+                                            size_t count, nprfx_rect frame,
+                                            nprfx_stipple_format_kind kind, const float *ink,
+                                            const float *paper, char **text, size_t *len);
 
 /* The stipple node's vector export (defined with the node in plugins/stipple.c, library
  * nprfx_nodes): the stipples of the whole frame for render arguments of the `stipple` node
@@ -161,8 +163,9 @@ nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list,
  * calls this after rendering a frame whose `export` param is set and writes the text to the
  * frame's path (".csv" -> NPRFX_STIPPLE_CSV, ".svg" -> NPRFX_STIPPLE_SVG). */
 struct nprfx_render_args;
-nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
-                                       nprfx_stipple_format_kind kind, char **text, size_t *len);
+NPRFX_API nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
+                                                 nprfx_stipple_format_kind kind, char **text,
+                                                 size_t *len);
 
 /* A lazily grown IVS sequence (seed NPRFX_IVS_DEFAULT_SEED) with its spatial index, owned by
  * the caller: there is no process-wide sequence. Empty when created (cheap). Its points are the
@@ -179,19 +182,21 @@ nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
  * pixel reads never changes a result. */
 typedef struct nprfx_stipple_sequence nprfx_stipple_sequence;
 
-nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_sequence **out);
+NPRFX_API nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx,
+                                                     nprfx_stipple_sequence **out);
 /* Use the first n points of xy (the default-seed sequence, decoded from its file) instead of
  * generating them; copied. Call before the sequence is first used. The points must be the
  * sequence's (a file's header names its seed: check it); they are rounded to the grid like
  * generated ones. */
-nprfx_result nprfx_stipple_sequence_preload(nprfx_context *ctx, nprfx_stipple_sequence *seq,
-                                            const float *xy, int n);
+NPRFX_API nprfx_result nprfx_stipple_sequence_preload(nprfx_context *ctx,
+                                                      nprfx_stipple_sequence *seq, const float *xy,
+                                                      int n);
 /* Frees every version; no call may be using it. NULL is a no-op. */
-void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
+NPRFX_API void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
 /* An index holding at least min_count points (clamped to NPRFX_STIPPLE_MAX_SAMPLES), valid
  * until seq is destroyed. */
-nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *seq,
-                                          int min_count, const nprfx_ivs_index **out);
+NPRFX_API nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *seq,
+                                                    int min_count, const nprfx_ivs_index **out);
 
 #ifdef __cplusplus
 }

@@ -7,6 +7,7 @@
 #define NPRFX_SYNTH_H
 
 #include "nprfx/image.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -22,20 +23,21 @@ extern "C" {
  *   id                  object index (0 = background, 1.. objects)
  *   diffuse             diffuse intensity max(0, N.L) in [0,1]
  *   coverage            1 where an object covers the pixel centre, 0 on background */
-int nprfx_synth_channel_count(void);
-const char *const *nprfx_synth_channel_names(void);
+NPRFX_API int nprfx_synth_channel_count(void);
+NPRFX_API const char *const *nprfx_synth_channel_names(void);
 
 typedef struct nprfx_synth_scene_info {
     const char *name; /* "orbit" */
     const char *help; /* one line */
 } nprfx_synth_scene_info;
-int nprfx_synth_scene_count(void);
-const nprfx_synth_scene_info *nprfx_synth_scene_at(int i);
+NPRFX_API int nprfx_synth_scene_count(void);
+NPRFX_API const nprfx_synth_scene_info *nprfx_synth_scene_at(int i);
 
 /* Render frame `frame` of scene `name` into out, which must be width x height with
  * nprfx_synth_channel_count() channels (bounds from (0,0)). Parallel over rows through the
  * context's executor; deterministic. */
-nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame,
+                                          nprfx_image *out);
 
 #ifdef __cplusplus
 }

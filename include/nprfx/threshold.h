@@ -25,33 +25,34 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /* The cookbook's threshold: (erf(sigma * (p - mu)) + 1) / 2. */
-double nprfx_threshold_erf(double p, double sigma, double mu);
+NPRFX_API double nprfx_threshold_erf(double p, double sigma, double mu);
 
 /* Mean of nprfx_threshold_erf(p, sigma, mu) over p uniform in [0,1] (closed form). */
-double nprfx_threshold_erf_mean(double sigma, double mu);
+NPRFX_API double nprfx_threshold_erf_mean(double sigma, double mu);
 
 /* The position mu for which nprfx_threshold_erf_mean(sigma, mu) == tone (tone clamped to [0,1];
  * sigma > 0). Exact to about 1e-12 in the mean; tones at or beyond 0 / 1 give a position far
  * enough outside [0,1] that the threshold is 0 / 1 in single precision. */
-double nprfx_threshold_builtin_mu(double tone, double sigma);
+NPRFX_API double nprfx_threshold_builtin_mu(double tone, double sigma);
 
 /* builtin(p, tone, sigma) = nprfx_threshold_erf(p, sigma, nprfx_threshold_builtin_mu(tone,
  * sigma)). */
-double nprfx_threshold_builtin(double p, double tone, double sigma);
+NPRFX_API double nprfx_threshold_builtin(double p, double tone, double sigma);
 
 /* Quantise a tone in [0,1] to `steps` levels 0, 1/(steps-1), ..., 1 (nearest level); steps < 2
  * returns the tone unchanged (clamped to [0,1]). */
-double nprfx_threshold_quantize(double tone, int steps);
+NPRFX_API double nprfx_threshold_quantize(double tone, int steps);
 
 /* Bilinear lookup of every channel of the map at (u, v) with the orientation above. out
  * receives map->channels floats. The map must be non-empty. */
-void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, float *out);
+NPRFX_API void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, float *out);
 
 /* ---- the threshold-map node over an image ---- */
 
@@ -75,15 +76,16 @@ typedef struct nprfx_threshold_params {
 /* Channels of the output: the pattern's, or the map's when a map of more than one channel is
  * applied to a 1-channel pattern. NPRFX_ERR_MISSING_INPUT when map mode has no map (map_channels
  * 0), NPRFX_ERR_INVALID_ARGUMENT for a many-channel map on a many-channel pattern. */
-nprfx_result nprfx_threshold_output_channels(int mode, int pattern_channels, int map_channels,
-                                             int *channels);
+NPRFX_API nprfx_result nprfx_threshold_output_channels(int mode, int pattern_channels,
+                                                       int map_channels, int *channels);
 
 /* Threshold `window` of the pattern into out (which has the channels above). tone and map may be
  * NULL (map mode needs a non-empty map). Inputs read as 0 outside their data windows. Runs on
  * ctx's executor; bit-identical for any thread count and window split. */
-nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_params *p,
-                                    const nprfx_image *pattern, const nprfx_image *tone,
-                                    const nprfx_image *map, nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_params *p,
+                                              const nprfx_image *pattern, const nprfx_image *tone,
+                                              const nprfx_image *map, nprfx_rect window,
+                                              nprfx_image *out);
 
 #ifdef __cplusplus
 }
