@@ -149,8 +149,10 @@ static void init_plugins(void)
         plugins[i].pluginApi = kOfxImageEffectPluginApi;
         plugins[i].apiVersion = kOfxImageEffectPluginApiVersion;
         plugins[i].pluginIdentifier = plugin_ids[i];
-        plugins[i].pluginVersionMajor = NPRFX_VERSION_MAJOR;
-        plugins[i].pluginVersionMinor = NPRFX_VERSION_MINOR;
+        /* Each node's own version: a host keeps projects made with another major version
+         * apart, and a minor bump tells it the pixels changed (cached frames are stale). */
+        plugins[i].pluginVersionMajor = (unsigned)nprfx_node_at(i)->version_major;
+        plugins[i].pluginVersionMinor = (unsigned)nprfx_node_at(i)->version_minor;
         plugins[i].setHost = set_host;
         plugins[i].mainEntry = entries[i];
     }
@@ -239,10 +241,13 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     else if (snprintf(grouping, sizeof grouping, "NPR/%s", d->group) >= (int)sizeof grouping)
         grouping[sizeof grouping - 1] = 0;
     set_str(p, kOfxImageEffectPluginPropGrouping, 0, grouping);
-    set_int(p, kOfxPropVersion, 0, NPRFX_VERSION_MAJOR);
-    set_int(p, kOfxPropVersion, 1, NPRFX_VERSION_MINOR);
-    set_int(p, kOfxPropVersion, 2, NPRFX_VERSION_PATCH);
-    set_str(p, kOfxPropVersionLabel, 0, NPRFX_VERSION_STRING);
+    /* The node's version (as in OfxPlugin), the library's in the label. */
+    set_int(p, kOfxPropVersion, 0, d->version_major);
+    set_int(p, kOfxPropVersion, 1, d->version_minor);
+    char vlabel[64];
+    snprintf(vlabel, sizeof vlabel, "%d.%d (nprfx %s)", d->version_major, d->version_minor,
+             NPRFX_VERSION_STRING);
+    set_str(p, kOfxPropVersionLabel, 0, vlabel);
     int nctx = 0;
     set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextGeneral);
     if (filter_capable(d))
