@@ -1,13 +1,15 @@
 /* The time-offset node: an input as it is at another frame (Nuke's TimeOffset). Handy for
  * comparing a frame with its neighbours in a graph, e.g. warping frame i-1 onto frame i along the
- * motion vectors to check their convention. */
-#include <math.h>
-#include <string.h>
+ * motion vectors to check their convention. The frame arithmetic and the copy live in
+ * core/time_offset.c; this file is the descriptor and the call into it. */
+#include <stddef.h>
 
 #include "nprfx/node.h"
+#include "nprfx/time_offset.h"
 
 enum { IN_IMAGE, IN_COUNT };
 enum { P_OFFSET, P_COUNT };
+typedef nprfx_time_offset_params top;
 
 static const nprfx_input_desc inputs[IN_COUNT] = {
     {.name = "image",
@@ -20,6 +22,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
 
 static const nprfx_param_desc params[P_COUNT] = {
     {.name = "offset",
+     NPRFX_FIELD(top, offset),
      .label = "Offset",
      .help = "Frames to shift by: the output at frame i is the input at frame i + offset (-1: the "
              "previous frame), held at the shot's first and last frames.",
@@ -31,34 +34,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 100000},
 };
 
-static nprfx_result time_offset_render(const nprfx_render_args *args, const void *typed)
+static nprfx_result time_offset_render(const nprfx_render_args *a, const void *params)
 {
-    nprfx_context *ctx = args->ctx;
-    int offset = (int)args->params[P_OFFSET].v[0];
-    if (offset == 0) return nprfx_image_copy(ctx, &args->inputs[IN_IMAGE], args->output);
-    if (!args->fetch)
-        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
-                           "time-offset: this host cannot fetch other frames");
-    /* Frames outside the shot hold its first or last frame, so frame 1 of a "previous frame"
-     * graph does not ask for a frame 0 that was never rendered. */
-    double t = args->time + offset;
-    if (args->first_frame <= args->last_frame) {
-        if (t < args->first_frame) t = args->first_frame;
-        if (t > args->last_frame) t = args->last_frame;
-    }
-    nprfx_image other;
-    nprfx_result r = args->fetch(args->fetch_user, IN_IMAGE, t, &other);
-    if (r) return r;
-    if (other.channels != args->output->channels)
-        return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,
-                           "time-offset: input 'image' has %d channels at frame %g but %d at %g",
-                           other.channels, t, args->output->channels, args->time);
-    /* Outside the other frame's data window the output is 0, as EXR readers do. */
-    nprfx_image win = nprfx_image_crop(args->output, args->window);
-    float zero[NPRFX_MAX_CHANNELS] = {0};
-    nprfx_image_fill(&win, zero);
-    other = nprfx_image_crop(&other, args->window);
-    return nprfx_image_copy(ctx, &other, &win);
+    return nprfx_time_offset_render(a->ctx, params, &a->inputs[IN_IMAGE], a->time, a->first_frame,
+                                    a->last_frame, a->fetch, a->fetch_user, IN_IMAGE, a->window,
+                                    a->output);
 }
 
 const nprfx_node_desc nprfx_node_time_offset = {
@@ -74,4 +54,6 @@ const nprfx_node_desc nprfx_node_time_offset = {
     .num_params = P_COUNT,
     .flags = NPRFX_NODE_TEMPORAL,
     .render = time_offset_render,
+    .params_size = sizeof(top),
+    .version_major = 1,
 };

@@ -1,9 +1,9 @@
-/* nprfx — compositing formulas (style cookbook §4; Bousseau et al. 2006 for pigment density).
+/* nprfx — compositing formulas and the blend node over an image (style cookbook §4; Bousseau et
+ * al. 2006 for pigment density; design: docs/design.md §3.5).
  *
- * Each blend mode is one formula written once, here (as openfx-supportext's ofxsMerging.h does
- * for merge operators), inline so the per-pixel loops of the blend node and any other node
- * that calls them compile to straight arithmetic. All
- * functions work on one channel value and do not clamp: values are scene-linear floats.
+ * Each blend mode is one formula, written once in core/blend.c (as openfx-supportext's
+ * ofxsMerging.h does for merge operators); nprfx_blend_render runs them over an image. All
+ * formulas work on one channel value and do not clamp: values are scene-linear floats.
  *
  *   alphaBlend(c0, c1, a)              = (1 - a) c0 + a c1
  *   overlay(c0, c1, f)                 = c0 f (1 - (1 - c0)(1 - c1))
@@ -21,7 +21,8 @@
 #ifndef NPRFX_BLEND_H
 #define NPRFX_BLEND_H
 
-#include <math.h>
+#include "nprfx/context.h"
+#include "nprfx/image.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -40,42 +41,19 @@ typedef enum nprfx_blend_mode {
     NPRFX_BLEND_MODE_COUNT = 7
 } nprfx_blend_mode;
 
-static inline double nprfx_blend_alpha(double c0, double c1, double a)
-{
-    return (1.0 - a) * c0 + a * c1;
-}
-static inline double nprfx_blend_overlay(double c0, double c1, double f)
-{
-    return c0 * f * (1.0 - (1.0 - c0) * (1.0 - c1));
-}
-static inline double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f,
-                                               double a)
-{
-    return back * (1.0 - a) + a * c0 * f * (1.0 - (1.0 - c0 * a) * (1.0 - c1));
-}
-static inline double nprfx_blend_multiply(double c0, double c1)
-{
-    return c0 * c1;
-}
-static inline double nprfx_blend_screen(double c0, double c1)
-{
-    return 1.0 - (1.0 - c0) * (1.0 - c1);
-}
-static inline double nprfx_blend_pigment(double c, double d)
-{
-    return c - (c - c * c) * (d - 1.0);
-}
+/* ---- the formulas, one channel value at a time ---- */
+
+double nprfx_blend_alpha(double c0, double c1, double a);
+double nprfx_blend_overlay(double c0, double c1, double f);
+double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f, double a);
+double nprfx_blend_multiply(double c0, double c1);
+double nprfx_blend_screen(double c0, double c1);
+double nprfx_blend_pigment(double c, double d);
 /* Scaled absolute difference (a compositor's "difference" merge): what changed between two
  * frames (Kass & Pesare's Figure 2). */
-static inline double nprfx_blend_difference(double c0, double c1, double f)
-{
-    return f * fabs(c0 - c1);
-}
+double nprfx_blend_difference(double c0, double c1, double f);
 /* Bousseau et al.'s density from a texture value: d = 1 + beta (t - 0.5). */
-static inline double nprfx_blend_pigment_density(double t, double beta)
-{
-    return 1.0 + beta * (t - 0.5);
-}
+double nprfx_blend_pigment_density(double t, double beta);
 
 /* One channel in one mode with the opacity rule the blend node documents:
  *   alphablend    nprfx_blend_alpha(c0, c1, a)
@@ -87,23 +65,35 @@ static inline double nprfx_blend_pigment_density(double t, double beta)
  *   difference    nprfx_blend_alpha(c0, difference(c0, c1, f), a)
  * i.e. the last four are mixed over c0 by a, as compositors apply a layer's opacity; `back` is
  * used by overlayalpha only. An out-of-range mode returns c0. */
-static inline double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1,
-                                       double f, double a)
-{
-    switch (mode) {
-    case NPRFX_BLEND_ALPHABLEND: return nprfx_blend_alpha(c0, c1, a);
-    case NPRFX_BLEND_OVERLAYALPHA: return nprfx_blend_overlay_alpha(back, c0, c1, f, a);
-    case NPRFX_BLEND_OVERLAY: return nprfx_blend_alpha(c0, nprfx_blend_overlay(c0, c1, f), a);
-    case NPRFX_BLEND_MULTIPLY: return nprfx_blend_alpha(c0, nprfx_blend_multiply(c0, c1), a);
-    case NPRFX_BLEND_SCREEN: return nprfx_blend_alpha(c0, nprfx_blend_screen(c0, c1), a);
-    case NPRFX_BLEND_PIGMENT:
-        return nprfx_blend_alpha(c0, nprfx_blend_pigment(c0, nprfx_blend_pigment_density(c1, f)),
-                                 a);
-    case NPRFX_BLEND_DIFFERENCE:
-        return nprfx_blend_alpha(c0, nprfx_blend_difference(c0, c1, f), a);
-    default: return c0;
-    }
-}
+double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1, double f,
+                         double a);
+
+/* ---- the blend node over an image ---- */
+
+/* The node's params (its descriptor binds each one here by offset). */
+typedef struct nprfx_blend_params {
+    int mode;       /* nprfx_blend_mode */
+    double factor;  /* f: overlay factor, pigment strength beta, difference scale */
+    double opacity; /* a = clamp(alpha * opacity, 0, 1); opacity alone without alpha */
+    double gain_base, gain_layer; /* c0 = gain_base * base, c1 = gain_layer * layer */
+    double background[4];         /* RGBA where coverage is 0 */
+} nprfx_blend_params;
+
+/* Blend `window` of out (which has base's channels, 1 to 4; with 4 the 4th is alpha and passes
+ * through). Per colour channel: r = nprfx_blend_apply(mode, back, c0, c1, factor, a), then
+ * out = nprfx_blend_alpha(background, r, coverage) on every channel (alpha too), coverage
+ * clamped to [0, 1]. A 1-channel base takes the background's Rec. 709 luminance, a 2-channel one
+ * its R and G.
+ *
+ * layer: 1 channel (used for every colour channel) or base's colour channels (an extra alpha
+ * channel is ignored). back (overlayalpha only; NULL: base without gain), alpha (NULL: a =
+ * opacity) and coverage (NULL: 1) may be NULL; back needs 1 channel or base's colour channels,
+ * alpha and coverage are read from channel 0. Inputs read as 0 outside their data windows. Runs
+ * on ctx's executor; bit-identical for any thread count and window split. */
+nprfx_result nprfx_blend_render(nprfx_context *ctx, const nprfx_blend_params *p,
+                                const nprfx_image *base, const nprfx_image *layer,
+                                const nprfx_image *back, const nprfx_image *alpha,
+                                const nprfx_image *coverage, nprfx_rect window, nprfx_image *out);
 
 #ifdef __cplusplus
 }

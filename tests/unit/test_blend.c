@@ -105,9 +105,11 @@ static void test_formulas(void)
 
 /* ---- the node ---- */
 
-static void test_descriptor(void)
+static void test_descriptor(nprfx_context *ctx)
 {
     CHECK(node != NULL);
+    CHECK_OK(nprfx_node_lint(ctx, node));
+    CHECK(node->params_size == sizeof(nprfx_blend_params));
     CHECK(strcmp(node->id, "blend") == 0);
     const nprfx_param_desc *m = &node->params[PI("mode")];
     const char *want[] = {"alphablend", "overlay", "overlayalpha", "multiply",
@@ -193,6 +195,7 @@ static void test_broadcast(nprfx_context *ctx)
     nprfx_image_free(&in[II("layer")]);
     out = run(ctx, 1, 1, &r);
     CHECK(r == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strstr(th_error(ctx), "blend: input 'layer' is not connected") != NULL);
     nprfx_image_free(&out);
 }
 
@@ -350,6 +353,57 @@ static void test_window(nprfx_context *ctx)
     nprfx_image_free(&out);
 }
 
+/* nprfx_blend_render called directly, with the typed params the descriptor binds: the same
+ * pixels as through the node, and its own checks with messages naming the input or param. */
+static void test_core_api(nprfx_context *ctx)
+{
+    reset();
+    const float base[] = {0.5f, 0.2f, 0.8f, 0.7f, 1.0f, 0.0f, 0.25f, 0.3f};
+    const float layer[] = {0.25f, 0.5f};
+    const float back[] = {0.1f, 0.9f};
+    const float cov[] = {1.0f, 0.25f};
+    in[II("base")] = th_image(2, 1, 4, base);
+    in[II("layer")] = th_image(2, 1, 1, layer);
+    in[II("back")] = th_image(2, 1, 1, back);
+    in[II("coverage")] = th_image(2, 1, 1, cov);
+    set_mode("overlayalpha");
+    pv[PI("factor")].v[0] = 1.2;
+    pv[PI("opacity")].v[0] = 0.5;
+    nprfx_result r;
+    nprfx_image via_node = run(ctx, 2, 1, &r);
+    CHECK_OK(r);
+    nprfx_blend_params p = {.mode = NPRFX_BLEND_OVERLAYALPHA,
+                            .factor = 1.2,
+                            .opacity = 0.5,
+                            .gain_base = 1,
+                            .gain_layer = 1,
+                            .background = {1, 1, 1, 1}};
+    nprfx_image direct = th_image(2, 1, 4, NULL);
+    CHECK_OK(nprfx_blend_render(ctx, &p, &in[II("base")], &in[II("layer")], &in[II("back")], NULL,
+                                &in[II("coverage")], direct.bounds, &direct));
+    CHECK(memcmp(via_node.data, direct.data, sizeof(float) * 8) == 0);
+    /* pixel 0, channel 0: back 0.1, c0 0.5, c1 0.25, f 1.2, a 0.5 => 0.18125 (coverage 1) */
+    CHECK_NEAR(direct.data[0], 0.18125, TOL);
+    /* pixel 1, alpha: coverage 0.25 over background 1 => 0.75 * 1 + 0.25 * 0.3 = 0.825 */
+    CHECK_NEAR(direct.data[7], 0.825, TOL);
+    /* the checks only the core function can make for a direct caller */
+    p.mode = NPRFX_BLEND_MODE_COUNT;
+    CHECK(nprfx_blend_render(ctx, &p, &in[II("base")], &in[II("layer")], NULL, NULL, NULL,
+                             direct.bounds, &direct) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(strstr(th_error(ctx), "blend.mode") != NULL);
+    p.mode = NPRFX_BLEND_MULTIPLY;
+    CHECK(nprfx_blend_render(ctx, &p, &in[II("base")], NULL, NULL, NULL, NULL, direct.bounds,
+                             &direct) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strstr(th_error(ctx), "input 'layer'") != NULL);
+    nprfx_image three = th_image(2, 1, 3, NULL);
+    CHECK(nprfx_blend_render(ctx, &p, &in[II("base")], &in[II("layer")], NULL, NULL, NULL,
+                             three.bounds, &three) == NPRFX_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(th_error(ctx), "output has 3 channels") != NULL);
+    nprfx_image_free(&three);
+    nprfx_image_free(&via_node);
+    nprfx_image_free(&direct);
+}
+
 /* Render the whole frame in tiles of tw x th. */
 static nprfx_result render_tiled(nprfx_context *ctx, nprfx_image *out, int tw, int th)
 {
@@ -421,11 +475,12 @@ int main(void)
     nprfx_context *ctx = NULL;
     CHECK_OK(nprfx_context_create(NULL, &ctx));
     test_formulas();
-    test_descriptor();
+    test_descriptor(ctx);
     test_broadcast(ctx);
     test_alpha_opacity(ctx);
     test_coverage(ctx);
     test_window(ctx);
+    test_core_api(ctx);
     test_determinism(ctx);
     reset();
     nprfx_context_destroy(ctx);
