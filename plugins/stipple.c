@@ -8,6 +8,7 @@
 
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
+#include "support/stipple_export.h"
 
 enum { IN_TONE, IN_UV, IN_ID, IN_COUNT };
 enum {
@@ -461,8 +462,7 @@ nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
 
 /* The descriptor's export hook: the format from the path's extension (case-insensitive). */
 static nprfx_result st_export_text(const nprfx_render_args *args, const void *typed,
-                                   const char *path, char **text,
-                                   size_t *len)
+                                   const char *path, char **text, size_t *len)
 {
     if (!text)
         return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,

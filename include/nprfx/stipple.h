@@ -122,7 +122,7 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
                                   const nprfx_stipple_inputs *in, nprfx_rect window,
                                   nprfx_image *out);
 
-/* One stipple, as the vector export writes it. */
+/* One stipple, as the vector export (plugins/support/stipple_export.h, outside core) writes it. */
 typedef struct nprfx_stipple {
     double x, y;  /* screen position in core pixel coordinates (pixel centres at integers) */
     float radius; /* px */
@@ -132,37 +132,11 @@ typedef struct nprfx_stipple {
 } nprfx_stipple;
 
 /* The stipples owned by the pixels of `region` (usually the frame), in row-major order of their
- * pixels. *list is malloc'd (NULL when *count is 0); the caller frees it. */
+ * pixels. *list is malloc'd (NULL when *count is 0); the caller frees it. Core formats no files:
+ * plugins/support/stipple_export.c writes the list as CSV or SVG. */
 nprfx_result nprfx_stipple_collect(nprfx_context *ctx, const nprfx_stipple_params *p,
                                    const nprfx_stipple_inputs *in, nprfx_rect region,
                                    nprfx_stipple **list, size_t *count);
-
-/* Vector export formats for nprfx_stipple_format. Coordinates in both are image-plane pixels
- * with the frame's top-left corner at (0, 0) and y down (a core position x becomes
- * x - frame.x0 + 0.5), so pixel (i, j) covers [i, i+1) x [j, j+1).
- *   CSV: the header line "x,y,radius,tone,sample,object", then one stipple per line.
- *   SVG: an <svg> with viewBox "0 0 W H" (the frame size), a rectangle of the paper colour,
- *        and one <circle cx cy r> per stipple, filled with the ink colour at opacity = tone. */
-typedef enum nprfx_stipple_format_kind {
-    NPRFX_STIPPLE_CSV = 0,
-    NPRFX_STIPPLE_SVG = 1
-} nprfx_stipple_format_kind;
-
-/* Format a stipple list as text (malloc'd, NUL-terminated; *len excludes the NUL). ink/paper are
- * RGBA (display-referred values in [0, 1] are expected for SVG; they are clamped). The CLI writes
- * the text to the frame's export path; core does no file I/O. */
-nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
-                                  nprfx_rect frame, nprfx_stipple_format_kind kind,
-                                  const float *ink, const float *paper, char **text, size_t *len);
-
-/* The stipple node's vector export (defined with the node in plugins/stipple.c, library
- * nprfx_nodes): the stipples of the whole frame for render arguments of the `stipple` node
- * (its inputs and params at the frame's time; window is ignored), formatted as `kind`. The CLI
- * calls this after rendering a frame whose `export` param is set and writes the text to the
- * frame's path (".csv" -> NPRFX_STIPPLE_CSV, ".svg" -> NPRFX_STIPPLE_SVG). */
-struct nprfx_render_args;
-nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
-                                       nprfx_stipple_format_kind kind, char **text, size_t *len);
 
 /* A lazily grown IVS sequence (seed NPRFX_IVS_DEFAULT_SEED) with its spatial index, owned by
  * the caller: there is no process-wide sequence. Empty when created (cheap). Its points are the

@@ -16,6 +16,7 @@
 #include "nprfx/metrics.h"
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
+#include "support/stipple_export.h"
 
 static nprfx_context *ctx1;         /* serial */
 static nprfx_context *ctx4;         /* 4 threads */
