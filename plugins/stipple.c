@@ -2,12 +2,12 @@
  * core/stipple.c and core/ivs*.c; this file is the descriptor and the glue. */
 #include <pthread.h>
 #include <stdatomic.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
+#include "support/data_files.h"
 #include "support/stipple_export.h"
 
 enum { IN_TONE, IN_UV, IN_ID, IN_COUNT };
@@ -238,69 +238,6 @@ static void st_state_free(void *state)
     free(s);
 }
 
-/* The shipped dot sequence, DATA_DIR/ivs.bin (built with the project by `nprfx ivs`), saves the
- * instance generating it on first use (seconds per million points) and keeps the dots the same
- * whatever compiler built this. No data directory or no file: generated, same pixels. A file
- * that is there but unreadable, corrupt or of another seed is an error that names it: a broken
- * install should not pass silently. */
-static nprfx_result st_preload(nprfx_context *ctx, nprfx_stipple_sequence *seq)
-{
-    const char *dir = nprfx_context_data_dir(ctx);
-    if (!dir || !*dir) return NPRFX_OK;
-    char path[4096];
-    if (snprintf(path, sizeof path, "%s/ivs.bin", dir) >= (int)sizeof path) return NPRFX_OK;
-    FILE *f = fopen(path, "rb");
-    if (!f) return NPRFX_OK;
-    unsigned char *buf = NULL;
-    size_t size = 0, cap = 0;
-    int failed = 0;
-    for (;;) {
-        if (size == cap) {
-            unsigned char *nb = realloc(buf, cap = cap ? 2 * cap : (size_t)8 << 20);
-            if (!nb) {
-                failed = 1;
-                break;
-            }
-            buf = nb;
-        }
-        size_t got = fread(buf + size, 1, cap - size, f);
-        size += got;
-        if (got == 0) break;
-    }
-    failed |= ferror(f) != 0;
-    fclose(f);
-    nprfx_result r = NPRFX_OK;
-    if (failed) {
-        r = nprfx_error(ctx, NPRFX_ERR_IO, "stipple: cannot read the dot sequence %s", path);
-    } else {
-        uint64_t seed = 0;
-        int n = 0;
-        float *xy = NULL;
-        /* Decode on a private context, so that the caller's handler hears one message that
-         * says which file and what to do, not the decoder's alone. */
-        nprfx_context *quiet = NULL;
-        r = nprfx_context_create(NULL, &quiet);
-        if (r == NPRFX_OK) r = nprfx_ivs_decode(quiet, buf, size, &seed, &n, &xy);
-        if (r != NPRFX_OK) {
-            char why[512];
-            nprfx_context_last_error(quiet, why, sizeof why);
-            r = nprfx_error(ctx, r, "stipple: %s: %s (rebuild it with `nprfx ivs`, or remove it)",
-                            path, why);
-        }
-        nprfx_context_destroy(quiet);
-        if (r == NPRFX_OK && seed != NPRFX_IVS_DEFAULT_SEED)
-            r = nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                            "stipple: %s holds the sequence of seed %llu, not the node's %u "
-                            "(rebuild it with `nprfx ivs`, or remove it)",
-                            path, (unsigned long long)seed, NPRFX_IVS_DEFAULT_SEED);
-        else if (r == NPRFX_OK)
-            r = nprfx_stipple_sequence_preload(ctx, seq, xy, n);
-        free(xy);
-    }
-    free(buf);
-    return r;
-}
-
 /* The instance state, created on first use; NULL when the caller gives no state slot (then
  * each call builds what it needs). Hosts may render tiles of one instance on several threads
  * at once: a fresh state is installed with a compare-and-swap, the loser frees its own. */
@@ -314,10 +251,9 @@ static nprfx_result st_get_state(const nprfx_render_args *args, st_state **out)
         st_state *fresh = calloc(1, sizeof *fresh);
         if (!fresh)
             return nprfx_error(args->ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
-        nprfx_result r = nprfx_stipple_sequence_create(args->ctx, &fresh->seq);
-        if (r == NPRFX_OK) r = st_preload(args->ctx, fresh->seq);
+        /* the shipped ivs.bin when there is one (plugins/support/data_files.c) */
+        nprfx_result r = nprfx_stipple_shipped_sequence(args->ctx, &fresh->seq);
         if (r != NPRFX_OK) {
-            nprfx_stipple_sequence_destroy(fresh->seq);
             free(fresh);
             return r;
         }
