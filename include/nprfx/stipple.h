@@ -167,6 +167,55 @@ void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
 nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *seq,
                                           int min_count, const nprfx_ivs_index **out);
 
+/* ---- the stipple node (core/stipple_node.c; its descriptor is plugins/stipple.c) ---- */
+
+/* The node's inputs, in its descriptor's order (render_args->inputs). */
+enum {
+    NPRFX_STIPPLE_IN_TONE, /* required: the shading */
+    NPRFX_STIPPLE_IN_UV,   /* optional: 2 channels */
+    NPRFX_STIPPLE_IN_ID,   /* optional: 1 channel */
+    NPRFX_STIPPLE_IN_COUNT
+};
+
+/* The node's params, as its descriptor binds them (by offset; areas already multiplied by the
+ * render scale squared). docs/nodes.md describes each. */
+typedef struct nprfx_stipple_node_params {
+    int mode;                /* nprfx_stipple_mode */
+    double size;             /* px^2: nprfx_stipple_params.area */
+    double a0, delta_min;    /* px^2 */
+    const char *tones;       /* multitone: pen darknesses, "0.33,0.67,1" */
+    double tile, aspect;     /* UV period and aspect */
+    double ink[4], paper[4]; /* RGBA, premultiplied */
+    int seed;
+    int tone_correction;     /* measure and invert the darkness overlapping dots give */
+    int coverage;            /* a 5th output channel, the ink coverage */
+    const char *export_path; /* the front end writes the node's text export there ("": none) */
+} nprfx_stipple_node_params;
+
+/* Makes the dot sequence a node instance keeps, on its first render: e.g. one preloaded from the
+ * shipped data file (plugins/support/data_files.h), which core does not read. */
+typedef nprfx_result (*nprfx_stipple_sequence_fn)(nprfx_context *ctx, nprfx_stipple_sequence **out);
+
+struct nprfx_render_args; /* nprfx/node.h */
+
+/* Render args->window of the stipple node (args as nprfx_node_render hands them on, checked, with
+ * np its bound params): the tones parsed (multitone; errors name stipple.tones), the pixels
+ * without a uv input in units of NPRFX_STIPPLE_PLANE_PIXELS * render scale, the dots drawn
+ * counted into args->items. The instance state (args->state, NULL: none, each call then
+ * generates what it needs) keeps the sequence, made by make_sequence (NULL: generated) on first
+ * use, and the tone-correction curve of the last params; it never changes a result. Free it
+ * with nprfx_stipple_node_state_free. Safe on several tiles of one instance at once. */
+nprfx_result nprfx_stipple_node_render(const struct nprfx_render_args *args,
+                                       const nprfx_stipple_node_params *np,
+                                       nprfx_stipple_sequence_fn make_sequence);
+/* The stipples of the whole frame (args->frame; window is ignored) for the same arguments, as
+ * nprfx_stipple_collect lists them: what the node's vector export writes. */
+nprfx_result nprfx_stipple_node_collect(const struct nprfx_render_args *args,
+                                        const nprfx_stipple_node_params *np,
+                                        nprfx_stipple_sequence_fn make_sequence,
+                                        nprfx_stipple **list, size_t *count);
+void nprfx_stipple_node_state_free(void *state);
+
 #ifdef __cplusplus
 }
 #endif

@@ -4,6 +4,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "support/stipple_export.h"
 
@@ -103,4 +104,73 @@ nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list,
     *text = b.s;
     if (len) *len = b.n;
     return NPRFX_OK;
+}
+
+/* ---- the node's export ---- */
+
+/* The format a path's extension names, case-insensitive: .csv or .svg. */
+static nprfx_result format_for_path(nprfx_context *ctx, const char *path,
+                                    nprfx_stipple_format_kind *kind)
+{
+    const char *p = path ? path : "";
+    const char *slash = strrchr(p, '/'), *dot = strrchr(p, '.');
+    if (dot && slash && dot < slash) dot = NULL; /* a dot in a directory name */
+    const char *ext = dot ? dot + 1 : "";
+    char low[8] = {0};
+    size_t n = strlen(ext);
+    for (size_t i = 0; i < n && i < sizeof low - 1; i++)
+        low[i] = (char)(ext[i] >= 'A' && ext[i] <= 'Z' ? ext[i] - 'A' + 'a' : ext[i]);
+    if (n == 3 && !strcmp(low, "csv")) {
+        *kind = NPRFX_STIPPLE_CSV;
+        return NPRFX_OK;
+    }
+    if (n == 3 && !strcmp(low, "svg")) {
+        *kind = NPRFX_STIPPLE_SVG;
+        return NPRFX_OK;
+    }
+    if (!dot)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "stipple.export: '%s' has no extension: end it in .csv or .svg", p);
+    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                       "stipple.export: unknown extension '.%s' in '%s': use .csv (a table of "
+                       "dots) or .svg (vector discs)",
+                       ext, p);
+}
+
+nprfx_result nprfx_stipple_export_text(const nprfx_render_args *args,
+                                       const nprfx_stipple_node_params *np,
+                                       nprfx_stipple_sequence_fn make_sequence, const char *path,
+                                       char **text, size_t *len)
+{
+    nprfx_stipple_format_kind kind = NPRFX_STIPPLE_CSV;
+    nprfx_result r = format_for_path(args->ctx, path, &kind);
+    if (r != NPRFX_OK) return r;
+    nprfx_stipple *list = NULL;
+    size_t count = 0;
+    r = nprfx_stipple_node_collect(args, np, make_sequence, &list, &count);
+    if (r == NPRFX_OK) {
+        float ink[4], paper[4];
+        for (int c = 0; c < 4; c++) {
+            ink[c] = (float)np->ink[c];
+            paper[c] = (float)np->paper[c];
+        }
+        r = nprfx_stipple_format(args->ctx, list, count, args->frame, kind, ink, paper, text, len);
+    }
+    free(list);
+    return r;
+}
+
+nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
+                                       nprfx_stipple_format_kind kind, char **text, size_t *len)
+{
+    nprfx_context *ctx = args ? args->ctx : NULL;
+    if (kind != NPRFX_STIPPLE_CSV && kind != NPRFX_STIPPLE_SVG)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple export: unknown format %d",
+                           (int)kind);
+    if (args && args->node && strcmp(args->node->id, "stipple") != 0)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "stipple export: render arguments of the '%s' node", args->node->id);
+    /* the node's export hook picks the format from the path's extension */
+    return nprfx_node_export(args, kind == NPRFX_STIPPLE_SVG ? "stipples.svg" : "stipples.csv",
+                             text, len);
 }
