@@ -1,15 +1,21 @@
 /* The stipple node: instant stippling from UV and shading (Ma et al. 2018). The math lives in
- * core/stipple.c and core/ivs*.c; this file is the descriptor and the glue. */
-#include <pthread.h>
-#include <stdatomic.h>
-#include <stdio.h>
-#include <stdlib.h>
+ * core/stipple*.c and core/ivs*.c, the node's params and instance cache in core/stipple_node.c;
+ * the shipped dot sequence is read and the dots exported as CSV/SVG in plugins/support/. This
+ * file is the descriptor and the glue. */
 #include <string.h>
 
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
+#include "support/data_files.h"
+#include "support/stipple_export.h"
 
-enum { IN_TONE, IN_UV, IN_ID, IN_COUNT };
+/* In the order core reads them (nprfx/stipple.h). */
+enum {
+    IN_TONE = NPRFX_STIPPLE_IN_TONE,
+    IN_UV = NPRFX_STIPPLE_IN_UV,
+    IN_ID = NPRFX_STIPPLE_IN_ID,
+    IN_COUNT = NPRFX_STIPPLE_IN_COUNT
+};
 enum {
     P_MODE,
     P_SIZE,
@@ -26,6 +32,7 @@ enum {
     P_EXPORT,
     P_COUNT
 };
+typedef nprfx_stipple_node_params sp;
 
 static const char *const mode_names[] = {"uniform", "radius", "multitone", NULL};
 static const char *const mode_help[] = {
@@ -65,6 +72,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
 
 static const nprfx_param_desc params[P_COUNT] = {
     {.name = "mode",
+     NPRFX_FIELD(sp, mode),
      .label = "Mode",
      .help = "How the tone is reproduced; see the node help.",
      .type = NPRFX_PARAM_CHOICE,
@@ -73,6 +81,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = mode_names,
      .choice_help = mode_help},
     {.name = "size",
+     NPRFX_FIELD(sp, size),
      .label = "Stipple Size",
      .help = "uniform and multitone: the area of every dot in px^2 (the paper's delta; a disc of "
              "radius sqrt(size / pi)). Smaller dots make more of them for the same tone.",
@@ -84,6 +93,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 2000,
      .flags = NPRFX_PARAM_AREA},
     {.name = "a0",
+     NPRFX_FIELD(sp, a0),
      .label = "Area per Dot",
      .help = "radius and multitone: the screen area in px^2 each kept dot stands for (the "
              "paper's a0): dots are spread at one per a0 px^2 whatever the tone. The darkest "
@@ -97,6 +107,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 2000,
      .flags = NPRFX_PARAM_AREA},
     {.name = "delta_min",
+     NPRFX_FIELD(sp, delta_min),
      .label = "Minimum Dot Area",
      .help = "radius: dots smaller than this many px^2 are dropped, as an artist would not draw "
              "them (the paper's delta_min).",
@@ -108,6 +119,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 2000,
      .flags = NPRFX_PARAM_AREA},
     {.name = "tones",
+     NPRFX_FIELD(sp, tones),
      .label = "Pen Tones",
      .help = "multitone: the darkness of each pen, ascending, in (0, 1] (1 = the ink colour, "
              "0.5 = halfway to the paper), separated by commas. White paper is the implicit "
@@ -115,6 +127,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .type = NPRFX_PARAM_STRING,
      .def_string = "0.33,0.67,1"},
     {.name = "tile",
+     NPRFX_FIELD(sp, tile),
      .label = "UV Tile",
      .help = "Period of the dot sequence in UV units: one copy covers tile x tile of UV space "
              "(the paper's A0 = tile^2). Without a uv input, in units of 1024 pixels. A copy "
@@ -128,6 +141,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-6,
      .hard_max = 1e6},
     {.name = "aspect",
+     NPRFX_FIELD(sp, aspect),
      .label = "UV Aspect",
      .help = "How many times longer a unit of u is than a unit of v on the surfaces (1: square "
              "UVs). Where a UV map stretches, e.g. a unit square mapped onto a 2.5:1 plane, the "
@@ -142,6 +156,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-3,
      .hard_max = 1e3},
     {.name = "ink",
+     NPRFX_FIELD(sp, ink),
      .label = "Ink",
      .help = "Colour of the dots (RGBA, premultiplied).",
      .type = NPRFX_PARAM_COLOR,
@@ -151,6 +166,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -1e9,
      .hard_max = 1e9},
     {.name = "paper",
+     NPRFX_FIELD(sp, paper),
      .label = "Paper",
      .help = "Colour between the dots (RGBA, premultiplied; alpha 0 gives dots over "
              "transparency, to composite over another image).",
@@ -161,6 +177,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -1e9,
      .hard_max = 1e9},
     {.name = "seed",
+     NPRFX_FIELD(sp, seed),
      .label = "Seed",
      .help = "Shifts the sequence (per object): a different seed gives different dots with the "
              "same statistics.",
@@ -171,6 +188,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 2147483647.0},
     {.name = "tone_correction",
+     NPRFX_FIELD(sp, tone_correction),
      .label = "Tone Correction",
      .help = "Compensate for overlapping dots: the paper's thresholds lay down ink area g per "
              "unit area, but overlapping discs cover less, so dark tones come out light (by up "
@@ -184,6 +202,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1},
     {.name = "coverage",
+     NPRFX_FIELD(sp, coverage),
      .label = "Coverage Channel",
      .help = "Add a fifth output channel, 'coverage': the ink coverage d in [0, 1] each pixel "
              "was drawn with (out = paper + d (ink - paper)).",
@@ -194,6 +213,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1},
     {.name = "export",
+     NPRFX_FIELD(sp, export_path),
      .label = "Export",
      .help = "Also write the dots of each frame as vectors to this frame-sequence path; the "
              "extension picks the format. .csv: the header x,y,radius,tone,sample,object, one "
@@ -217,277 +237,18 @@ static nprfx_result st_output(const nprfx_value *pv, const int *ich, nprfx_outpu
     return NPRFX_OK;
 }
 
-/* ---- the per-instance cache: the dot sequence, and the tone-correction curve of the last
- * params ---- */
-
-typedef struct st_state {
-    nprfx_stipple_sequence *seq; /* grown on demand, thread-safe on its own */
-    pthread_mutex_t lock;        /* guards the curve */
-    int valid;
-    nprfx_stipple_params key; /* the params the curve was measured for */
-    float curve[NPRFX_STIPPLE_CURVE_SIZE];
-} st_state;
-
-static void st_state_free(void *state)
+/* Core renders (core/stipple_node.c); the dot sequence comes from the shipped data file when
+ * there is one (plugins/support/data_files.c). */
+static nprfx_result st_render(const nprfx_render_args *a, const void *params)
 {
-    st_state *s = state;
-    if (!s) return;
-    nprfx_stipple_sequence_destroy(s->seq);
-    pthread_mutex_destroy(&s->lock);
-    free(s);
+    return nprfx_stipple_node_render(a, params, nprfx_stipple_shipped_sequence);
 }
 
-/* The shipped dot sequence, DATA_DIR/ivs.bin (built with the project by `nprfx ivs`), saves the
- * instance generating it on first use (seconds per million points) and keeps the dots the same
- * whatever compiler built this. No data directory or no file: generated, same pixels. A file
- * that is there but unreadable, corrupt or of another seed is an error that names it: a broken
- * install should not pass silently. */
-static nprfx_result st_preload(nprfx_context *ctx, nprfx_stipple_sequence *seq)
+/* The dots as CSV or SVG, by the path's extension (plugins/support/stipple_export.c). */
+static nprfx_result st_export_text(const nprfx_render_args *a, const void *params, const char *path,
+                                   char **text, size_t *len)
 {
-    const char *dir = nprfx_context_data_dir(ctx);
-    if (!dir || !*dir) return NPRFX_OK;
-    char path[4096];
-    if (snprintf(path, sizeof path, "%s/ivs.bin", dir) >= (int)sizeof path) return NPRFX_OK;
-    FILE *f = fopen(path, "rb");
-    if (!f) return NPRFX_OK;
-    unsigned char *buf = NULL;
-    size_t size = 0, cap = 0;
-    int failed = 0;
-    for (;;) {
-        if (size == cap) {
-            unsigned char *nb = realloc(buf, cap = cap ? 2 * cap : (size_t)8 << 20);
-            if (!nb) {
-                failed = 1;
-                break;
-            }
-            buf = nb;
-        }
-        size_t got = fread(buf + size, 1, cap - size, f);
-        size += got;
-        if (got == 0) break;
-    }
-    failed |= ferror(f) != 0;
-    fclose(f);
-    nprfx_result r = NPRFX_OK;
-    if (failed) {
-        r = nprfx_error(ctx, NPRFX_ERR_IO, "stipple: cannot read the dot sequence %s", path);
-    } else {
-        uint64_t seed = 0;
-        int n = 0;
-        float *xy = NULL;
-        /* Decode on a private context, so that the caller's handler hears one message that
-         * says which file and what to do, not the decoder's alone. */
-        nprfx_context *quiet = NULL;
-        r = nprfx_context_create(NULL, &quiet);
-        if (r == NPRFX_OK) r = nprfx_ivs_decode(quiet, buf, size, &seed, &n, &xy);
-        if (r != NPRFX_OK) {
-            char why[512];
-            nprfx_context_last_error(quiet, why, sizeof why);
-            r = nprfx_error(ctx, r, "stipple: %s: %s (rebuild it with `nprfx ivs`, or remove it)",
-                            path, why);
-        }
-        nprfx_context_destroy(quiet);
-        if (r == NPRFX_OK && seed != NPRFX_IVS_DEFAULT_SEED)
-            r = nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                            "stipple: %s holds the sequence of seed %llu, not the node's %u "
-                            "(rebuild it with `nprfx ivs`, or remove it)",
-                            path, (unsigned long long)seed, NPRFX_IVS_DEFAULT_SEED);
-        else if (r == NPRFX_OK)
-            r = nprfx_stipple_sequence_preload(ctx, seq, xy, n);
-        free(xy);
-    }
-    free(buf);
-    return r;
-}
-
-/* The instance state, created on first use; NULL when the caller gives no state slot (then
- * each call builds what it needs). Hosts may render tiles of one instance on several threads
- * at once: a fresh state is installed with a compare-and-swap, the loser frees its own. */
-static nprfx_result st_get_state(const nprfx_render_args *args, st_state **out)
-{
-    *out = NULL;
-    if (!args->state) return NPRFX_OK;
-    _Atomic(void *) *slot = (_Atomic(void *) *)args->state;
-    st_state *s = atomic_load(slot);
-    if (!s) {
-        st_state *fresh = calloc(1, sizeof *fresh);
-        if (!fresh)
-            return nprfx_error(args->ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
-        nprfx_result r = nprfx_stipple_sequence_create(args->ctx, &fresh->seq);
-        if (r == NPRFX_OK) r = st_preload(args->ctx, fresh->seq);
-        if (r != NPRFX_OK) {
-            nprfx_stipple_sequence_destroy(fresh->seq);
-            free(fresh);
-            return r;
-        }
-        pthread_mutex_init(&fresh->lock, NULL);
-        void *expected = NULL;
-        if (atomic_compare_exchange_strong(slot, &expected, fresh)) {
-            s = fresh;
-        } else {
-            st_state_free(fresh);
-            s = expected;
-        }
-    }
-    *out = s;
-    return NPRFX_OK;
-}
-
-/* The curve depends on the mode and the dot sizes and pens, nothing else. */
-static int same_curve_params(const nprfx_stipple_params *a, const nprfx_stipple_params *b)
-{
-    if (a->mode != b->mode || a->area != b->area || a->a0 != b->a0 ||
-        a->delta_min != b->delta_min || a->num_tones != b->num_tones)
-        return 0;
-    for (int i = 0; i < a->num_tones; i++)
-        if (a->tones[i] != b->tones[i]) return 0;
-    return 1;
-}
-
-/* Fill curve for p, through the instance cache when there is one (computed under its lock). */
-static nprfx_result st_curve(const nprfx_render_args *args, st_state *s,
-                             const nprfx_stipple_params *p, float *curve)
-{
-    if (!s) return nprfx_stipple_tone_curve(args->ctx, p, curve);
-    nprfx_result r = NPRFX_OK;
-    pthread_mutex_lock(&s->lock);
-    if (!s->valid || !same_curve_params(&s->key, p)) {
-        s->valid = 0;
-        r = nprfx_stipple_tone_curve(args->ctx, p, s->curve);
-        if (r == NPRFX_OK) {
-            s->key = *p;
-            s->valid = 1;
-        }
-    }
-    if (r == NPRFX_OK) memcpy(curve, s->curve, sizeof s->curve);
-    pthread_mutex_unlock(&s->lock);
-    return r;
-}
-
-/* Node params to core params (the render scale is already applied to the areas). */
-static nprfx_result st_params(const nprfx_render_args *args, nprfx_stipple_params *p)
-{
-    const nprfx_value *pv = args->params;
-    nprfx_stipple_params_default(p);
-    p->mode = (int)pv[P_MODE].v[0];
-    p->area = pv[P_SIZE].v[0];
-    p->a0 = pv[P_A0].v[0];
-    p->delta_min = pv[P_DELTA_MIN].v[0];
-    p->tile = pv[P_TILE].v[0];
-    p->aspect = pv[P_ASPECT].v[0];
-    double scale = args->render_scale > 0 ? args->render_scale : 1.0;
-    p->plane_scale = NPRFX_STIPPLE_PLANE_PIXELS * scale;
-    for (int c = 0; c < 4; c++) {
-        p->ink[c] = (float)pv[P_INK].v[c];
-        p->paper[c] = (float)pv[P_PAPER].v[c];
-    }
-    p->seed = (uint64_t)pv[P_SEED].v[0];
-    p->coverage_channel = pv[P_COVERAGE].v[0] != 0.0;
-    if (p->mode == NPRFX_STIPPLE_MULTITONE)
-        return nprfx_stipple_parse_tones(args->ctx, pv[P_TONES].s, p);
-    return NPRFX_OK;
-}
-
-/* st_params plus the instance's sequence, and the tone curve when the param asks for it
- * (curve: the caller's storage). */
-static nprfx_result st_params_full(const nprfx_render_args *args, nprfx_stipple_params *p,
-                                   float *curve)
-{
-    st_state *s = NULL;
-    nprfx_result r = st_params(args, p);
-    if (r == NPRFX_OK) r = st_get_state(args, &s);
-    if (r != NPRFX_OK) return r;
-    p->sequence = s ? s->seq : NULL;
-    if (args->params[P_TONE_CORRECTION].v[0] != 0.0) {
-        r = st_curve(args, s, p, curve);
-        p->tone_curve = curve;
-    }
-    return r;
-}
-
-static nprfx_result st_check(const nprfx_render_args *args)
-{
-    if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params)
-        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
-                           "stipple: incomplete render arguments");
-    if (!args->inputs[IN_TONE].data)
-        return nprfx_error(args->ctx, NPRFX_ERR_MISSING_INPUT,
-                           "stipple: input 'tone' is not connected");
-    return NPRFX_OK;
-}
-
-static nprfx_stipple_inputs st_inputs(const nprfx_render_args *args)
-{
-    nprfx_stipple_inputs in;
-    in.tone = &args->inputs[IN_TONE];
-    in.uv = args->inputs[IN_UV].data ? &args->inputs[IN_UV] : NULL;
-    in.id = args->inputs[IN_ID].data ? &args->inputs[IN_ID] : NULL;
-    in.frame = args->frame;
-    return in;
-}
-
-static nprfx_result st_render(const nprfx_render_args *args, const void *typed)
-{
-    nprfx_result r = st_check(args);
-    if (r != NPRFX_OK) return r;
-    if (!args->output)
-        return nprfx_error(args->ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: no output image");
-    nprfx_stipple_params p;
-    float curve[NPRFX_STIPPLE_CURVE_SIZE];
-    if ((r = st_params_full(args, &p, curve)) != NPRFX_OK) return r;
-    nprfx_stipple_inputs in = st_inputs(args);
-    p.count = args->items;
-    return nprfx_stipple_render(args->ctx, &p, &in, args->window, args->output);
-}
-
-nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
-                                       nprfx_stipple_format_kind kind, char **text, size_t *len)
-{
-    nprfx_result r = st_check(args);
-    if (r != NPRFX_OK) return r;
-    nprfx_stipple_params p;
-    float curve[NPRFX_STIPPLE_CURVE_SIZE];
-    if ((r = st_params_full(args, &p, curve)) != NPRFX_OK) return r;
-    nprfx_stipple_inputs in = st_inputs(args);
-    nprfx_stipple *list = NULL;
-    size_t count = 0;
-    r = nprfx_stipple_collect(args->ctx, &p, &in, args->frame, &list, &count);
-    if (r == NPRFX_OK)
-        r = nprfx_stipple_format(args->ctx, list, count, args->frame, kind, p.ink, p.paper, text,
-                                 len);
-    free(list);
-    return r;
-}
-
-/* The descriptor's export hook: the format from the path's extension (case-insensitive). */
-static nprfx_result st_export_text(const nprfx_render_args *args, const void *typed,
-                                   const char *path, char **text,
-                                   size_t *len)
-{
-    if (!text)
-        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
-                           "stipple.export: NULL output");
-    *text = NULL;
-    if (len) *len = 0;
-    const char *p = path ? path : "";
-    const char *slash = strrchr(p, '/'), *dot = strrchr(p, '.');
-    if (dot && slash && dot < slash) dot = NULL; /* a dot in a directory name */
-    const char *ext = dot ? dot + 1 : "";
-    char low[8] = {0};
-    size_t n = strlen(ext);
-    for (size_t i = 0; i < n && i < sizeof low - 1; i++)
-        low[i] = (char)(ext[i] >= 'A' && ext[i] <= 'Z' ? ext[i] - 'A' + 'a' : ext[i]);
-    if (n == 3 && !strcmp(low, "csv"))
-        return nprfx_stipple_node_export(args, NPRFX_STIPPLE_CSV, text, len);
-    if (n == 3 && !strcmp(low, "svg"))
-        return nprfx_stipple_node_export(args, NPRFX_STIPPLE_SVG, text, len);
-    if (!dot)
-        return nprfx_error(args->ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "stipple.export: '%s' has no extension: end it in .csv or .svg", p);
-    return nprfx_error(args->ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                       "stipple.export: unknown extension '.%s' in '%s': use .csv (a table of "
-                       "dots) or .svg (vector discs)",
-                       ext, p);
+    return nprfx_stipple_export_text(a, params, nprfx_stipple_shipped_sequence, path, text, len);
 }
 
 const nprfx_node_desc nprfx_node_stipple = {
@@ -530,7 +291,9 @@ const nprfx_node_desc nprfx_node_stipple = {
     .output = st_output,
     .flags = NPRFX_NODE_STATEFUL,
     .render = st_render,
-    .state_free = st_state_free,
+    .state_free = nprfx_stipple_node_state_free,
     .export_text = st_export_text,
     .item_name = "stipples",
+    .params_size = sizeof(sp),
+    .version_major = 1,
 };

@@ -23,6 +23,7 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -43,17 +44,17 @@ typedef enum nprfx_blend_mode {
 
 /* ---- the formulas, one channel value at a time ---- */
 
-double nprfx_blend_alpha(double c0, double c1, double a);
-double nprfx_blend_overlay(double c0, double c1, double f);
-double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f, double a);
-double nprfx_blend_multiply(double c0, double c1);
-double nprfx_blend_screen(double c0, double c1);
-double nprfx_blend_pigment(double c, double d);
+NPRFX_API double nprfx_blend_alpha(double c0, double c1, double a);
+NPRFX_API double nprfx_blend_overlay(double c0, double c1, double f);
+NPRFX_API double nprfx_blend_overlay_alpha(double back, double c0, double c1, double f, double a);
+NPRFX_API double nprfx_blend_multiply(double c0, double c1);
+NPRFX_API double nprfx_blend_screen(double c0, double c1);
+NPRFX_API double nprfx_blend_pigment(double c, double d);
 /* Scaled absolute difference (a compositor's "difference" merge): what changed between two
  * frames (Kass & Pesare's Figure 2). */
-double nprfx_blend_difference(double c0, double c1, double f);
+NPRFX_API double nprfx_blend_difference(double c0, double c1, double f);
 /* Bousseau et al.'s density from a texture value: d = 1 + beta (t - 0.5). */
-double nprfx_blend_pigment_density(double t, double beta);
+NPRFX_API double nprfx_blend_pigment_density(double t, double beta);
 
 /* One channel in one mode with the opacity rule the blend node documents:
  *   alphablend    nprfx_blend_alpha(c0, c1, a)
@@ -65,8 +66,8 @@ double nprfx_blend_pigment_density(double t, double beta);
  *   difference    nprfx_blend_alpha(c0, difference(c0, c1, f), a)
  * i.e. the last four are mixed over c0 by a, as compositors apply a layer's opacity; `back` is
  * used by overlayalpha only. An out-of-range mode returns c0. */
-double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1, double f,
-                         double a);
+NPRFX_API double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1,
+                                   double f, double a);
 
 /* ---- the blend node over an image ---- */
 
@@ -90,10 +91,11 @@ typedef struct nprfx_blend_params {
  * opacity) and coverage (NULL: 1) may be NULL; back needs 1 channel or base's colour channels,
  * alpha and coverage are read from channel 0. Inputs read as 0 outside their data windows. Runs
  * on ctx's executor; bit-identical for any thread count and window split. */
-nprfx_result nprfx_blend_render(nprfx_context *ctx, const nprfx_blend_params *p,
-                                const nprfx_image *base, const nprfx_image *layer,
-                                const nprfx_image *back, const nprfx_image *alpha,
-                                const nprfx_image *coverage, nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_blend_render(nprfx_context *ctx, const nprfx_blend_params *p,
+                                          const nprfx_image *base, const nprfx_image *layer,
+                                          const nprfx_image *back, const nprfx_image *alpha,
+                                          const nprfx_image *coverage, nprfx_rect window,
+                                          nprfx_image *out);
 
 #ifdef __cplusplus
 }

@@ -62,9 +62,9 @@ typedef struct nprfx_morphology_params {
  * the window grown by the footprint, so tiles agree with the whole frame. fmaxf/fminf ignore a
  * NaN rather than spreading it. Runs on ctx's executor; bit-identical for any thread count and
  * window split. */
-nprfx_result nprfx_morphology_render(nprfx_context *ctx, const nprfx_morphology_params *p,
-                                     const nprfx_image *image, nprfx_rect frame, nprfx_rect window,
-                                     nprfx_image *out);
+NPRFX_API nprfx_result nprfx_morphology_render(nprfx_context *ctx, const nprfx_morphology_params *p,
+                                               const nprfx_image *image, nprfx_rect frame,
+                                               nprfx_rect window, nprfx_image *out);
 
 /* ---- the warp node over an image ---- */
 
@@ -87,9 +87,9 @@ typedef struct nprfx_warp_params {
  * window the offset reads as 0 (no displacement); a NaN displacement leaves the pixel in place.
  * The image must not be empty; offset needs at least 2 channels. Runs on ctx's executor;
  * bit-identical for any thread count and window split. */
-nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
-                               const nprfx_image *image, const nprfx_image *offset,
-                               nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
+                                         const nprfx_image *image, const nprfx_image *offset,
+                                         nprfx_rect window, nprfx_image *out);
 
 #ifdef __cplusplus
 }

@@ -10,8 +10,9 @@
  * are bit-exact for a given compiler and architecture; a compiler that contracts a*b+c into FMA
  * may give a different, equally good sequence: ship the encoded file where that matters.)
  *
- * Core does no file I/O: the sequence is encoded into and decoded from memory buffers, and the
- * CLI (`nprfx ivs`) reads and writes the files. */
+ * Core does no file I/O: the sequence is encoded into and decoded from memory buffers, the CLI
+ * (`nprfx ivs`) reads and writes the files, and the stipple node reads the shipped one through
+ * plugins/support/data_files.c. */
 #ifndef NPRFX_IVS_H
 #define NPRFX_IVS_H
 

@@ -123,7 +123,7 @@ NPRFX_API nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stip
                                             const nprfx_stipple_inputs *in, nprfx_rect window,
                                             nprfx_image *out);
 
-/* One stipple, as the vector export writes it. */
+/* One stipple, as the vector export (plugins/support/stipple_export.h, outside core) writes it. */
 typedef struct nprfx_stipple {
     double x, y;  /* screen position in core pixel coordinates (pixel centres at integers) */
     float radius; /* px */
@@ -133,39 +133,11 @@ typedef struct nprfx_stipple {
 } nprfx_stipple;
 
 /* The stipples owned by the pixels of `region` (usually the frame), in row-major order of their
- * pixels. *list is malloc'd (NULL when *count is 0); the caller frees it. */
+ * pixels. *list is malloc'd (NULL when *count is 0); the caller frees it. Core formats no files:
+ * plugins/support/stipple_export.c writes the list as CSV or SVG. */
 NPRFX_API nprfx_result nprfx_stipple_collect(nprfx_context *ctx, const nprfx_stipple_params *p,
                                              const nprfx_stipple_inputs *in, nprfx_rect region,
                                              nprfx_stipple **list, size_t *count);
-
-/* Vector export formats for nprfx_stipple_format. Coordinates in both are image-plane pixels
- * with the frame's top-left corner at (0, 0) and y down (a core position x becomes
- * x - frame.x0 + 0.5), so pixel (i, j) covers [i, i+1) x [j, j+1).
- *   CSV: the header line "x,y,radius,tone,sample,object", then one stipple per line.
- *   SVG: an <svg> with viewBox "0 0 W H" (the frame size), a rectangle of the paper colour,
- *        and one <circle cx cy r> per stipple, filled with the ink colour at opacity = tone. */
-typedef enum nprfx_stipple_format_kind {
-    NPRFX_STIPPLE_CSV = 0,
-    NPRFX_STIPPLE_SVG = 1
-} nprfx_stipple_format_kind;
-
-/* Format a stipple list as text (malloc'd, NUL-terminated; *len excludes the NUL). ink/paper are
- * RGBA (display-referred values in [0, 1] are expected for SVG; they are clamped). The CLI writes
- * the text to the frame's export path; core does no file I/O. */
-NPRFX_API nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list,
-                                            size_t count, nprfx_rect frame,
-                                            nprfx_stipple_format_kind kind, const float *ink,
-                                            const float *paper, char **text, size_t *len);
-
-/* The stipple node's vector export (defined with the node in plugins/stipple.c, library
- * nprfx_nodes): the stipples of the whole frame for render arguments of the `stipple` node
- * (its inputs and params at the frame's time; window is ignored), formatted as `kind`. The CLI
- * calls this after rendering a frame whose `export` param is set and writes the text to the
- * frame's path (".csv" -> NPRFX_STIPPLE_CSV, ".svg" -> NPRFX_STIPPLE_SVG). */
-struct nprfx_render_args;
-NPRFX_API nprfx_result nprfx_stipple_node_export(const struct nprfx_render_args *args,
-                                                 nprfx_stipple_format_kind kind, char **text,
-                                                 size_t *len);
 
 /* A lazily grown IVS sequence (seed NPRFX_IVS_DEFAULT_SEED) with its spatial index, owned by
  * the caller: there is no process-wide sequence. Empty when created (cheap). Its points are the
@@ -197,6 +169,55 @@ NPRFX_API void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
  * until seq is destroyed. */
 NPRFX_API nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *seq,
                                                     int min_count, const nprfx_ivs_index **out);
+
+/* ---- the stipple node (core/stipple_node.c; its descriptor is plugins/stipple.c) ---- */
+
+/* The node's inputs, in its descriptor's order (render_args->inputs). */
+enum {
+    NPRFX_STIPPLE_IN_TONE, /* required: the shading */
+    NPRFX_STIPPLE_IN_UV,   /* optional: 2 channels */
+    NPRFX_STIPPLE_IN_ID,   /* optional: 1 channel */
+    NPRFX_STIPPLE_IN_COUNT
+};
+
+/* The node's params, as its descriptor binds them (by offset; areas already multiplied by the
+ * render scale squared). docs/nodes.md describes each. */
+typedef struct nprfx_stipple_node_params {
+    int mode;                /* nprfx_stipple_mode */
+    double size;             /* px^2: nprfx_stipple_params.area */
+    double a0, delta_min;    /* px^2 */
+    const char *tones;       /* multitone: pen darknesses, "0.33,0.67,1" */
+    double tile, aspect;     /* UV period and aspect */
+    double ink[4], paper[4]; /* RGBA, premultiplied */
+    int seed;
+    int tone_correction;     /* measure and invert the darkness overlapping dots give */
+    int coverage;            /* a 5th output channel, the ink coverage */
+    const char *export_path; /* the front end writes the node's text export there ("": none) */
+} nprfx_stipple_node_params;
+
+/* Makes the dot sequence a node instance keeps, on its first render: e.g. one preloaded from the
+ * shipped data file (plugins/support/data_files.h), which core does not read. */
+typedef nprfx_result (*nprfx_stipple_sequence_fn)(nprfx_context *ctx, nprfx_stipple_sequence **out);
+
+struct nprfx_render_args; /* nprfx/node.h */
+
+/* Render args->window of the stipple node (args as nprfx_node_render hands them on, checked, with
+ * np its bound params): the tones parsed (multitone; errors name stipple.tones), the pixels
+ * without a uv input in units of NPRFX_STIPPLE_PLANE_PIXELS * render scale, the dots drawn
+ * counted into args->items. The instance state (args->state, NULL: none, each call then
+ * generates what it needs) keeps the sequence, made by make_sequence (NULL: generated) on first
+ * use, and the tone-correction curve of the last params; it never changes a result. Free it
+ * with nprfx_stipple_node_state_free. Safe on several tiles of one instance at once. */
+NPRFX_API nprfx_result nprfx_stipple_node_render(const struct nprfx_render_args *args,
+                                                 const nprfx_stipple_node_params *np,
+                                                 nprfx_stipple_sequence_fn make_sequence);
+/* The stipples of the whole frame (args->frame; window is ignored) for the same arguments, as
+ * nprfx_stipple_collect lists them: what the node's vector export writes. */
+NPRFX_API nprfx_result nprfx_stipple_node_collect(const struct nprfx_render_args *args,
+                                                  const nprfx_stipple_node_params *np,
+                                                  nprfx_stipple_sequence_fn make_sequence,
+                                                  nprfx_stipple **list, size_t *count);
+NPRFX_API void nprfx_stipple_node_state_free(void *state);
 
 #ifdef __cplusplus
 }

@@ -6,6 +6,7 @@
 #include "nprfx/context.h"
 #include "nprfx/image.h"
 #include "nprfx/node.h"
+#include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -19,17 +20,19 @@ typedef struct nprfx_time_offset_params {
 /* The frame shown at `time`: time + offset, clamped to [first_frame, last_frame] when
  * first_frame <= last_frame (so frame 1 of a "previous frame" graph does not ask for a frame 0
  * that was never rendered). */
-double nprfx_time_offset_frame(double time, int offset, int first_frame, int last_frame);
+NPRFX_API double nprfx_time_offset_frame(double time, int offset, int first_frame, int last_frame);
 
 /* Render `window` of out at frame `time` of the shot [first_frame, last_frame]. Offset 0 copies
  * `image` (the input at `time`; the overlap of its data window and out's bounds). Otherwise the
  * input at nprfx_time_offset_frame(...) comes from fetch(fetch_user, input, frame, &view) (the
  * front end's nprfx_fetch_fn; NULL: NPRFX_ERR_UNSUPPORTED) and must have out's channels; the
  * window reads 0 outside its data window, as EXR readers do. */
-nprfx_result nprfx_time_offset_render(nprfx_context *ctx, const nprfx_time_offset_params *p,
-                                      const nprfx_image *image, double time, int first_frame,
-                                      int last_frame, nprfx_fetch_fn fetch, void *fetch_user,
-                                      int input, nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_time_offset_render(nprfx_context *ctx,
+                                                const nprfx_time_offset_params *p,
+                                                const nprfx_image *image, double time,
+                                                int first_frame, int last_frame,
+                                                nprfx_fetch_fn fetch, void *fetch_user, int input,
+                                                nprfx_rect window, nprfx_image *out);
 
 #ifdef __cplusplus
 }

@@ -16,6 +16,7 @@
 #include "nprfx/metrics.h"
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
+#include "support/stipple_export.h"
 
 static nprfx_context *ctx1;         /* serial */
 static nprfx_context *ctx4;         /* 4 threads */
@@ -681,6 +682,7 @@ static void test_export(void)
 {
     node = nprfx_node_find("stipple");
     if (!node) return;
+    CHECK_OK(nprfx_node_lint(ctx1, node)); /* params bound by offset, each to its own field */
     const int w = 64, h = 48;
     nprfx_image tone = th_image(w, h, 1, NULL);
     for (int y = 0; y < h; y++)
@@ -700,6 +702,9 @@ static void test_export(void)
     a.inputs = inputs;
     a.params = pv;
     a.state = &node_state;
+    nprfx_image out = th_image(w, h, 4, NULL); /* the export goes through nprfx_node_export,
+                                                * which checks the args of any node call */
+    a.output = &out;
     pv[th_param(node, "tone_correction")].v[0] = 0; /* compared with the plain core call below */
     char *csv = NULL, *svg = NULL;
     size_t len = 0;
@@ -736,7 +741,6 @@ static void test_export(void)
     nprfx_image none[3] = {{0}, {0}, {0}};
     a.inputs = none;
     CHECK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len) == NPRFX_ERR_MISSING_INPUT);
-    nprfx_image out = th_image(w, h, 4, NULL);
     CHECK(node_render(ctx1, none, pv, &out, out.bounds) == NPRFX_ERR_MISSING_INPUT);
     pv[th_param(node, "mode")].v[0] = NPRFX_STIPPLE_MULTITONE;
     pv[th_param(node, "tones")].s = "0.5, banana";

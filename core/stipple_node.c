@@ -1,0 +1,175 @@
+/* The stipple node over its render arguments: its bound params into core's (the pen tones
+ * parsed), the per-instance cache (the dot sequence, the tone-correction curve of the last
+ * params) in the instance slot, then nprfx_stipple_render or nprfx_stipple_collect. No file I/O:
+ * the caller's make_sequence brings a shipped sequence. See nprfx/stipple.h. */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nprfx/node.h"
+#include "nprfx/stipple.h"
+
+/* ---- the per-instance cache: the dot sequence, and the tone-correction curve of the last
+ * params ---- */
+
+typedef struct node_state {
+    nprfx_stipple_sequence *seq; /* grown on demand, thread-safe on its own */
+    pthread_mutex_t lock;        /* guards the curve */
+    int valid;
+    nprfx_stipple_params key; /* the params the curve was measured for */
+    float curve[NPRFX_STIPPLE_CURVE_SIZE];
+} node_state;
+
+void nprfx_stipple_node_state_free(void *state)
+{
+    node_state *s = state;
+    if (!s) return;
+    nprfx_stipple_sequence_destroy(s->seq);
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+}
+
+/* The instance state, created on first use; NULL when the caller gives no state slot (then
+ * each call builds what it needs). Hosts may render tiles of one instance on several threads
+ * at once: a fresh state is installed with a compare-and-swap, the loser frees its own. */
+static nprfx_result get_state(const nprfx_render_args *args,
+                              nprfx_stipple_sequence_fn make_sequence, node_state **out)
+{
+    *out = NULL;
+    if (!args->state) return NPRFX_OK;
+    _Atomic(void *) *slot = (_Atomic(void *) *)args->state;
+    node_state *s = atomic_load(slot);
+    if (!s) {
+        node_state *fresh = calloc(1, sizeof *fresh);
+        if (!fresh)
+            return nprfx_error(args->ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
+        nprfx_result r = make_sequence ? make_sequence(args->ctx, &fresh->seq)
+                                       : nprfx_stipple_sequence_create(args->ctx, &fresh->seq);
+        if (r != NPRFX_OK) {
+            nprfx_stipple_sequence_destroy(fresh->seq);
+            free(fresh);
+            return r;
+        }
+        pthread_mutex_init(&fresh->lock, NULL);
+        void *expected = NULL;
+        if (atomic_compare_exchange_strong(slot, &expected, fresh)) {
+            s = fresh;
+        } else {
+            nprfx_stipple_node_state_free(fresh);
+            s = expected;
+        }
+    }
+    *out = s;
+    return NPRFX_OK;
+}
+
+/* The curve depends on the mode and the dot sizes and pens, nothing else. */
+static int same_curve_params(const nprfx_stipple_params *a, const nprfx_stipple_params *b)
+{
+    if (a->mode != b->mode || a->area != b->area || a->a0 != b->a0 ||
+        a->delta_min != b->delta_min || a->num_tones != b->num_tones)
+        return 0;
+    for (int i = 0; i < a->num_tones; i++)
+        if (a->tones[i] != b->tones[i]) return 0;
+    return 1;
+}
+
+/* Fill curve for p, through the instance cache when there is one (computed under its lock). */
+static nprfx_result tone_curve(nprfx_context *ctx, node_state *s, const nprfx_stipple_params *p,
+                               float *curve)
+{
+    if (!s) return nprfx_stipple_tone_curve(ctx, p, curve);
+    nprfx_result r = NPRFX_OK;
+    pthread_mutex_lock(&s->lock);
+    if (!s->valid || !same_curve_params(&s->key, p)) {
+        s->valid = 0;
+        r = nprfx_stipple_tone_curve(ctx, p, s->curve);
+        if (r == NPRFX_OK) {
+            s->key = *p;
+            s->valid = 1;
+        }
+    }
+    if (r == NPRFX_OK) memcpy(curve, s->curve, sizeof s->curve);
+    pthread_mutex_unlock(&s->lock);
+    return r;
+}
+
+/* ---- node params to core params ---- */
+
+/* Core params for the node's (the render scale is already applied to the areas), with the
+ * instance's sequence and the tone curve when the params ask for it (curve: the caller's
+ * storage). */
+static nprfx_result core_params(const nprfx_render_args *args, const nprfx_stipple_node_params *np,
+                                nprfx_stipple_sequence_fn make_sequence, nprfx_stipple_params *p,
+                                float *curve)
+{
+    nprfx_stipple_params_default(p);
+    p->mode = np->mode;
+    p->area = np->size;
+    p->a0 = np->a0;
+    p->delta_min = np->delta_min;
+    p->tile = np->tile;
+    p->aspect = np->aspect;
+    double scale = args->render_scale > 0 ? args->render_scale : 1.0;
+    p->plane_scale = NPRFX_STIPPLE_PLANE_PIXELS * scale;
+    for (int c = 0; c < 4; c++) {
+        p->ink[c] = (float)np->ink[c];
+        p->paper[c] = (float)np->paper[c];
+    }
+    p->seed = (uint64_t)np->seed;
+    p->coverage_channel = np->coverage != 0;
+    nprfx_result r = NPRFX_OK;
+    if (p->mode == NPRFX_STIPPLE_MULTITONE) r = nprfx_stipple_parse_tones(args->ctx, np->tones, p);
+    node_state *s = NULL;
+    if (r == NPRFX_OK) r = get_state(args, make_sequence, &s);
+    if (r != NPRFX_OK) return r;
+    p->sequence = s ? s->seq : NULL;
+    if (np->tone_correction) {
+        r = tone_curve(args->ctx, s, p, curve);
+        p->tone_curve = curve;
+    }
+    return r;
+}
+
+static nprfx_stipple_inputs node_inputs(const nprfx_render_args *args)
+{
+    nprfx_stipple_inputs in;
+    in.tone = &args->inputs[NPRFX_STIPPLE_IN_TONE];
+    in.uv = nprfx_render_input(args, NPRFX_STIPPLE_IN_UV);
+    in.id = nprfx_render_input(args, NPRFX_STIPPLE_IN_ID);
+    in.frame = args->frame;
+    return in;
+}
+
+nprfx_result nprfx_stipple_node_render(const nprfx_render_args *args,
+                                       const nprfx_stipple_node_params *np,
+                                       nprfx_stipple_sequence_fn make_sequence)
+{
+    if (!args || !np || !args->inputs || !args->output)
+        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
+                           "stipple: incomplete render arguments");
+    nprfx_stipple_params p;
+    float curve[NPRFX_STIPPLE_CURVE_SIZE];
+    nprfx_result r = core_params(args, np, make_sequence, &p, curve);
+    if (r != NPRFX_OK) return r;
+    nprfx_stipple_inputs in = node_inputs(args);
+    p.count = args->items;
+    return nprfx_stipple_render(args->ctx, &p, &in, args->window, args->output);
+}
+
+nprfx_result nprfx_stipple_node_collect(const nprfx_render_args *args,
+                                        const nprfx_stipple_node_params *np,
+                                        nprfx_stipple_sequence_fn make_sequence,
+                                        nprfx_stipple **list, size_t *count)
+{
+    if (!args || !np || !args->inputs)
+        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
+                           "stipple: incomplete render arguments");
+    nprfx_stipple_params p;
+    float curve[NPRFX_STIPPLE_CURVE_SIZE];
+    nprfx_result r = core_params(args, np, make_sequence, &p, curve);
+    if (r != NPRFX_OK) return r;
+    nprfx_stipple_inputs in = node_inputs(args);
+    return nprfx_stipple_collect(args->ctx, &p, &in, args->frame, list, count);
+}
