@@ -1,6 +1,6 @@
 /* Coherent noise (Kass & Pesare 2011): the per-frame recursion, its noise sources and the
  * stationary resampler. See include/nprfx/coherent_noise.h for the maths; the node's caching and
- * render-order logic lives in plugins/coherent_noise.c.
+ * render-order logic lives in core/cn_temporal.c.
  *
  * Everything here is a pure function of its arguments: row-parallel loops write disjoint rows and
  * every random number is a hash of its counter, so results do not depend on the thread count.
