@@ -1,6 +1,6 @@
 /* The coherent-noise node: Kass & Pesare's depth- and motion-aware recursive noise filter. This
  * file holds its descriptor and hands the param values to core: the recursion is in
- * core/coherent_noise.c, the render-order independent driver (a per-instance cache of pass states
+ * core/cn_step.c, the render-order independent driver (a per-instance cache of pass states
  * with checkpoints) in core/cn_temporal.c. */
 #include <stdint.h>
 #include <string.h>
