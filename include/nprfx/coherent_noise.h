@@ -26,6 +26,7 @@
 
 #include "nprfx/image.h"
 #include "nprfx/export.h"
+#include "nprfx/node.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -128,6 +129,56 @@ NPRFX_API nprfx_result nprfx_cn_smooth(nprfx_context *ctx, const nprfx_cn_params
                                        nprfx_image *img);
 /* The variance of a unit innovation field after a Gaussian blur of sigma (1 when sigma is 0). */
 NPRFX_API double nprfx_cn_smoothed_variance(const nprfx_cn_params *p, double sigma);
+
+/* ---- the node: any frame of a shot, in any order (core/cn_temporal.c) ---- */
+
+/* The node's inputs, in this order in args->inputs and for args->fetch. */
+enum {
+    NPRFX_CN_IN_DEPTH,       /* channel 0 */
+    NPRFX_CN_IN_MOTION_PREV, /* channels 0-1 */
+    NPRFX_CN_IN_MOTION_NEXT, /* channels 0-1; symmetric mode */
+    NPRFX_CN_IN_ZVEL,        /* channel 0; optional */
+    NPRFX_CN_IN_SOURCE,      /* noise = input: 1 to 4 channels */
+    NPRFX_CN_IN_COUNT
+};
+
+typedef enum nprfx_cn_mode {
+    NPRFX_CN_MODE_CAUSAL = 0,    /* the forward pass alone */
+    NPRFX_CN_MODE_SYMMETRIC = 1, /* forward and backward passes combined (Eq. 11) */
+    NPRFX_CN_MODE_COUNT
+} nprfx_cn_mode;
+
+typedef enum nprfx_cn_output {
+    NPRFX_CN_OUTPUT_UNIT = 0,   /* zero mean, unit variance */
+    NPRFX_CN_OUTPUT_UNIT01 = 1, /* 0.5 + contrast * n */
+    NPRFX_CN_OUTPUT_COUNT
+} nprfx_cn_output;
+
+/* The node's params, as its descriptor binds them by offset (plugins/coherent_noise.c has their
+ * help and ranges; nprfx_node_render checks them). */
+typedef struct nprfx_coherent_noise_params {
+    double alpha;
+    int mode; /* nprfx_cn_mode */
+    double epsilon;
+    int noise; /* nprfx_cn_noise */
+    double sigma_lo, sigma_hi;
+    double smooth; /* post-smoothing sigma in pixels */
+    int channels;  /* noise channels, 1-4 (input mode: the source's) */
+    int seed;      /* >= 0 */
+    int start;     /* first frame of the recursion (the shot's first frame if later) */
+    int window;    /* 0: from start; W > 0: at most W steps back (and forward) */
+    int output;    /* nprfx_cn_output; not for noise = input */
+    double contrast;
+    int cache_mb; /* memory bound of the per-instance state cache */
+} nprfx_coherent_noise_params;
+
+/* Render args->window of the frame at args->time (NPRFX_NODE_TEMPORAL: other frames of the
+ * inputs through args->fetch; symmetric mode needs the shot's frame range). *args->state holds the
+ * instance's cache of pass states (NPRFX_NODE_STATEFUL): the result never depends on it, it only
+ * saves work; free it with nprfx_coherent_noise_state_free. */
+NPRFX_API nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
+                                                   const nprfx_coherent_noise_params *p);
+NPRFX_API void nprfx_coherent_noise_state_free(void *state);
 
 #ifdef __cplusplus
 }

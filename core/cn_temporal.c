@@ -1,0 +1,629 @@
+/* The coherent-noise node's temporal driver (Kass & Pesare 2011): frame i is defined by the
+ * recursion from the start frame (or from max(start, i - window)), so a render of any frame walks
+ * the passes there from the nearest saved state. A per-instance cache of pass states with
+ * checkpoints makes that render-order independent: in-order rendering costs one step per frame,
+ * random access recomputes from the nearest checkpoint within the cache's memory bound. Inputs at
+ * other frames come from the host through args->fetch. */
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nprfx/coherent_noise.h"
+#include "nprfx/context.h"
+#include "nprfx/exec.h"
+#include "nprfx/node.h"
+
+enum {
+    IN_DEPTH = NPRFX_CN_IN_DEPTH,
+    IN_MOTION_PREV = NPRFX_CN_IN_MOTION_PREV,
+    IN_MOTION_NEXT = NPRFX_CN_IN_MOTION_NEXT,
+    IN_ZVEL = NPRFX_CN_IN_ZVEL,
+    IN_SOURCE = NPRFX_CN_IN_SOURCE,
+    IN_COUNT = NPRFX_CN_IN_COUNT
+};
+
+/* ---- the state cache ----------------------------------------------------------------------- */
+
+typedef struct cn_slot {
+    int used;
+    int64_t frame;
+    uint64_t fingerprint; /* of the inputs read at this frame */
+    nprfx_cn_state st;    /* value.data NULL until allocated */
+} cn_slot;
+
+typedef struct cn_pass {
+    int dir;
+    int64_t origin;
+    int valid;
+    int K;         /* checkpoint spacing (0: none) */
+    cn_slot *ckpt; /* ncap checkpoints */
+    int ncap;
+    cn_slot *ring; /* the most recent run of states */
+    int nring, ring_next;
+    nprfx_cn_state scratch;
+    /* The depth read by the latest step (frame depth_frame, of the state whose fingerprint is
+     * depth_fp): the next in-order step needs it as the previous depth, and fetching another
+     * frame can be costly in a host (an upstream render, a channel repack). */
+    nprfx_image depth;
+    int64_t depth_frame;
+    uint64_t depth_fp;
+    int depth_valid;
+} cn_pass;
+
+typedef struct cn_cache {
+    pthread_mutex_t lock;
+    uint64_t key;
+    int have_key;
+    cn_pass pass[2]; /* forward, backward */
+    nprfx_image result;
+    int64_t result_frame;
+    uint64_t result_key, result_fp;
+    int has_result;
+} cn_cache;
+
+static void cn_slot_free(cn_slot *s)
+{
+    nprfx_cn_state_free(&s->st);
+    s->used = 0;
+}
+
+static void cn_pass_free(cn_pass *ps)
+{
+    for (int i = 0; i < ps->ncap; i++)
+        cn_slot_free(&ps->ckpt[i]);
+    for (int i = 0; i < ps->nring; i++)
+        cn_slot_free(&ps->ring[i]);
+    free(ps->ckpt);
+    free(ps->ring);
+    nprfx_cn_state_free(&ps->scratch);
+    nprfx_image_free(&ps->depth);
+    memset(ps, 0, sizeof *ps);
+}
+
+void nprfx_coherent_noise_state_free(void *state)
+{
+    cn_cache *c = state;
+    if (!c) return;
+    cn_pass_free(&c->pass[0]);
+    cn_pass_free(&c->pass[1]);
+    nprfx_image_free(&c->result);
+    pthread_mutex_destroy(&c->lock);
+    free(c);
+}
+
+/* The instance's cache, created on first use. Two tiles of the first render may race here: the
+ * loser of the compare-and-swap frees its copy. */
+static cn_cache *cn_cache_get(void **slot)
+{
+    cn_cache *c = __atomic_load_n((cn_cache **)slot, __ATOMIC_ACQUIRE);
+    if (c) return c;
+    cn_cache *mine = calloc(1, sizeof *mine);
+    if (!mine) return NULL;
+    if (pthread_mutex_init(&mine->lock, NULL) != 0) {
+        free(mine);
+        return NULL;
+    }
+    void *expected = NULL;
+    if (__atomic_compare_exchange_n(slot, &expected, (void *)mine, 0, __ATOMIC_ACQ_REL,
+                                    __ATOMIC_ACQUIRE))
+        return mine;
+    pthread_mutex_destroy(&mine->lock);
+    free(mine);
+    return expected;
+}
+
+/* FNV-1a over bytes. */
+static uint64_t cn_hash_bytes(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *b = data;
+    for (size_t i = 0; i < n; i++) {
+        h ^= b[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+#define CN_HASH_INIT 0xcbf29ce484222325ull
+static uint64_t cn_hash_f64(uint64_t h, double v)
+{
+    return cn_hash_bytes(h, &v, sizeof v);
+}
+static uint64_t cn_hash_i64(uint64_t h, int64_t v)
+{
+    return cn_hash_bytes(h, &v, sizeof v);
+}
+
+/* A sparse fingerprint of an input view (a fixed 32x32 grid of samples plus its shape): cheap
+ * enough for every render call, and enough to notice an upstream change in a host that keeps the
+ * instance alive. */
+static uint64_t cn_fingerprint(uint64_t h, const nprfx_image *im)
+{
+    if (!im || !im->data) return cn_hash_bytes(h, "none", 4);
+    h = cn_hash_bytes(h, &im->bounds, sizeof im->bounds);
+    h = cn_hash_bytes(h, &im->channels, sizeof im->channels);
+    int w = nprfx_rect_width(im->bounds), ht = nprfx_rect_height(im->bounds);
+    for (int j = 0; j < 32; j++)
+        for (int i = 0; i < 32; i++) {
+            int x = im->bounds.x0 + (int)(((int64_t)(2 * i + 1) * w) / 64);
+            int y = im->bounds.y0 + (int)(((int64_t)(2 * j + 1) * ht) / 64);
+            h = cn_hash_bytes(h, nprfx_image_at(im, x, y), sizeof(float) * (size_t)im->channels);
+        }
+    return h;
+}
+
+/* ---- one render ---------------------------------------------------------------------------- */
+
+typedef struct cn_run {
+    const nprfx_render_args *args;
+    nprfx_context *ctx;
+    nprfx_cn_params p;
+    int symmetric, window, have_zvel;
+    int64_t frame, start, last;
+    size_t budget; /* bytes for pass states */
+} cn_run;
+
+static nprfx_result cn_fetch(const cn_run *run, int input, int64_t frame, nprfx_image *out)
+{
+    const nprfx_render_args *a = run->args;
+    static const char *const names[IN_COUNT] = {"depth", "motion_prev", "motion_next", "zvel",
+                                                "source"};
+    memset(out, 0, sizeof *out);
+    if (frame == run->frame && a->inputs[input].data) {
+        /* The render call's own inputs are the inputs at this frame: no second fetch. */
+        *out = a->inputs[input];
+        return NPRFX_OK;
+    }
+    if (!a->fetch) {
+        if (frame != run->frame)
+            return nprfx_error(run->ctx, NPRFX_ERR_UNSUPPORTED,
+                               "coherent-noise: frame %lld needs input '%s' at frame %lld, but "
+                               "the host cannot fetch other frames",
+                               (long long)run->frame, names[input], (long long)frame);
+        *out = a->inputs[input];
+    } else {
+        nprfx_result r = a->fetch(a->fetch_user, input, (double)frame, out);
+        if (r)
+            return nprfx_error(run->ctx, r,
+                               "coherent-noise: could not fetch input '%s' at frame %lld",
+                               names[input], (long long)frame);
+    }
+    if (!out->data)
+        return nprfx_error(run->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "coherent-noise: input '%s' is not connected", names[input]);
+    return NPRFX_OK;
+}
+
+static nprfx_result cn_frame_fingerprint(const cn_run *run, int dir, int64_t f, uint64_t *fp)
+{
+    nprfx_image im;
+    uint64_t h = CN_HASH_INIT;
+    nprfx_result r;
+    int ins[3] = {IN_DEPTH, dir > 0 ? IN_MOTION_PREV : IN_MOTION_NEXT,
+                  run->p.noise == NPRFX_CN_NOISE_INPUT ? IN_SOURCE : -1};
+    for (int k = 0; k < 3; k++) {
+        if (ins[k] < 0) continue;
+        if ((r = cn_fetch(run, ins[k], f, &im))) return r;
+        h = cn_fingerprint(h, &im);
+    }
+    *fp = h;
+    return NPRFX_OK;
+}
+
+static nprfx_result cn_slot_ensure(const cn_run *run, nprfx_cn_state *st)
+{
+    if (st->value.data) return NPRFX_OK;
+    return nprfx_cn_state_alloc(run->ctx, run->args->frame, run->p.channels, st);
+}
+
+/* Sizes the pass for a span of n frames within the byte budget: checkpoints every K frames and
+ * a ring of K recent states (sqrt decomposition: any frame is at most K steps from a checkpoint
+ * and in-order or reverse-order rendering recomputes each block once). */
+static nprfx_result cn_pass_configure(const cn_run *run, cn_pass *ps, int dir, int64_t origin,
+                                      int64_t n)
+{
+    if (ps->valid && ps->dir == dir && ps->origin == origin) return NPRFX_OK;
+    cn_pass_free(ps);
+    ps->dir = dir;
+    ps->origin = origin;
+    size_t sb = nprfx_cn_state_bytes(run->args->frame, run->p.channels);
+    int64_t m = sb ? (int64_t)(run->budget / sb) : 0;
+    if (n < 1) n = 1;
+    int64_t k = (int64_t)ceil(sqrt((double)n));
+    if (m >= 2 * k + 1) {
+        ps->K = (int)k;
+        ps->nring = (int)k;
+    } else if (m >= 2) {
+        ps->nring = 1;
+        ps->K = (int)((n + (m - 1) - 1) / (m - 1));
+    } else {
+        ps->nring = 1;
+        ps->K = 0;
+    }
+    ps->ncap = ps->K > 0 ? (int)(n / ps->K + 2) : 0;
+    ps->ckpt = ps->ncap ? calloc((size_t)ps->ncap, sizeof(cn_slot)) : NULL;
+    ps->ring = calloc((size_t)ps->nring, sizeof(cn_slot));
+    if ((ps->ncap && !ps->ckpt) || !ps->ring) {
+        cn_pass_free(ps);
+        return nprfx_error(run->ctx, NPRFX_ERR_OUT_OF_MEMORY, "coherent-noise: out of memory");
+    }
+    ps->valid = 1;
+    return NPRFX_OK;
+}
+
+static cn_slot *cn_pass_find(cn_pass *ps, int64_t f)
+{
+    for (int i = 0; i < ps->nring; i++)
+        if (ps->ring[i].used && ps->ring[i].frame == f) return &ps->ring[i];
+    for (int i = 0; i < ps->ncap; i++)
+        if (ps->ckpt[i].used && ps->ckpt[i].frame == f) return &ps->ckpt[i];
+    return NULL;
+}
+
+/* The saved state nearest to f on the origin side (NULL: none). */
+static cn_slot *cn_pass_nearest(cn_pass *ps, int64_t f)
+{
+    cn_slot *best = NULL;
+    int64_t bd = INT64_MAX;
+    for (int pass = 0; pass < 2; pass++) {
+        cn_slot *s = pass ? ps->ckpt : ps->ring;
+        int n = pass ? ps->ncap : ps->nring;
+        for (int i = 0; i < n; i++) {
+            if (!s[i].used) continue;
+            int64_t d = (f - s[i].frame) * ps->dir;
+            if (d >= 0 && (s[i].frame - ps->origin) * ps->dir >= 0 && d < bd) {
+                bd = d;
+                best = &s[i];
+            }
+        }
+    }
+    return best;
+}
+
+/* Push the scratch state (frame f) into the ring; the replaced buffers become the scratch. */
+static cn_slot *cn_pass_push(cn_pass *ps, int64_t f, uint64_t fp)
+{
+    cn_slot *s = &ps->ring[ps->ring_next];
+    ps->ring_next = (ps->ring_next + 1) % ps->nring;
+    nprfx_cn_state t = s->st;
+    s->st = ps->scratch;
+    ps->scratch = t;
+    s->used = 1;
+    s->frame = f;
+    s->fingerprint = fp;
+    return s;
+}
+
+static nprfx_result cn_pass_checkpoint(const cn_run *run, cn_pass *ps, const cn_slot *s)
+{
+    if (ps->K <= 0 || ((s->frame - ps->origin) * ps->dir) % ps->K != 0) return NPRFX_OK;
+    int idx = (int)(((s->frame - ps->origin) * ps->dir) / ps->K);
+    if (idx >= ps->ncap) return NPRFX_OK;
+    cn_slot *c = &ps->ckpt[idx];
+    if (c->used && c->frame == s->frame) return NPRFX_OK;
+    nprfx_result r = cn_slot_ensure(run, &c->st);
+    if (r) return r;
+    if ((r = nprfx_cn_state_copy(run->ctx, &s->st, &c->st))) return r;
+    c->used = 1;
+    c->frame = s->frame;
+    c->fingerprint = s->fingerprint;
+    return NPRFX_OK;
+}
+
+/* Keep a copy of the depth a step read at frame f (its state's fingerprint fp). Best effort:
+ * without memory the next step fetches the depth instead. */
+static void cn_copy(nprfx_context *ctx, const nprfx_image *src, nprfx_image *dst, nprfx_rect win,
+                    int unit01, float contrast);
+
+static void cn_pass_keep_depth(nprfx_context *ctx, cn_pass *ps, const nprfx_image *depth, int64_t f,
+                               uint64_t fp)
+{
+    ps->depth_valid = 0;
+    if (!ps->depth.data || !nprfx_rect_equal(ps->depth.bounds, depth->bounds)) {
+        nprfx_image_free(&ps->depth);
+        if (nprfx_image_alloc(NULL, depth->bounds, 1, &ps->depth)) return;
+    }
+    cn_copy(ctx, depth, &ps->depth, depth->bounds, 0, 0.0f);
+    ps->depth_frame = f;
+    ps->depth_fp = fp;
+    ps->depth_valid = 1;
+}
+
+/* The pass's state at frame f, computed from the nearest saved state (or the origin). */
+static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const cn_slot **out)
+{
+    nprfx_result r;
+    cn_slot *s = cn_pass_find(ps, f);
+    if (s) {
+        *out = s;
+        return NPRFX_OK;
+    }
+    if ((r = cn_slot_ensure(run, &ps->scratch))) return r;
+    const cn_slot *cur = cn_pass_nearest(ps, f);
+    int64_t g;
+    if (!cur) {
+        nprfx_image src = {0};
+        g = ps->origin;
+        if (run->p.noise == NPRFX_CN_NOISE_INPUT && (r = cn_fetch(run, IN_SOURCE, g, &src)))
+            return r;
+        uint64_t fp;
+        if ((r = cn_frame_fingerprint(run, ps->dir, g, &fp))) return r;
+        if ((r = nprfx_cn_begin(run->ctx, &run->p, g, &src, &ps->scratch))) return r;
+        cn_slot *ns = cn_pass_push(ps, g, fp);
+        if ((r = cn_pass_checkpoint(run, ps, ns))) return r;
+        cur = ns;
+    }
+    g = cur->frame;
+    int minput = ps->dir > 0 ? IN_MOTION_PREV : IN_MOTION_NEXT;
+    while (g != f) {
+        int64_t h = g + ps->dir;
+        nprfx_image depth, motion, zvel = {0}, depth_prev, src = {0};
+        if ((r = cn_fetch(run, IN_DEPTH, h, &depth)) || (r = cn_fetch(run, minput, h, &motion)))
+            return r;
+        if (ps->depth_valid && ps->depth_frame == g && ps->depth_fp == cur->fingerprint)
+            depth_prev = ps->depth;
+        else if ((r = cn_fetch(run, IN_DEPTH, g, &depth_prev)))
+            return r;
+        if (run->have_zvel && (r = cn_fetch(run, IN_ZVEL, h, &zvel))) return r;
+        if (run->p.noise == NPRFX_CN_NOISE_INPUT && (r = cn_fetch(run, IN_SOURCE, h, &src)))
+            return r;
+        uint64_t fp = cn_fingerprint(cn_fingerprint(CN_HASH_INIT, &depth), &motion);
+        if (run->p.noise == NPRFX_CN_NOISE_INPUT) fp = cn_fingerprint(fp, &src);
+        nprfx_cn_inputs in = {&depth, &motion, run->have_zvel ? &zvel : NULL, &depth_prev, &src};
+        if ((r = cn_slot_ensure(run, &ps->scratch))) return r;
+        if ((r = nprfx_cn_step(run->ctx, &run->p, ps->dir, h, &in, &cur->st, &ps->scratch)))
+            return r;
+        cn_slot *ns = cn_pass_push(ps, h, fp);
+        if ((r = cn_pass_checkpoint(run, ps, ns))) return r;
+        cn_pass_keep_depth(run->ctx, ps, &depth, h, fp);
+        cur = ns;
+        g = h;
+    }
+    *out = cur;
+    return NPRFX_OK;
+}
+
+static void cn_pass_invalidate(cn_pass *ps)
+{
+    ps->valid = 0;
+}
+
+/* Rows of win from src into dst (dst->channels channels); unit01: 0.5 + contrast * v. Row-parallel
+ * over the context's executor: the copies are a sizeable part of a frame's memory traffic. */
+typedef struct cn_copy_job {
+    const nprfx_image *src;
+    nprfx_image *dst;
+    nprfx_rect win;
+    int unit01;
+    float contrast;
+} cn_copy_job;
+
+static void cn_copy_rows(void *user, int begin, int end, int worker)
+{
+    const cn_copy_job *j = user;
+    const int C = j->dst->channels, w = nprfx_rect_width(j->win);
+    const size_t n = (size_t)w * (size_t)C;
+    const int packed = j->src->pixel_stride == C && j->dst->pixel_stride == C;
+    (void)worker;
+    for (int y = j->win.y0 + begin; y < j->win.y0 + end; y++) {
+        const float *s = nprfx_image_at(j->src, j->win.x0, y);
+        float *o = nprfx_image_at(j->dst, j->win.x0, y);
+        if (packed && !j->unit01) {
+            memcpy(o, s, n * sizeof(float));
+        } else if (packed) {
+            for (size_t i = 0; i < n; i++)
+                o[i] = 0.5f + j->contrast * s[i];
+        } else {
+            for (int x = 0; x < w; x++)
+                for (int c = 0; c < C; c++) {
+                    float v = s[(ptrdiff_t)x * j->src->pixel_stride + c];
+                    o[(ptrdiff_t)x * j->dst->pixel_stride + c] =
+                        j->unit01 ? 0.5f + j->contrast * v : v;
+                }
+        }
+    }
+}
+
+static void cn_copy(nprfx_context *ctx, const nprfx_image *src, nprfx_image *dst, nprfx_rect win,
+                    int unit01, float contrast)
+{
+    if (nprfx_rect_empty(win)) return;
+    cn_copy_job job = {src, dst, win, unit01, contrast};
+    nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(win), 32, cn_copy_rows, &job);
+}
+
+/* The render window of src into the output. */
+static void cn_copy_window(const nprfx_render_args *args, const nprfx_image *src, int unit01,
+                           float contrast)
+{
+    cn_copy(args->ctx, src, args->output, nprfx_rect_intersect(args->window, args->frame), unit01,
+            contrast);
+}
+
+nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
+                                         const nprfx_coherent_noise_params *np)
+{
+    if (!args || args->size < sizeof(nprfx_render_args) || !np ||
+        !args->output || !args->inputs || !args->state)
+        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
+                           "coherent-noise: incomplete render arguments");
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *in = args->inputs;
+    cn_run run;
+    memset(&run, 0, sizeof run);
+    run.args = args;
+    run.ctx = ctx;
+    nprfx_cn_params_default(&run.p);
+    run.p.alpha = np->alpha;
+    run.p.epsilon = np->epsilon;
+    run.p.noise = np->noise;
+    run.p.sigma_lo = np->sigma_lo;
+    run.p.sigma_hi = np->sigma_hi;
+    run.p.seed = (uint64_t)np->seed;
+    run.p.motion_scale = args->render_scale > 0.0 ? args->render_scale : 1.0;
+    int mode = np->mode, outmap = np->output;
+    double smooth = np->smooth, contrast = np->contrast;
+    run.symmetric = mode == NPRFX_CN_MODE_SYMMETRIC;
+    run.window = np->window;
+    run.frame = (int64_t)floor(args->time + 0.5);
+    if (mode < 0 || mode >= NPRFX_CN_MODE_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "coherent-noise.mode: no mode %d", mode);
+    if (outmap < 0 || outmap >= NPRFX_CN_OUTPUT_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "coherent-noise.output: no mapping %d",
+                           outmap);
+    if (run.window < 0)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "coherent-noise.window: %d is negative",
+                           run.window);
+    if (!(smooth >= 0.0))
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "coherent-noise.smooth: %g is negative",
+                           smooth);
+    if (!in[IN_DEPTH].data)
+        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                           "coherent-noise: input 'depth' is not connected");
+    if (!in[IN_MOTION_PREV].data)
+        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                           "coherent-noise: input 'motion_prev' is not connected");
+    if (run.symmetric && !in[IN_MOTION_NEXT].data)
+        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                           "coherent-noise: mode 'symmetric' needs input 'motion_next'");
+    run.have_zvel = in[IN_ZVEL].data != NULL;
+    if (run.p.noise == NPRFX_CN_NOISE_INPUT) {
+        if (!in[IN_SOURCE].data)
+            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                               "coherent-noise: noise 'input' needs input 'source'");
+        run.p.channels = in[IN_SOURCE].channels > 4 ? 4 : in[IN_SOURCE].channels;
+    } else {
+        run.p.channels = np->channels;
+    }
+    nprfx_result r = nprfx_cn_params_check(ctx, &run.p);
+    if (r) return r;
+    if (args->output->channels != run.p.channels)
+        return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,
+                           "coherent-noise: output has %d channels, expected %d",
+                           args->output->channels, run.p.channels);
+    if (nprfx_rect_empty(args->frame)) return NPRFX_OK;
+
+    /* The recursion's span for this frame. */
+    int shot_known = args->last_frame >= args->first_frame;
+    int64_t start = np->start;
+    if (shot_known && start < args->first_frame) start = args->first_frame;
+    if (run.window > 0 && run.frame - run.window > start) start = run.frame - run.window;
+    if (run.frame < start) start = run.frame;
+    run.start = start;
+    int64_t last = shot_known ? args->last_frame : run.frame;
+    if (run.symmetric) {
+        if (!shot_known)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "coherent-noise: mode 'symmetric' needs the shot's frame range");
+        if (run.window > 0 && run.frame + run.window < last) last = run.frame + run.window;
+        if (run.frame > last) last = run.frame;
+    }
+    run.last = last;
+    double mb = np->cache_mb;
+    run.budget = (size_t)((mb > 0 ? mb : 0) * 1048576.0);
+    if (run.symmetric) run.budget /= 2;
+
+    cn_cache *cache = cn_cache_get(args->state);
+    if (!cache) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "coherent-noise: out of memory");
+
+    /* What the pass states depend on (not the output mapping, not the cache size). */
+    uint64_t key = CN_HASH_INIT;
+    key = cn_hash_f64(key, run.p.alpha);
+    key = cn_hash_f64(key, run.p.epsilon);
+    key = cn_hash_i64(key, (int64_t)(run.p.noise));
+    if (run.p.noise == NPRFX_CN_NOISE_BANDPASS) {
+        key = cn_hash_f64(key, run.p.sigma_lo);
+        key = cn_hash_f64(key, run.p.sigma_hi);
+    }
+    key = cn_hash_i64(key, (int64_t)(run.p.channels));
+    key = cn_hash_i64(key, (int64_t)(run.p.seed));
+    key = cn_hash_i64(key, (int64_t)(run.p.resample));
+    key = cn_hash_f64(key, run.p.motion_scale);
+    key = cn_hash_i64(key, (int64_t)(run.have_zvel));
+    key = cn_hash_i64(key, (int64_t)(run.symmetric));
+    key = cn_hash_i64(key, (int64_t)(run.window));
+    key = cn_hash_bytes(key, &args->frame, sizeof args->frame);
+    key = cn_hash_i64(key, np->start);
+    key = cn_hash_i64(key, (int64_t)(args->first_frame));
+    key = cn_hash_i64(key, (int64_t)(args->last_frame));
+    key = cn_hash_i64(key, (int64_t)(run.budget));
+    uint64_t okey = key;
+    okey = cn_hash_f64(okey, smooth);
+    okey = cn_hash_i64(okey, (int64_t)(outmap));
+    okey = cn_hash_f64(okey, contrast);
+
+    /* Causal without smoothing: the output is the forward state itself (mapped), copied to the
+     * window straight from the pass; no full-frame result is kept. */
+    int direct = !run.symmetric && !(smooth > 0.0);
+
+    pthread_mutex_lock(&cache->lock);
+    if (!cache->have_key || cache->key != key) {
+        cn_pass_free(&cache->pass[0]);
+        cn_pass_free(&cache->pass[1]);
+        cache->has_result = 0;
+        cache->key = key;
+        cache->have_key = 1;
+    }
+    uint64_t fp = 0;
+    if ((r = cn_frame_fingerprint(&run, NPRFX_CN_FORWARD, run.frame, &fp))) goto unlock;
+    if (!(cache->has_result && cache->result_frame == run.frame && cache->result_key == okey &&
+          cache->result_fp == fp)) {
+        cache->has_result = 0;
+        /* A changed input at this frame invalidates every state that read it. */
+        for (int d = 0; d < 2; d++) {
+            cn_pass *ps = &cache->pass[d];
+            if (!ps->valid) continue;
+            cn_slot *s = cn_pass_find(ps, run.frame);
+            if (s && d == 0 && s->fingerprint != fp) cn_pass_invalidate(ps);
+        }
+        int64_t nf = shot_known ? args->last_frame - run.start + 1 : 1024;
+        if (run.window > 0) nf = run.window + 1;
+        if ((r = cn_pass_configure(&run, &cache->pass[0], NPRFX_CN_FORWARD, run.start, nf)))
+            goto unlock;
+        const cn_slot *fw = NULL, *bw = NULL;
+        if ((r = cn_pass_get(&run, &cache->pass[0], run.frame, &fw))) goto unlock;
+        if (direct) {
+            nprfx_image_free(&cache->result);
+            cn_copy_window(args, &fw->st.value,
+                           outmap == NPRFX_CN_OUTPUT_UNIT01 && run.p.noise != NPRFX_CN_NOISE_INPUT,
+                           (float)contrast);
+            goto unlock;
+        }
+        if (run.symmetric) {
+            int64_t nb = run.window > 0 ? run.window + 1 : run.last - run.start + 1;
+            if ((r = cn_pass_configure(&run, &cache->pass[1], NPRFX_CN_BACKWARD, run.last, nb)))
+                goto unlock;
+            if ((r = cn_pass_get(&run, &cache->pass[1], run.frame, &bw))) goto unlock;
+        }
+        if (!cache->result.data || !nprfx_rect_equal(cache->result.bounds, args->frame) ||
+            cache->result.channels != run.p.channels) {
+            nprfx_image_free(&cache->result);
+            if ((r = nprfx_image_alloc(ctx, args->frame, run.p.channels, &cache->result)))
+                goto unlock;
+        }
+        nprfx_image src = {0};
+        if (run.symmetric && run.p.noise == NPRFX_CN_NOISE_INPUT &&
+            (r = cn_fetch(&run, IN_SOURCE, run.frame, &src)))
+            goto unlock;
+        if ((r = nprfx_cn_combine(ctx, &run.p, run.frame, &fw->st, bw ? &bw->st : NULL, &src,
+                                  &cache->result)))
+            goto unlock;
+        if ((r = nprfx_cn_smooth(ctx, &run.p, smooth, &cache->result))) goto unlock;
+        if (outmap == NPRFX_CN_OUTPUT_UNIT01 && run.p.noise != NPRFX_CN_NOISE_INPUT) {
+            nprfx_image *o = &cache->result;
+            size_t n = (size_t)nprfx_rect_width(o->bounds) * (size_t)nprfx_rect_height(o->bounds) *
+                       (size_t)o->channels;
+            float c = (float)contrast;
+            for (size_t i = 0; i < n; i++)
+                o->data[i] = 0.5f + c * o->data[i];
+        }
+        cache->has_result = 1;
+        cache->result_frame = run.frame;
+        cache->result_key = okey;
+        cache->result_fp = fp;
+    }
+    cn_copy_window(args, &cache->result, 0, 0.0f);
+unlock:
+    pthread_mutex_unlock(&cache->lock);
+    return r;
+}
