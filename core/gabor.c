@@ -300,6 +300,14 @@ void nprfx_gabor_params_default(nprfx_gabor_params *p)
     p->points = 0;
 }
 
+/* A frequency param in cycles per pixel at the host's render scale: the radius is scaled by the
+ * host (a PIXELS param), so a frequency per pixel scales inversely. */
+double nprfx_gabor_frequency_at_scale(double frequency, double render_scale)
+{
+    double scale = render_scale > 0.0 ? render_scale : 1.0;
+    return frequency / scale;
+}
+
 double nprfx_gabor_bandwidth(double radius)
 {
     /* exp(-pi a^2 r^2) = 0.05 at the truncation radius */
