@@ -1,5 +1,5 @@
 /* The gabor-splat node: NPR Gabor noise anchored on surfaces through position/UV AOVs (Benard et
- * al. 2010, DESIGN.md §3.2). The algorithm lives in core/gabor.c; this file is the descriptor
+ * al. 2010, DESIGN.md §3.2). The algorithm lives in core/gabor*.c; this file is the descriptor
  * and the glue from param values to nprfx_gabor_params. */
 #include <stddef.h>
 #include <string.h>
