@@ -1,7 +1,6 @@
 /* The gabor-splat node: NPR Gabor noise anchored on surfaces through position/UV AOVs (Benard et
- * al. 2010, DESIGN.md §3.2). The algorithm lives in core/gabor.c; this file is the descriptor
+ * al. 2010, DESIGN.md §3.2). The algorithm lives in core/gabor*.c; this file is the descriptor
  * and the glue from param values to nprfx_gabor_params. */
-#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -343,10 +342,9 @@ static nprfx_result gabor_render(const nprfx_render_args *args, const void *type
 
     nprfx_gabor_params p;
     nprfx_gabor_params_default(&p);
-    double scale = args->render_scale > 0.0 ? args->render_scale : 1.0;
     p.anchor_dims = dims;
-    /* radius is scaled by the host (a PIXELS param); a frequency per pixel scales inversely */
-    p.frequency = pv[P_FREQUENCY].v[0] / scale;
+    /* radius is scaled by the host (a PIXELS param); the frequency by the core's rule */
+    p.frequency = nprfx_gabor_frequency_at_scale(pv[P_FREQUENCY].v[0], args->render_scale);
     p.orientation = pv[P_ORIENTATION].v[0];
     p.isotropic = pv[P_ISOTROPIC].v[0] != 0.0;
     p.radius = pv[P_RADIUS].v[0];

@@ -107,6 +107,11 @@ typedef struct nprfx_gabor_stats {
 /* Kernel bandwidth a for a truncation radius r (pixels). */
 NPRFX_API double nprfx_gabor_bandwidth(double radius);
 
+/* A frequency in cycles per pixel at a host's render scale (1 at full resolution, e.g. 0.5 for
+ * a proxy; <= 0 is taken as 1): sizes in pixels scale with it, so a frequency per pixel scales
+ * inversely. */
+double nprfx_gabor_frequency_at_scale(double frequency, double render_scale);
+
 /* Theoretical variance of the un-normalised sum at frequency F0 * frequency_scale:
  * lambda E[v^2] (1 / (4 a^2)) (1 + exp(-2 pi F^2 / a^2)) times the truncation factor
  * (1 - 0.05^2) and, with supersampling, the box filter's attenuation of the spectrum. */
