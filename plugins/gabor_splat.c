@@ -28,7 +28,8 @@ enum {
     P_POINTS,
     P_COUNT
 };
-enum { SPACE_PREF, SPACE_UV, SPACE_P, SPACE_COUNT };
+enum { SPACE_COUNT = NPRFX_GABOR_SPACE_COUNT };
+typedef nprfx_gabor_node_params gnp;
 
 static const char *const space_names[] = {"pref", "uv", "p", NULL};
 static const char *const space_help[] = {
@@ -121,14 +122,16 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
 
 static const nprfx_param_desc params[P_COUNT] = {
     {.name = "anchor_space",
+     NPRFX_FIELD(gnp, anchor_space),
      .label = "Anchor Space",
      .help = "What the anchor input holds; see the node help on choosing it.",
      .type = NPRFX_PARAM_CHOICE,
-     .def = {SPACE_PREF},
+     .def = {NPRFX_GABOR_SPACE_PREF},
      NPRFX_CHOICE_RANGE(SPACE_COUNT),
      .choices = space_names,
      .choice_help = space_help},
     {.name = "frequency",
+     NPRFX_FIELD(gnp, frequency),
      .label = "Frequency",
      .help = "F0: the kernels' frequency in cycles per pixel (1 / wavelength: 0.1 = stripes 10 "
              "px apart). Kept in screen space at every zoom. Above 0.5 it aliases unless "
@@ -140,6 +143,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-4,
      .hard_max = 100},
     {.name = "orientation",
+     NPRFX_FIELD(gnp, orientation),
      .label = "Orientation",
      .help = "w0: direction of the wave vector in degrees, counter-clockwise from the image's +x"
              " axis. The stripes run across it: 0 gives vertical stripes, 90 horizontal ones "
@@ -151,6 +155,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -1e6,
      .hard_max = 1e6},
     {.name = "isotropic",
+     NPRFX_FIELD(gnp, isotropic),
      .label = "Isotropic",
      .help = "A random orientation per kernel: no preferred direction (blobs and stipples "
              "when thresholded instead of hatches).",
@@ -161,6 +166,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1},
     {.name = "radius",
+     NPRFX_FIELD(gnp, radius),
      .label = "Kernel Radius",
      .help = "Truncation radius r of the kernels in pixels; the bandwidth is a = sqrt(-ln 0.05 /"
              " pi) / r (the envelope is 5% at r). Larger kernels hold more stripes: more regular,"
@@ -173,6 +179,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 4096,
      .flags = NPRFX_PARAM_PIXELS},
     {.name = "n0",
+     NPRFX_FIELD(gnp, n0),
      .label = "Kernel Overlap",
      .help = "N0: expected number of kernels overlapping a pixel (point density lambda = N0 / "
              "(pi r^2)). Cost and quality grow with it; 16 to 128 (the paper), 32 is usually "
@@ -184,6 +191,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0.01,
      .hard_max = 100000},
     {.name = "amplitude",
+     NPRFX_FIELD(gnp, amplitude),
      .label = "Amplitude Law",
      .help = "Distribution of the kernels' random weights (zero mean).",
      .type = NPRFX_PARAM_CHOICE,
@@ -192,6 +200,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = amp_names,
      .choice_help = amp_help},
     {.name = "seed",
+     NPRFX_FIELD(gnp, seed),
      .label = "Seed",
      .help = "Selects the point set; layers of one style need different seeds.",
      .type = NPRFX_PARAM_INT,
@@ -201,6 +210,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 2147483647},
     {.name = "cell",
+     NPRFX_FIELD(gnp, cell),
      .label = "Cell Size",
      .help = "h0: size of a level-0 cell of the anchor-space hierarchy, in anchor units. It "
              "matters only where fewer than one point per level-0 cell is wanted (objects tiny "
@@ -214,6 +224,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-9,
      .hard_max = 1e9},
     {.name = "lod_levels",
+     NPRFX_FIELD(gnp, lod_levels),
      .label = "LOD Levels",
      .help = "W: number of whole levels kept between the level fading in and the level fading "
              "out. The coarsest level carries at most 3 / (4^(W+1) - 1) of the variance; "
@@ -225,6 +236,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1,
      .hard_max = 30},
     {.name = "fade",
+     NPRFX_FIELD(gnp, fade),
      .label = "LOD Fade",
      .help = "How the next finer level of points fades in as an object approaches (and the "
              "coarsest one out).",
@@ -234,6 +246,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = fade_names,
      .choice_help = fade_help},
     {.name = "depth_test",
+     NPRFX_FIELD(gnp, depth_test),
      .label = "Depth Test",
      .help = "How a kernel is trimmed where the depth under it is not its own surface's (the "
              "paper's per-fragment depth test). The depth expected under the kernel is its "
@@ -245,6 +258,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = dtest_names,
      .choice_help = dtest_help},
     {.name = "depth_tolerance",
+     NPRFX_FIELD(gnp, depth_tolerance),
      .label = "Depth Tolerance",
      .help = "Relative depth error |z - z_expected| / z_expected a kernel tolerates. Also the "
              "largest relative depth step between neighbouring pixels of one surface (at least "
@@ -256,6 +270,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 10},
     {.name = "supersample",
+     NPRFX_FIELD(gnp, supersample),
      .label = "Supersample",
      .help = "s: evaluate s x s samples per pixel and average them (anti-aliasing of high "
              "frequencies and of the trimmed edges). The normaliser accounts for the box filter, "
@@ -267,6 +282,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1,
      .hard_max = 16},
     {.name = "output",
+     NPRFX_FIELD(gnp, output),
      .label = "Output",
      .help = "Mapping of the noise n (normalised by the theoretical standard deviation of the "
              "sum).",
@@ -276,6 +292,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = output_names,
      .choice_help = output_help},
     {.name = "contrast",
+     NPRFX_FIELD(gnp, contrast),
      .label = "Contrast",
      .help = "unit01: the gain on n (0.15 maps +-3.3 sigma to [0, 1]).",
      .type = NPRFX_PARAM_DOUBLE,
@@ -285,6 +302,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -100,
      .hard_max = 100},
     {.name = "points",
+     NPRFX_FIELD(gnp, points),
      .label = "Point Channel",
      .help = "Debugging: add a second channel 'points' holding, at each pixel, the squared "
              "weights of the kernels it owns (their sum per pixel^2 is lambda; a kernel's centre"
@@ -307,75 +325,16 @@ static nprfx_result gabor_output(const nprfx_value *pv, const int *ich, nprfx_ou
     return NPRFX_OK;
 }
 
-static nprfx_result gabor_render(const nprfx_render_args *args, const void *typed)
+static nprfx_result gabor_render(const nprfx_render_args *a, const void *params)
 {
-    if (!args || args->size < sizeof(nprfx_render_args) || !args->inputs || !args->params ||
-        !args->output)
-        return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
-                           "gabor-splat: incomplete render arguments");
-    nprfx_context *ctx = args->ctx;
-    const nprfx_image *in = args->inputs;
-    const nprfx_value *pv = args->params;
-    if (!in[IN_ANCHOR].data)
-        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                           "gabor-splat: input 'anchor' is not connected");
-    if (!in[IN_DEPTH].data)
-        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                           "gabor-splat: input 'depth' is not connected");
-    int space = (int)pv[P_ANCHOR_SPACE].v[0];
-    if (space < 0 || space >= SPACE_COUNT)
-        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
-                           "gabor-splat.anchor_space: no anchor space with index %d", space);
-    int dims = space == SPACE_UV ? 2 : 3;
-    int ach = in[IN_ANCHOR].channels;
-    if (ach < dims || ach > dims + 1)
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "gabor-splat: input 'anchor' has %d channels; anchor_space %s needs %d "
-                           "(or %d with coverage), e.g. %s",
-                           ach, space_names[space], dims, dims + 1,
-                           space == SPACE_UV ? "plate:UV.U,UV.V" : "plate:Pref");
-    if (in[IN_ORIENTATION].data && in[IN_ORIENTATION].channels > 2)
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "gabor-splat: input 'orientation' has %d channels; 1 (angle) or 2 "
-                           "(direction) are supported",
-                           in[IN_ORIENTATION].channels);
-
-    nprfx_gabor_params p;
-    nprfx_gabor_params_default(&p);
-    p.anchor_dims = dims;
-    /* radius is scaled by the host (a PIXELS param); the frequency by the core's rule */
-    p.frequency = nprfx_gabor_frequency_at_scale(pv[P_FREQUENCY].v[0], args->render_scale);
-    p.orientation = pv[P_ORIENTATION].v[0];
-    p.isotropic = pv[P_ISOTROPIC].v[0] != 0.0;
-    p.radius = pv[P_RADIUS].v[0];
-    p.n0 = pv[P_N0].v[0];
-    p.amplitude = (int)pv[P_AMPLITUDE].v[0];
-    p.seed = (uint64_t)pv[P_SEED].v[0];
-    p.cell = pv[P_CELL].v[0];
-    p.lod_levels = (int)pv[P_LOD_LEVELS].v[0];
-    p.fade = (int)pv[P_FADE].v[0];
-    p.depth_test = (int)pv[P_DEPTH_TEST].v[0];
-    p.depth_tolerance = pv[P_DEPTH_TOLERANCE].v[0];
-    p.supersample = (int)pv[P_SUPERSAMPLE].v[0];
-    p.output = (int)pv[P_OUTPUT].v[0];
-    p.contrast = pv[P_CONTRAST].v[0];
-    p.points = pv[P_POINTS].v[0] != 0.0;
-
-    nprfx_gabor_inputs gi;
-    memset(&gi, 0, sizeof gi);
-    gi.size = sizeof gi;
-    gi.anchor = &in[IN_ANCHOR];
-    gi.depth = &in[IN_DEPTH];
-    gi.id = in[IN_ID].data ? &in[IN_ID] : NULL;
-    gi.orientation = in[IN_ORIENTATION].data ? &in[IN_ORIENTATION] : NULL;
-    gi.frequency = in[IN_FREQUENCY].data ? &in[IN_FREQUENCY] : NULL;
-    long long *items = args->items;
-    nprfx_gabor_stats stats;
-    nprfx_result r =
-        nprfx_gabor_render(ctx, &p, &gi, args->window, args->output, items ? &stats : NULL);
-    if (r) return r; /* core's message names the node ("gabor: ...") */
-    if (items) *items += stats.kernels;
-    return NPRFX_OK;
+    const nprfx_gabor_inputs in = {sizeof in,
+                                   &a->inputs[IN_ANCHOR],
+                                   &a->inputs[IN_DEPTH],
+                                   nprfx_render_input(a, IN_ID),
+                                   nprfx_render_input(a, IN_ORIENTATION),
+                                   nprfx_render_input(a, IN_FREQUENCY)};
+    return nprfx_gabor_node_render(a->ctx, params, &in, a->render_scale, a->window, a->output,
+                                   a->items);
 }
 
 const nprfx_node_desc nprfx_node_gabor_splat = {
@@ -442,5 +401,7 @@ const nprfx_node_desc nprfx_node_gabor_splat = {
     .num_params = P_COUNT,
     .output = gabor_output,
     .render = gabor_render,
+    .params_size = sizeof(gnp),
+    .version_major = 1,
     .item_name = "kernels",
 };

@@ -110,7 +110,7 @@ NPRFX_API double nprfx_gabor_bandwidth(double radius);
 /* A frequency in cycles per pixel at a host's render scale (1 at full resolution, e.g. 0.5 for
  * a proxy; <= 0 is taken as 1): sizes in pixels scale with it, so a frequency per pixel scales
  * inversely. */
-double nprfx_gabor_frequency_at_scale(double frequency, double render_scale);
+NPRFX_API double nprfx_gabor_frequency_at_scale(double frequency, double render_scale);
 
 /* Theoretical variance of the un-normalised sum at frequency F0 * frequency_scale:
  * lambda E[v^2] (1 / (4 a^2)) (1 + exp(-2 pi F^2 / a^2)) times the truncation factor
@@ -131,6 +131,42 @@ NPRFX_API int nprfx_gabor_lod_weights(double mu, int lod_levels, int *first_leve
 NPRFX_API nprfx_result nprfx_gabor_render(nprfx_context *ctx, const nprfx_gabor_params *p,
                                           const nprfx_gabor_inputs *in, nprfx_rect window,
                                           nprfx_image *out, nprfx_gabor_stats *stats);
+
+/* ---- the gabor-splat node (its descriptor is plugins/gabor_splat.c) ---- */
+
+/* Anchor spaces of the node's anchor_space param. */
+typedef enum nprfx_gabor_anchor_space {
+    NPRFX_GABOR_SPACE_PREF = 0, /* 3D object-space position */
+    NPRFX_GABOR_SPACE_UV = 1,   /* 2D texture coordinates */
+    NPRFX_GABOR_SPACE_P = 2,    /* 3D world position (static objects only) */
+    NPRFX_GABOR_SPACE_COUNT
+} nprfx_gabor_anchor_space;
+
+/* The node's params, as its descriptor binds them by offset (radius already multiplied by the
+ * render scale; the frequency is scaled here, by nprfx_gabor_frequency_at_scale). */
+typedef struct nprfx_gabor_node_params {
+    int anchor_space; /* nprfx_gabor_anchor_space */
+    double frequency, orientation;
+    int isotropic;
+    double radius, n0;
+    int amplitude; /* nprfx_gabor_amplitude */
+    int seed;      /* >= 0 */
+    double cell;
+    int lod_levels, fade, depth_test;
+    double depth_tolerance;
+    int supersample, output;
+    double contrast;
+    int points;
+} nprfx_gabor_node_params;
+
+/* The node's render: checks what only this node knows (the anchor's channels for its space, the
+ * orientation input's), then nprfx_gabor_render. inputs.size may be 0. *kernels, when not NULL,
+ * grows by the kernels splatted. */
+NPRFX_API nprfx_result nprfx_gabor_node_render(nprfx_context *ctx,
+                                               const nprfx_gabor_node_params *np,
+                                               const nprfx_gabor_inputs *in, double render_scale,
+                                               nprfx_rect window, nprfx_image *out,
+                                               long long *kernels);
 
 #ifdef __cplusplus
 }
