@@ -107,8 +107,8 @@ void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const ch
     (void)g;
 }
 
-/* The motion-vector conventions a read node can map onto nprfx's (DESIGN.md §2: pixels, y down,
- * motion_prev points to where the surface point was at frame-1). */
+/* The motion-vector conventions a read node can map onto nprfx's (docs/design.md §2: pixels, y
+ * down, motion_prev points to where the surface point was at frame-1). */
 typedef struct vec_convention {
     const char *name;
     const char *layer; /* channels to look for: prev.x, prev.y, next.x, next.y */

@@ -1,4 +1,4 @@
-/* NPR Gabor noise splatted from point-cloud AOVs (DESIGN.md §3.2; Benard et al. 2010, Lagae et
+/* NPR Gabor noise splatted from point-cloud AOVs (docs/design.md §3.2; Benard et al. 2010, Lagae et
  * al. 2009). See nprfx/gabor.h for the interface.
  *
  * The render runs in two phases over a region E = window grown by the kernel reach, cut into
@@ -20,7 +20,7 @@
  *    at a sample is a function of (kernel, sample) only (its tables start at the kernel's own
  *    bounding box, never at a tile edge): the output is bit-identical for any tiling.
  *
- * Where this departs from the letter of DESIGN.md §3.2, and why:
+ * Where this departs from the letter of docs/design.md §3.2, and why:
  *  - the level window: W levels are kept whole, the finer one fades in and the coarser one
  *    fades out, instead of levels 0..L all whole; the cost per pixel then does not grow with
  *    zoom, and the fading-out level carries at most 3 / (4^(W+1) - 1) of the variance;

@@ -18,7 +18,7 @@
 
 #include "nprfx/gabor.h"
 
-/* Vector code (DESIGN.md §1: output bit-identical whatever the path): GCC/Clang vector
+/* Vector code (docs/design.md §1: output bit-identical whatever the path): GCC/Clang vector
  * extensions. On x86-64 the emission and splatting are compiled again for AVX2 and AVX-512
  * (picked at run time); elsewhere, and on CPUs without AVX2, only the splat rows are vectors (4
  * lanes: 8-lane and double vectors split into more pieces than the registers hold). Every vector
@@ -214,7 +214,7 @@ static const double k_pi = 3.14159265358979323846;
  * wanted density in those units. In regime L the levels L-W+1..L are whole (weight 1), level
  * L+1 fades in with squared weight f and level L-W fades out with squared weight 1-f, where
  * S(L) = sum_{l=max(0,L-W)}^{L} 4^l <= mu < S(L+1):
- *   L < W (no level to fade out yet): f = (mu - S(L)) / 4^(L+1)   (DESIGN.md's rule)
+ *   L < W (no level to fade out yet): f = (mu - S(L)) / 4^(L+1)   (docs/design.md's rule)
  *   L >= W:                            f = (mu - S(L)) / (3 S(L)), since S(L+1) = 4 S(L)
  * In both, sum_l w_l^2 4^l = mu exactly and every weight is continuous in mu, so the variance
  * and spectrum stay constant at every zoom while kernels appear (and, W levels coarser,

@@ -115,6 +115,13 @@ static inline int internal_usable_j(const pixdata *d, int x, int y, int id)
     return nprfx_rect_contains(d->r, x, y) && d->jid[pd_at(d, x, y)] == id;
 }
 
+/* stipple_jacobian.c: the UV Jacobian of the pixels of r (from the raw data fill_raw wrote),
+ * the repair of outlier silhouette pixels in M, and the smoothed area scale of the pixels of R
+ * (inside E) into out. */
+void internal_stipple_fill_jacobian(pixdata *d, nprfx_rect r);
+void internal_stipple_repair_outliers(pixdata *d, nprfx_rect M);
+void internal_stipple_smooth_area(pixdata *d, nprfx_rect E, nprfx_rect R, float *out);
+
 /* stipple_pixels.c */
 int internal_stipple_reserve(void **p, size_t *cap, size_t n, size_t elem);
 void internal_stipple_scratch_free(scratch *s);

@@ -1,4 +1,4 @@
-/* The IVS generator: a farthest-point sequence on the unit torus (DESIGN.md §3.3).
+/* The IVS generator: a farthest-point sequence on the unit torus (docs/design.md §3.3).
  *
  * Written from the description, not from an existing implementation:
  *

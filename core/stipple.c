@@ -1,4 +1,4 @@
-/* Stippling from UV and shading (Ma et al. 2018; DESIGN.md §3.3). stipple.h has the model.
+/* Stippling from UV and shading (Ma et al. 2018; docs/design.md §3.3). stipple.h has the model.
  *
  * A render works in two parallel phases. First the pixels that can reach the window (the window
  * plus a margin of the largest disc radius) are split into units, and each unit finds the

@@ -322,7 +322,7 @@ static const char help[] =
     "motion_next and outputs c_fwd + c_bwd - (1-alpha) w (Eq. 11), normalised; where both passes "
     "restart at once the weight of w is adjusted so the variance stays 1 there too.\n"
     "\n"
-    "Motion convention (DESIGN.md §2): motion vectors are in pixels of the full-resolution "
+    "Motion convention (docs/design.md §2): motion vectors are in pixels of the full-resolution "
     "frame, y pointing down; motion_prev(x) goes from x to the same surface point in the "
     "previous frame, motion_next(x) to the next frame. Blender's Vector pass holds (to previous "
     "X, Y, and this frame's position minus the next one) with y up, as measured on the sample "

@@ -1,5 +1,5 @@
 /* The gabor-splat node: NPR Gabor noise anchored on surfaces through position/UV AOVs (Benard et
- * al. 2010, DESIGN.md §3.2). The algorithm lives in core/gabor*.c; this file is the descriptor
+ * al. 2010, docs/design.md §3.2). The algorithm lives in core/gabor*.c; this file is the descriptor
  * and the glue from param values to nprfx_gabor_params. */
 #include <stddef.h>
 #include <string.h>
@@ -62,7 +62,7 @@ _Static_assert(sizeof dtest_names / sizeof dtest_names[0] == NPRFX_GABOR_DEPTH_C
 
 static const char *const fade_names[] = {"level", "staggered", NULL};
 static const char *const fade_help[] = {
-    "DESIGN.md's rule: every point of the finer level fades in together, squared weight "
+    "docs/design.md's rule: every point of the finer level fades in together, squared weight "
     "(D - D_L) / (K 4^(L+1) / h0^2) (the paper's a(N) = sqrt(N/M - 1))",
     "each point of the finer level fades in on its own (a hashed start, its amplitude ramping "
     "linearly over a quarter of the level's zoom range); the expected squared weight is the "

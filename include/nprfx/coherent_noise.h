@@ -1,6 +1,6 @@
 /* nprfx — coherent noise (Kass & Pesare 2011), the core of the `coherent-noise` node.
  *
- * A recursion over frames, per pixel x of frame i (DESIGN.md §3.1):
+ * A recursion over frames, per pixel x of frame i (docs/design.md §3.1):
  *   p = x + motion(x)                              (where the surface point was in the pass's
  *                                                   previous frame: i-1 forward, i+1 backward)
  *   fresh if p leaves the frame, the depth at x is background, or the predicted depth

@@ -1,5 +1,5 @@
 /* nprfx — NPR Gabor noise splatted from point-cloud AOVs (Benard et al., EGSR 2010; Gabor noise
- * of Lagae et al. 2009), DESIGN.md §3.2.
+ * of Lagae et al. 2009), docs/design.md §3.2.
  *
  * The noise is a sum of Gabor kernels whose frequency, orientation and size are set in pixels (so
  * it looks 2D) while their centres are points anchored on the surfaces through an anchor AOV
@@ -39,7 +39,7 @@ typedef enum nprfx_gabor_depth_test {
 } nprfx_gabor_depth_test;
 
 typedef enum nprfx_gabor_fade {
-    /* DESIGN.md §3.2: every point of the level fading in has the squared weight
+    /* docs/design.md §3.2: every point of the level fading in has the squared weight
      * (D - D_L) / (density of the level) */
     NPRFX_GABOR_FADE_LEVEL = 0,
     /* each point of that level fades in on its own (a hashed start), its amplitude ramping

@@ -1,7 +1,7 @@
 /* nprfx — the incremental Voronoi set (IVS): a progressive blue-noise sequence on the unit torus.
  *
- * DESIGN.md §3.3. The sequence is a farthest-point sequence: each new point is the centre of the
- * largest empty circle left by the points before it, found as the largest circumcircle of a
+ * docs/design.md §3.3. The sequence is a farthest-point sequence: each new point is the centre of
+ * the largest empty circle left by the points before it, found as the largest circumcircle of a
  * periodic Delaunay triangulation. Every prefix is therefore evenly spread, and sample i (1-based)
  * owns a Voronoi area of about 1/i of the torus, which is what the stipple node thresholds on.
  *
@@ -75,10 +75,10 @@ NPRFX_API nprfx_result nprfx_ivs_decode(nprfx_context *ctx, const unsigned char 
 
 /* ---- the spatial index ----
  *
- * A pixel that keeps samples i <= i_max (DESIGN.md §3.3: k * A0 / i >= threshold) needs only the
- * prefix of the sequence up to i_max, and expects about (its footprint area) * i_max of them. The
- * index holds one uniform grid per power-of-two prefix (level L: the first 2^L points, about two
- * per cell), so a query reads the level just above i_max and the cells its rectangle touches:
+ * A pixel that keeps samples i <= i_max (docs/design.md §3.3: k * A0 / i >= threshold) needs only
+ * the prefix of the sequence up to i_max, and expects about (its footprint area) * i_max of them.
+ * The index holds one uniform grid per power-of-two prefix (level L: the first 2^L points, about
+ * two per cell), so a query reads the level just above i_max and the cells its rectangle touches:
  * time proportional to the answer, not to the sequence length. */
 typedef struct nprfx_ivs_index nprfx_ivs_index;
 

@@ -52,7 +52,7 @@ NPRFX_API nprfx_result nprfx_ssim(nprfx_context *ctx, const nprfx_image *a, int 
 
 /* Warp test along a motion field. For each pixel p of cur inside its bounds, with mask (may be
  * NULL) > 0.5, the previous frame is sampled bilinearly at p + motion_prev(p) (motion: 2
- * channels, pixels, DESIGN.md §2); pixels whose source falls outside prev are skipped. Reports
+ * channels, pixels, docs/design.md §2); pixels whose source falls outside prev are skipped. Reports
  * the RMS difference and the Pearson correlation between cur and the warped prev (channel ch);
  * pixels with a non-finite value are skipped. correlation is NaN where undefined (no pixels, or
  * one side constant). */

@@ -1,4 +1,4 @@
-/* nprfx — stippling from UV and shading (Ma et al. 2018; DESIGN.md §3.3).
+/* nprfx — stippling from UV and shading (Ma et al. 2018; docs/design.md §3.3).
  *
  * Candidate stipples are the points of the IVS sequence (ivs.h) tiled over UV space with period
  * `tile` (A0 = tile^2 of UV area per copy; tile / sqrt(aspect) by tile * sqrt(aspect) where the
@@ -10,7 +10,7 @@
  *   radius     threshold a0; stipple area g * a0, dropped below delta_min         (Eq. 6)
  *   multitone  threshold a0; stipple area `area`; pen tone tau = g * a0 / area is made of the
  *              two nearest pens tau_l <= tau <= tau_l+1: the samples with i / i_max <= (tau -
- *              tau_l) / (tau_l+1 - tau_l) take the darker pen (Eq. 7-8 as read in DESIGN.md)
+ *              tau_l) / (tau_l+1 - tau_l) take the darker pen (Eq. 7-8 as read in docs/design.md)
  *
  * Which pixel a sample belongs to is decided in UV space: each pixel's footprint is the
  * quadrilateral through its four corners, a corner being the mean UV of the (same-object) pixels

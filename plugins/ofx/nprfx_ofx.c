@@ -873,7 +873,7 @@ static OfxStatus clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_a
     }
     (void)nprfx_ofx_g.prop->propSetString(out_args, kOfxImageEffectPropPreMultiplication, 0,
                                           premult);
-    /* Random numbers hash the frame (DESIGN.md §1): the output varies with time even when the
+    /* Random numbers hash the frame (docs/design.md §1): the output varies with time even when the
      * inputs do not. */
     (void)nprfx_ofx_g.prop->propSetInt(out_args, kOfxImageEffectFrameVarying, 0, 1);
     return kOfxStatOK;

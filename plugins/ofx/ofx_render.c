@@ -2,7 +2,7 @@
  * evaluated at the render time, and the node's render function runs with an executor built on
  * the host's multithread suite and a fetch callback that gets clip images at other times.
  *
- * Coordinates. OFX pixel coordinates grow upward; nprfx's grow downward (DESIGN.md §2). Every
+ * Coordinates. OFX pixel coordinates grow upward; nprfx's grow downward (docs/design.md §2). Every
  * frame-aligned image is flipped about the effect's frame [fy1, fy2): y_down = fy1 + fy2 - 1 -
  * y_up, which maps the frame onto itself, so a frame at (0, 0, W, H) keeps those numbers and
  * clips that share the canonical space stay aligned. An unaligned input (a lookup map) is

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Pixel-diff regression: every tests/graphs/*.json is rendered and each image it writes is
-# compared with the file of the same name in tests/golden/ (DESIGN.md §4 thresholds for
+# compared with the file of the same name in tests/golden/ (docs/design.md §4 thresholds for
 # deterministic float outputs: fail 1e-5, failpercent 0, hardfail 1e-4). A failure leaves a
 # scaled difference image beside the output.
 # Regenerate the golden files (and explain why in the commit): tests/golden/regen.sh BUILD/nprfx

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# DESIGN.md §4: every node's output is bit-identical across thread counts, tile sizes and render
+# docs/design.md §4: every node's output is bit-identical across thread counts, tile sizes and render
 # orders. Each tests/graphs/*.json renders with 1 thread whole-frame, with 4 threads in 16-pixel
 # tiles, with 3 threads in 37-pixel tiles and frames in reverse order; the results must match
 # exactly (nprfx diff --fail 0 --hardfail 0).

@@ -129,7 +129,7 @@ static void test_lod_weights(void)
     n = nprfx_gabor_lod_weights(1.0 + 4.0 + 16.0, 3, &first, w2, 8); /* levels 0..2 whole */
     CHECK(first == 0 && n == 3);
     CHECK_NEAR(w2[0] + w2[1] + w2[2], 3.0, 1e-12);
-    /* DESIGN.md's rule below W: level L+1 fades in with (D - D_L) / 4^(L+1) */
+    /* docs/design.md's rule below W: level L+1 fades in with (D - D_L) / 4^(L+1) */
     n = nprfx_gabor_lod_weights(1.0 + 4.0 + 8.0, 3, &first, w2, 8);
     CHECK(first == 0 && n == 3);
     CHECK_NEAR(w2[2], 0.5, 1e-12);

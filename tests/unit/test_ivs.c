@@ -1,4 +1,4 @@
-/* The IVS sequence (DESIGN.md §3.3): spacing of every prefix, the farthest-point property,
+/* The IVS sequence (docs/design.md §3.3): spacing of every prefix, the farthest-point property,
  * determinism, the encoded form, and the spatial index. */
 #include <math.h>
 #include <stdint.h>

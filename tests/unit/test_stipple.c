@@ -1,4 +1,4 @@
-/* The stipple node (DESIGN.md §3.3): tone reproduction, blue noise on screen, exactly-once
+/* The stipple node (docs/design.md §3.3): tone reproduction, blue noise on screen, exactly-once
  * ownership, the three modes' rules, determinism across threads and tiles, vector export and
  * errors. Temporal coherence and zoom live in test_stipple_motion.c. */
 #include <math.h>

@@ -1,0 +1,494 @@
+/* The UV Jacobian of the stipple renderer's per-pixel data: finite differences that do not
+ * straddle object edges or UV seams, the repair of silhouette pixels whose Jacobian is an
+ * outlier, and the smoothed area scale |det J| the thresholds read. Split from stipple_pixels.c
+ * (which reads the inputs and builds the corner grid); the same fast-loop rule holds here: SSE2
+ * lanes do the scalar code's operations in its order, and the scalar code is the reference at
+ * edges, seams and NaNs. */
+#include <math.h>
+#include <stdlib.h>
+#include <stdint.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "internal_stipple.h"
+
+/* One column of the Jacobian at pixel k along a neighbour `step` away, given which of the
+ * neighbours k + step (hf) and k - step (hb) are usable (same object, with a UV): differences
+ * to those; central where both sides agree, else the smaller one-sided difference (a UV seam
+ * gives a jump on one side only). Returns 0 when no neighbour qualifies, 2 when the sides
+ * disagree. */
+static inline int derivative(const double *su, const double *sv, size_t k, size_t step, int hf,
+                             int hb, double *du, double *dv)
+{
+    double fu = 0, fv = 0, bu = 0, bv = 0;
+    if (hf) {
+        fu = su[k + step] - su[k];
+        fv = sv[k + step] - sv[k];
+    }
+    if (hb) {
+        bu = su[k] - su[k - step];
+        bv = sv[k] - sv[k - step];
+    }
+    if (hf && hb) {
+        double nf = fu * fu + fv * fv, nb = bu * bu + bv * bv;
+        if (nf <= 4.0 * nb && nb <= 4.0 * nf) {
+            *du = 0.5 * (fu + bu);
+            *dv = 0.5 * (fv + bv);
+            return 1;
+        }
+        if (nf < nb)
+            *du = fu, *dv = fv;
+        else
+            *du = bu, *dv = bv;
+        return 2;
+    }
+    if (hf) {
+        *du = fu, *dv = fv;
+        return 1;
+    }
+    if (hb) {
+        *du = bu, *dv = bv;
+        return 1;
+    }
+    return 0;
+}
+
+/* The Jacobian of pixel (x, y) at k (the reference for the fast path below). */
+static void jac_pixel(pixdata *d, size_t k, int x, int up, int down)
+{
+    const size_t w = (size_t)d->w;
+    const int *ids = d->id;
+    d->jid[k] = NO_ID;
+    if (!(d->ok[k] & OK_UV)) return;
+    const int id = ids[k];
+    double ux, vx, uy, vy;
+    int ex = derivative(d->su, d->sv, k, 1, x + 1 < d->r.x1 && ids[k + 1] == id,
+                        x - 1 >= d->r.x0 && ids[k - 1] == id, &ux, &vx);
+    int ey =
+        derivative(d->su, d->sv, k, w, down && ids[k + w] == id, up && ids[k - w] == id, &uy, &vy);
+    if (!ex || !ey) return;
+    if (ex == 2 || ey == 2) d->ok[k] |= OK_SEAM;
+    float *jc = d->jac + 4 * k;
+    jc[0] = (float)ux;
+    jc[1] = (float)uy;
+    jc[2] = (float)vx;
+    jc[3] = (float)vy;
+    double det = (double)jc[0] * jc[3] - (double)jc[1] * jc[2];
+    d->adet[k] = (float)fabs(det);
+    if (det != 0.0 && isfinite(det) && d->adet[k] > 0) {
+        d->ok[k] |= OK_J;
+        d->jid[k] = id;
+    }
+}
+
+#if defined(__SSE2__)
+/* The arrays fill_jacobian's fast path uses, held in registers across the byte stores to ok
+ * (which could otherwise alias every pointer of the pixdata). */
+typedef struct jacview {
+    const double *su, *sv;
+    const int *id;
+    float *jac, *adet;
+    int *jid;
+    unsigned char *ok;
+    size_t w;
+} jacview;
+
+/* For pixels k .. k + 3 (one lane each, their ids in id): do the four neighbours share the
+ * pixel's id, and has it a UV? -1 in the lanes where so. */
+static inline __m128i same_around(const jacview *v, size_t k, __m128i id)
+{
+    const int *p = v->id + k;
+    const ptrdiff_t w = (ptrdiff_t)v->w;
+    __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(p - 1)), id);
+    same = _mm_and_si128(same, _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(p + 1)), id));
+    same = _mm_and_si128(same, _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(p - w)), id));
+    same = _mm_and_si128(same, _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(p + w)), id));
+    return _mm_andnot_si128(_mm_cmpeq_epi32(id, _mm_set1_epi32(NO_ID)), same);
+}
+
+/* jac_pixel for pixels k and k + 1 (one lane each, ids in the low lanes of id) whose
+ * neighbours all share their id, where both sides agree in x and in y for both (the usual
+ * case). Returns 0, having written nothing, where they do not. */
+static inline int jac_lanes(const jacview *v, size_t k, __m128i id)
+{
+    const size_t w = v->w;
+    const double *su = v->su + k, *sv = v->sv + k;
+    const __m128d u0 = _mm_loadu_pd(su), v0 = _mm_loadu_pd(sv), four = _mm_set1_pd(4.0);
+    const __m128d half = _mm_set1_pd(0.5);
+    /* x: forward and backward differences, their squared lengths, the agreement test */
+    __m128d fu = _mm_sub_pd(_mm_loadu_pd(su + 1), u0), fv = _mm_sub_pd(_mm_loadu_pd(sv + 1), v0);
+    __m128d bu = _mm_sub_pd(u0, _mm_loadu_pd(su - 1)), bv = _mm_sub_pd(v0, _mm_loadu_pd(sv - 1));
+    __m128d nf = _mm_add_pd(_mm_mul_pd(fu, fu), _mm_mul_pd(fv, fv));
+    __m128d nb = _mm_add_pd(_mm_mul_pd(bu, bu), _mm_mul_pd(bv, bv));
+    __m128d agree =
+        _mm_and_pd(_mm_cmple_pd(nf, _mm_mul_pd(four, nb)), _mm_cmple_pd(nb, _mm_mul_pd(four, nf)));
+    const __m128d ux = _mm_mul_pd(half, _mm_add_pd(fu, bu)),
+                  vx = _mm_mul_pd(half, _mm_add_pd(fv, bv));
+    /* y */
+    fu = _mm_sub_pd(_mm_loadu_pd(su + w), u0), fv = _mm_sub_pd(_mm_loadu_pd(sv + w), v0);
+    bu = _mm_sub_pd(u0, _mm_loadu_pd(su - w)), bv = _mm_sub_pd(v0, _mm_loadu_pd(sv - w));
+    nf = _mm_add_pd(_mm_mul_pd(fu, fu), _mm_mul_pd(fv, fv));
+    nb = _mm_add_pd(_mm_mul_pd(bu, bu), _mm_mul_pd(bv, bv));
+    agree = _mm_and_pd(agree, _mm_and_pd(_mm_cmple_pd(nf, _mm_mul_pd(four, nb)),
+                                         _mm_cmple_pd(nb, _mm_mul_pd(four, nf))));
+    if (_mm_movemask_pd(agree) != 3) return 0;
+    const __m128d uy = _mm_mul_pd(half, _mm_add_pd(fu, bu)),
+                  vy = _mm_mul_pd(half, _mm_add_pd(fv, bv));
+    /* the floats, stored as jac_pixel orders them: ux uy vx vy a pixel */
+    const __m128 fux = _mm_cvtpd_ps(ux), fuy = _mm_cvtpd_ps(uy), fvx = _mm_cvtpd_ps(vx);
+    const __m128 fvy = _mm_cvtpd_ps(vy);
+    const __m128 lu = _mm_unpacklo_ps(fux, fuy), lv = _mm_unpacklo_ps(fvx, fvy);
+    _mm_storeu_ps(v->jac + 4 * k, _mm_movelh_ps(lu, lv));
+    _mm_storeu_ps(v->jac + 4 * k + 4, _mm_movehl_ps(lv, lu));
+    /* det from the stored floats, |det|, and the usability test */
+    const __m128d det = _mm_sub_pd(_mm_mul_pd(_mm_cvtps_pd(fux), _mm_cvtps_pd(fvy)),
+                                   _mm_mul_pd(_mm_cvtps_pd(fuy), _mm_cvtps_pd(fvx)));
+    const __m128d adet = _mm_andnot_pd(_mm_set1_pd(-0.0), det);
+    const __m128 fadet = _mm_cvtpd_ps(adet);
+    _mm_storel_pi((__m64 *)(v->adet + k), fadet);
+    /* usable: det finite (|det| <= DBL_MAX) and |det| > 0 as a float (which implies
+     * det != 0); the pixels had OK_UV only */
+    const __m128d dm = _mm_cmple_pd(adet, _mm_set1_pd(1.79769313486231570815e308));
+    const __m128i usable =
+        _mm_and_si128(_mm_shuffle_epi32(_mm_castpd_si128(dm), _MM_SHUFFLE(3, 1, 2, 0)),
+                      _mm_castps_si128(_mm_cmpgt_ps(fadet, _mm_setzero_ps())));
+    _mm_storel_epi64(
+        (__m128i *)(v->jid + k),
+        _mm_or_si128(_mm_and_si128(usable, id), _mm_andnot_si128(usable, _mm_set1_epi32(NO_ID))));
+    const int bits = _mm_movemask_ps(_mm_castsi128_ps(usable));
+    v->ok[k] = (unsigned char)(OK_UV | (bits & 1 ? OK_J : 0));
+    v->ok[k + 1] = (unsigned char)(OK_UV | (bits & 2 ? OK_J : 0));
+    return 1;
+}
+
+/* jac_pixel for pixels k .. k + 3, whose neighbours are all held: the id tests four at a
+ * time, the rest by pairs, each pair not in the usual case going to jac_pixel. */
+static inline void jac_quad(pixdata *d, const jacview *v, size_t k, int x)
+{
+    const __m128i id = _mm_loadu_si128((const __m128i *)(v->id + k));
+    const int m = _mm_movemask_epi8(same_around(v, k, id));
+    for (int h = 0; h < 2; h++) {
+        const size_t kh = k + 2 * (size_t)h;
+        const __m128i idh = h ? _mm_unpackhi_epi64(id, id) : id;
+        if (((m >> (8 * h)) & 0xff) != 0xff || !jac_lanes(v, kh, idh)) {
+            jac_pixel(d, kh, x + 2 * h, 1, 1);
+            jac_pixel(d, kh + 1, x + 2 * h + 1, 1, 1);
+        }
+    }
+}
+#endif
+
+/* The Jacobian, |det J|, OK_J, OK_SEAM and jid (NO_ID where not usable) over r. */
+void internal_stipple_fill_jacobian(pixdata *d, nprfx_rect r)
+{
+#if defined(__SSE2__)
+    /* the columns whose left and right neighbours are held */
+    const int xa = r.x0 - 1 >= d->r.x0 ? r.x0 : d->r.x0 + 1;
+    const int xb = r.x1 + 1 <= d->r.x1 ? r.x1 : d->r.x1 - 1;
+    const jacview v = {d->su, d->sv, d->id, d->jac, d->adet, d->jid, d->ok, (size_t)d->w};
+#endif
+    for (int y = r.y0; y < r.y1; y++) {
+        const int up = y - 1 >= d->r.y0, down = y + 1 < d->r.y1;
+        const size_t k0 = pd_at(d, r.x0, y);
+        int x = r.x0;
+#if defined(__SSE2__)
+        if (up && down) {
+            for (; x < xa; x++)
+                jac_pixel(d, k0 + (size_t)(x - r.x0), x, up, down);
+            for (; x + 4 <= xb; x += 4)
+                jac_quad(d, &v, k0 + (size_t)(x - r.x0), x);
+        }
+#endif
+        for (; x < r.x1; x++)
+            jac_pixel(d, k0 + (size_t)(x - r.x0), x, up, down);
+    }
+}
+
+/* A pixel whose |det J| exceeds OUTLIER times the smallest of its same-object neighbours'
+ * sees a jump, not the surface: renderers filter the UV pass, so along a silhouette the
+ * pixels hold a blend of the two objects' UVs (and across a UV seam, of the two charts'),
+ * which sits between the surfaces and makes a huge footprint there, packed with dots (a dark
+ * outline). Half-float steps and perspective change |det J| between neighbours by a few times
+ * at most. */
+#define OUTLIER 8.0f
+
+/* A repaired pixel's new values, computed from the values before any repair. */
+typedef struct fix {
+    size_t k;
+    double su, sv;
+    float jac[4], adet;
+} fix;
+
+/* The repairs found so far; failed: one could not be recorded (out of memory). */
+typedef struct fixlist {
+    pixdata *d;
+    size_t n;
+    int failed;
+} fixlist;
+
+/* Is pixel (x, y) at k an outlier? Then which neighbour it takes: 1 + its index in
+ * {-1, +1, -w, +w}; else 0. */
+static inline int outlier_source(const pixdata *d, ptrdiff_t k, int x, int up, int down)
+{
+    const ptrdiff_t w = d->w;
+    const int *jid = d->jid;
+    const float *adet = d->adet;
+    const int id = jid[k];
+    if (id == NO_ID) return 0;
+    const ptrdiff_t step[4] = {-1, 1, -w, w};
+    const int has[4] = {x - 1 >= d->r.x0, x + 1 < d->r.x1, up, down};
+    /* an outlier exceeds OUTLIER times some usable neighbour's (exactly: times the
+     * smallest); the usual pixel fails all four tests and is done */
+    const float a = adet[k] * (1.0f / OUTLIER);
+    if (!((has[0] && a > adet[k - 1] && jid[k - 1] == id) ||
+          (has[1] && a > adet[k + 1] && jid[k + 1] == id) ||
+          (up && a > adet[k - w] && jid[k - w] == id) ||
+          (down && a > adet[k + w] && jid[k + w] == id)))
+        return 0;
+    float ref = INFINITY;
+    int best = 0;
+    for (int n = 0; n < 4; n++)
+        if (has[n] && jid[k + step[n]] == id && adet[k + step[n]] < ref) {
+            ref = adet[k + step[n]];
+            best = n;
+        }
+    return 1 + best;
+}
+
+/* Record the repair of pixel k from neighbour n (outlier_source - 1): the neighbour's UV
+ * extrapolated by its derivatives, and those derivatives. Where there is no room to record
+ * it, the pixel is marked OK_DROP instead. */
+static void record_fix(fixlist *fl, size_t k, int n)
+{
+    pixdata *d = fl->d;
+    if (fl->n == d->fixcap) {
+        size_t cap = d->fixcap ? 2 * d->fixcap : 256;
+        fix *nf = realloc(d->fixes, cap * sizeof *nf);
+        if (!nf) {
+            fl->failed = 1;
+            d->ok[k] |= OK_DROP;
+            return;
+        }
+        d->fixes = nf;
+        d->fixcap = cap;
+    }
+    const ptrdiff_t w = d->w, step[4] = {-1, 1, -w, w};
+    const size_t q = (size_t)((ptrdiff_t)k + step[n]);
+    const double dx = n == 0 ? 1 : n == 1 ? -1 : 0, dy = n == 2 ? 1 : n == 3 ? -1 : 0;
+    const float *jq = d->jac + 4 * q;
+    fix *f = (fix *)d->fixes + fl->n++;
+    f->k = k;
+    f->su = d->su[q] + jq[0] * dx + jq[1] * dy;
+    f->sv = d->sv[q] + jq[2] * dx + jq[3] * dy;
+    memcpy(f->jac, jq, sizeof f->jac);
+    f->adet = d->adet[q];
+}
+
+#if defined(__SSE2__)
+/* Lanes where a > adet and the id is the same, at the neighbours `s` away from four pixels. */
+static inline __m128 exceeds(const int *jid, const float *adet, ptrdiff_t s, __m128 a, __m128i id)
+{
+    const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(jid + s)), id);
+    return _mm_and_ps(_mm_cmpgt_ps(a, _mm_loadu_ps(adet + s)), _mm_castsi128_ps(same));
+}
+
+/* outlier_source's first test for pixels k .. k + 3, whose neighbours are all held: a bit a
+ * pixel that may be an outlier. */
+static inline int outlier_mask4(const pixdata *d, ptrdiff_t k)
+{
+    const ptrdiff_t w = d->w;
+    const int *jid = d->jid + k;
+    const float *adet = d->adet + k;
+    const __m128i id = _mm_loadu_si128((const __m128i *)jid);
+    const __m128 a = _mm_mul_ps(_mm_loadu_ps(adet), _mm_set1_ps(1.0f / OUTLIER));
+    __m128 hit = _mm_or_ps(exceeds(jid, adet, -1, a, id), exceeds(jid, adet, 1, a, id));
+    hit = _mm_or_ps(hit, _mm_or_ps(exceeds(jid, adet, -w, a, id), exceeds(jid, adet, w, a, id)));
+    hit = _mm_andnot_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(id, _mm_set1_epi32(NO_ID))), hit);
+    return _mm_movemask_ps(hit);
+}
+#endif
+
+/* Such a pixel takes the surface of that neighbour instead: its UV extrapolated from the
+ * neighbour's UV and derivatives, and those derivatives, so it owns its share of the surface
+ * like the pixels around (and is marked OK_SEAM, so the corners it shares with the other side
+ * of a seam are checked). Every repair is computed from the values before any repair, on M,
+ * from the derivatives of D1 (M plus 1) as computed: the same whatever the units. The search
+ * records each repair as it finds it (the values are all read before any is stored), four
+ * pixels at a time where SSE2 is there: a group none of whose pixels is an outlier, the usual
+ * case, is done with one test. */
+void internal_stipple_repair_outliers(pixdata *d, nprfx_rect M)
+{
+    fixlist fl = {d, 0, 0};
+#if defined(__SSE2__)
+    /* the columns whose left and right neighbours are held */
+    const int xa = M.x0 - 1 >= d->r.x0 ? M.x0 : d->r.x0 + 1;
+    const int xb = M.x1 + 1 <= d->r.x1 ? M.x1 : d->r.x1 - 1;
+#endif
+    for (int y = M.y0; y < M.y1; y++) {
+        const int up = y - 1 >= d->r.y0, down = y + 1 < d->r.y1;
+        const ptrdiff_t k0 = (ptrdiff_t)pd_at(d, M.x0, y);
+        int x = M.x0;
+#if defined(__SSE2__)
+        if (up && down) {
+            for (; x < xa; x++) {
+                const int n = outlier_source(d, k0 + (x - M.x0), x, up, down);
+                if (n) record_fix(&fl, (size_t)(k0 + (x - M.x0)), n - 1);
+            }
+            for (; x + 4 <= xb; x += 4) {
+                const ptrdiff_t k = k0 + (x - M.x0);
+                for (int m = outlier_mask4(d, k), i = 0; m; i++, m >>= 1) {
+                    const int n = m & 1 ? outlier_source(d, k + i, x + i, up, down) : 0;
+                    if (n) record_fix(&fl, (size_t)(k + i), n - 1);
+                }
+            }
+        }
+#endif
+        for (; x < M.x1; x++) {
+            const int n = outlier_source(d, k0 + (x - M.x0), x, up, down);
+            if (n) record_fix(&fl, (size_t)(k0 + (x - M.x0)), n - 1);
+        }
+    }
+    const fix *fx = d->fixes;
+    if (fl.failed) { /* no room for them all: drop them instead (they own nothing) */
+        for (size_t i = 0; i < fl.n; i++)
+            d->ok[fx[i].k] |= OK_DROP;
+        for (int y = M.y0; y < M.y1; y++) {
+            size_t k = pd_at(d, M.x0, y);
+            for (int x = M.x0; x < M.x1; x++, k++)
+                if (d->ok[k] & OK_DROP)
+                    d->jid[k] = NO_ID, d->ok[k] &= (unsigned char)~(OK_J | OK_DROP);
+        }
+        return;
+    }
+    for (size_t i = 0; i < fl.n; i++) {
+        size_t k = fx[i].k;
+        d->su[k] = fx[i].su;
+        d->sv[k] = fx[i].sv;
+        memcpy(d->jac + 4 * k, fx[i].jac, sizeof fx[i].jac);
+        d->adet[k] = fx[i].adet;
+        d->ok[k] |= OK_SEAM;
+    }
+}
+
+#if defined(__SSE2__)
+/* The horizontal pass of smooth_area for pixels k .. k + 3 (one lane each), whose +-SMOOTH
+ * neighbours are all held: the sum of adet over the same-id pixels, and their count (summed as
+ * an integer: the float sum of 1s is exact), both 0 where the pixel has no usable
+ * derivatives. */
+static inline void horizontal4(const int *jid, const float *adet, float *hs, float *hc, size_t k)
+{
+    const __m128i vid = _mm_loadu_si128((const __m128i *)(jid + k));
+    __m128 vs = _mm_setzero_ps();
+    __m128i vc = _mm_setzero_si128();
+    for (int dx = -SMOOTH; dx <= SMOOTH; dx++) {
+        const __m128i same = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(jid + k + dx)), vid);
+        vs = _mm_add_ps(vs, _mm_and_ps(_mm_castsi128_ps(same), _mm_loadu_ps(adet + k + dx)));
+        vc = _mm_sub_epi32(vc, same);
+    }
+    const __m128 none = _mm_castsi128_ps(_mm_cmpeq_epi32(vid, _mm_set1_epi32(NO_ID)));
+    _mm_storeu_ps(hs + k, _mm_andnot_ps(none, vs));
+    _mm_storeu_ps(hc + k, _mm_andnot_ps(none, _mm_cvtepi32_ps(vc)));
+}
+
+/* The vertical pass of smooth_area for pixels k .. k + 3 (one lane each) over rows lo .. hi
+ * around them: cnt > 0 ? sum / cnt : 0, and 0 where the pixel has no usable derivatives. */
+static inline __m128 vertical4(const int *jid, const float *hs, const float *hc, ptrdiff_t k,
+                               ptrdiff_t w, int lo, int hi)
+{
+    const __m128i vid = _mm_loadu_si128((const __m128i *)(jid + k));
+    __m128 vs = _mm_setzero_ps(), vc = _mm_setzero_ps();
+    for (int dy = lo; dy <= hi; dy++) {
+        const ptrdiff_t q = k + dy * w;
+        const __m128 same =
+            _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(jid + q)), vid));
+        vs = _mm_add_ps(vs, _mm_and_ps(same, _mm_loadu_ps(hs + q)));
+        vc = _mm_add_ps(vc, _mm_and_ps(same, _mm_loadu_ps(hc + q)));
+    }
+    const __m128 use = _mm_andnot_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(vid, _mm_set1_epi32(NO_ID))),
+                                     _mm_cmpgt_ps(vc, _mm_setzero_ps()));
+    return _mm_and_ps(use, _mm_div_ps(vs, vc));
+}
+#endif
+
+/* The area scale |det J| averaged over the same-object pixels of a (2 SMOOTH + 1)^2 window
+ * (a horizontal pass within the object, then a vertical one), for the density thresholds only.
+ * UV passes are often stored as half floats, whose steps make per-pixel differences of a slowly
+ * varying UV jump by factors of two; the kept prefix would then change from pixel to pixel,
+ * which scatters the dots like white noise. Needs adet on E plus SMOOTH; writes out[] over E.
+ * Sums start at +0 and add values >= +0 (|det|, and sums of them), so adding +0 for a pixel
+ * that does not count gives the same float as skipping it: the interior loops test without
+ * branching, four pixels at a time where SSE2 is there, each lane adding in the scalar
+ * order. */
+void internal_stipple_smooth_area(pixdata *d, nprfx_rect E, nprfx_rect R, float *out)
+{
+    const ptrdiff_t w = d->w;
+    const int *restrict jid = d->jid;
+    const float *restrict adet = d->adet;
+    float *restrict hs = d->hs, *restrict hc = d->hc;
+    /* columns of E whose +-SMOOTH neighbours are all held */
+    const int xa = E.x0 - SMOOTH >= d->r.x0 ? E.x0 : d->r.x0 + SMOOTH;
+    const int xb = E.x1 + SMOOTH <= d->r.x1 ? E.x1 : d->r.x1 - SMOOTH;
+    for (int y = R.y0; y < R.y1; y++) {
+        const size_t k0 = pd_at(d, E.x0, y);
+        for (int x = E.x0; x < E.x1; x++) {
+            const size_t k = k0 + (size_t)(x - E.x0);
+#if defined(__SSE2__)
+            if (x >= xa && x + 4 <= xb) {
+                horizontal4(jid, adet, hs, hc, k);
+                x += 3;
+                continue;
+            }
+#endif
+            float sum = 0, cnt = 0;
+            const int id = jid[k];
+            if (id == NO_ID) {
+            } else if (x >= xa && x < xb) {
+                for (int dx = -SMOOTH; dx <= SMOOTH; dx++) {
+                    const int same = jid[k + dx] == id;
+                    sum += same ? adet[k + dx] : 0.0f;
+                    cnt += same ? 1.0f : 0.0f;
+                }
+            } else {
+                int lo = x - SMOOTH < d->r.x0 ? d->r.x0 - x : -SMOOTH;
+                int hi = x + SMOOTH >= d->r.x1 ? d->r.x1 - 1 - x : SMOOTH;
+                for (int dx = lo; dx <= hi; dx++)
+                    if (jid[k + dx] == id) {
+                        sum += adet[k + dx];
+                        cnt += 1;
+                    }
+            }
+            hs[k] = sum;
+            hc[k] = cnt;
+        }
+    }
+    int ew = nprfx_rect_width(E);
+    for (int y = E.y0; y < E.y1; y++) {
+        int lo = y - SMOOTH < R.y0 ? R.y0 - y : -SMOOTH;
+        int hi = y + SMOOTH >= R.y1 ? R.y1 - 1 - y : SMOOTH;
+        const ptrdiff_t k0 = (ptrdiff_t)pd_at(d, E.x0, y);
+        float *restrict o = out + (size_t)(y - E.y0) * ew;
+        int i = 0;
+#if defined(__SSE2__)
+        if (lo == -SMOOTH && hi == SMOOTH) /* the usual row: the taps unrolled */
+            for (; i + 4 <= ew; i += 4)
+                _mm_storeu_ps(o + i, vertical4(jid, hs, hc, k0 + i, w, -SMOOTH, SMOOTH));
+        for (; i + 4 <= ew; i += 4)
+            _mm_storeu_ps(o + i, vertical4(jid, hs, hc, k0 + i, w, lo, hi));
+#endif
+        for (; i < ew; i++) {
+            const ptrdiff_t k = k0 + i;
+            float sum = 0, cnt = 0;
+            const int id = jid[k];
+            if (id != NO_ID)
+                for (int dy = lo; dy <= hi; dy++) {
+                    const ptrdiff_t q = k + dy * w;
+                    const int same = jid[q] == id;
+                    sum += same ? hs[q] : 0.0f;
+                    cnt += same ? hc[q] : 0.0f;
+                }
+            o[i] = cnt > 0 ? sum / cnt : 0.0f;
+        }
+    }
+}
