@@ -302,8 +302,10 @@ static nprfx_result bind_params(nprfx_context *ctx, const nprfx_node_desc *node,
     return NPRFX_OK;
 }
 
-/* The shared checks of nprfx_node_render/export; on success *a is a full-size copy of args. */
-static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args *a)
+/* The shared checks of nprfx_node_render/export; on success *a is a full-size copy of args. A
+ * text export writes no pixels: it needs no output image (when one is given it is checked). */
+static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args *a,
+                               int need_output)
 {
     if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
     nprfx_context *ctx = args->ctx;
@@ -317,13 +319,14 @@ static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args 
     const nprfx_node_desc *d = a->node;
     if (!d || !d->render)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "render arguments name no node");
-    if ((d->num_inputs > 0 && !a->inputs) || (d->num_params > 0 && !a->params) || !a->output ||
-        !a->output->data)
+    if (!need_output && (!a->output || !a->output->data)) a->output = NULL;
+    if ((d->num_inputs > 0 && !a->inputs) || (d->num_params > 0 && !a->params) ||
+        (need_output && (!a->output || !a->output->data)))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "%s: incomplete render arguments (inputs, params or output missing)",
                            d->id);
     /* Tiles at the edges may reach past the image: a node writes only what exists. */
-    a->window = nprfx_rect_intersect(a->window, a->output->bounds);
+    if (a->output) a->window = nprfx_rect_intersect(a->window, a->output->bounds);
     int ich[NPRFX_MAX_INPUTS_CHECKED];
     if (d->num_inputs > NPRFX_MAX_INPUTS_CHECKED)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: more than %d inputs", d->id,
@@ -346,7 +349,7 @@ static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args 
     nprfx_output_info oi;
     nprfx_result r = nprfx_node_output_info(ctx, d, a->params, ich, &oi);
     if (r) return r;
-    if (a->output->channels != oi.channels)
+    if (a->output && a->output->channels != oi.channels)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "%s: output has %d channels, expected %d", d->id, a->output->channels,
                            oi.channels);
@@ -356,10 +359,11 @@ static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args 
 typedef nprfx_result (*bound_call)(const nprfx_render_args *a, const void *typed, void *user);
 
 /* Check args, bind params into a typed struct (on the stack when it fits) and call `call`. */
-static nprfx_result with_bound_params(const nprfx_render_args *args, bound_call call, void *user)
+static nprfx_result with_bound_params(const nprfx_render_args *args, int need_output,
+                                      bound_call call, void *user)
 {
     nprfx_render_args a;
-    nprfx_result r = check_args(args, &a);
+    nprfx_result r = check_args(args, &a, need_output);
     if (r) return r;
     const nprfx_node_desc *d = a.node;
     union {
@@ -391,7 +395,7 @@ static nprfx_result call_render(const nprfx_render_args *a, const void *typed, v
 
 nprfx_result nprfx_node_render(const nprfx_render_args *args)
 {
-    return with_bound_params(args, call_render, NULL);
+    return with_bound_params(args, 1, call_render, NULL);
 }
 
 typedef struct export_call {
@@ -416,7 +420,7 @@ nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path, 
         return nprfx_error(args->ctx, NPRFX_ERR_UNSUPPORTED, "%s: the node has no text export",
                            args->node->id);
     export_call e = {path, text, len};
-    return with_bound_params(args, call_export, &e);
+    return with_bound_params(args, 0, call_export, &e);
 }
 
 /* ---- descriptor lint ------------------------------------------------------------------------ */

@@ -199,7 +199,8 @@ static inline const nprfx_image *nprfx_render_input(const nprfx_render_args *arg
 NPRFX_API nprfx_result nprfx_node_render(const nprfx_render_args *args);
 
 /* The node's text export of a whole frame (desc->export_text), with the same checks and binding
- * as nprfx_node_render. NPRFX_ERR_UNSUPPORTED when the node has none. */
+ * as nprfx_node_render, except that it needs no output image (args->output may be NULL).
+ * NPRFX_ERR_UNSUPPORTED when the node has none. */
 NPRFX_API nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path,
                                          char **text, size_t *len);
 
