@@ -19,14 +19,11 @@ nprfx_result nprfx_gabor_node_render(nprfx_context *ctx, const nprfx_gabor_node_
     int dims = uv ? 2 : 3;
     int ach = in->anchor->channels;
     if (ach < dims || ach > dims + 1)
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "gabor-splat: input 'anchor' has %d channels; anchor_space %s needs %d "
-                           "(or %d with coverage), e.g. %s",
-                           ach,
-                           uv                             ? "uv"
-                           : space == NPRFX_GABOR_SPACE_P ? "p"
-                                                          : "pref",
-                           dims, dims + 1, uv ? "plate:UV.U,UV.V" : "plate:Pref");
+        return nprfx_error(
+            ctx, NPRFX_ERR_INVALID_ARGUMENT,
+            "gabor-splat: input 'anchor' has %d channels; this anchor_space needs %d "
+            "(or %d with coverage), e.g. %s",
+            ach, dims, dims + 1, uv ? "plate:UV.U,UV.V" : "plate:Pref");
     if (in->orientation && in->orientation->channels > 2)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "gabor-splat: input 'orientation' has %d channels; 1 (angle) or 2 "
