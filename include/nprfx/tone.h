@@ -1,0 +1,89 @@
+/* nprfx — the tone node: a shading AOV mapped into the [0, 1] tone the threshold and the styles
+ * expect (the cookbook's "diffuseIntensity": 0 darkest, 1 lightest), with a range measured once
+ * over the whole shot or on a reference frame, never per frame, so it cannot flicker
+ * (docs/design.md §3.9). */
+#ifndef NPRFX_TONE_H
+#define NPRFX_TONE_H
+
+#include "nprfx/context.h"
+#include "nprfx/image.h"
+#include "nprfx/node.h"
+#include "nprfx/export.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Where the range [lo, hi] that maps to [0, 1] comes from. */
+typedef enum nprfx_tone_range {
+    NPRFX_TONE_RANGE_SHOT = 0,   /* percentiles of every frame of the shot together */
+    NPRFX_TONE_RANGE_FRAME = 1,  /* percentiles of one reference frame */
+    NPRFX_TONE_RANGE_MANUAL = 2, /* lo = black, hi = white as given */
+    NPRFX_TONE_RANGE_COUNT
+} nprfx_tone_range;
+
+/* The node's params (its descriptor binds each one here by offset). */
+typedef struct nprfx_tone_params {
+    int range;                /* nprfx_tone_range */
+    double low, high;         /* percentiles (0-100) of the covered pixels that map to 0 and 1 */
+    int reference_frame;      /* RANGE_FRAME: the frame measured */
+    double black, white;      /* RANGE_MANUAL: the values that map to 0 and 1 */
+    double exposure;          /* stops, applied after the range: t * 2^exposure */
+    double gamma;             /* t^(1/gamma) */
+    double out_low, out_high; /* the output spans [out_low, out_high] */
+    double background;        /* output where coverage is 0 */
+} nprfx_tone_params;
+
+/* The scalar the node maps: one channel as it is, RGB(A) as Rec. 709 luminance
+ * 0.2126 R + 0.7152 G + 0.0722 B, two channels: the first. */
+NPRFX_API double nprfx_tone_value(const float *px, int channels);
+
+/* Below this albedo luminance a surface counts as black (light 0). */
+#define NPRFX_TONE_MIN_ALBEDO 1e-4
+
+/* The light on a surface: its shading divided by its albedo (Blender's Combined / DiffCol is the
+ * direct plus the ambient light), 0 where the albedo is black. */
+NPRFX_API double nprfx_tone_light(double tone, double albedo);
+
+/* The mapping of one value v with the range [lo, hi] (hi <= lo: a step at lo):
+ *   t = clamp((v - lo) / (hi - lo) * 2^exposure, 0, 1)^(1 / gamma)
+ *   out = out_low + (out_high - out_low) t,
+ * and where coverage c < 1, out = c out + (1 - c) background. NaN v maps as lo. */
+NPRFX_API double nprfx_tone_map(const nprfx_tone_params *p, double lo, double hi, double v,
+                                double coverage);
+
+/* The q-th percentile (0-100) of n values, linear between order statistics; values is
+ * reordered. n == 0 gives 0. */
+NPRFX_API double nprfx_tone_percentile(float *values, size_t n, double q);
+
+/* The samples a frame contributes to a measured range: the value (tone, or tone / albedo when an
+ * albedo is given) at every s-th pixel in x and y of the tone's data window (s = the smallest
+ * integer with (w / s)(h / s) <= 65536, so every frame weighs about the same whatever its size;
+ * a long shot takes fewer per frame so that it holds at most 4M), where coverage (when given) is
+ * at least 0.5 and the value is finite. *values is malloc'd (free it); *hash fingerprints them. */
+NPRFX_API nprfx_result nprfx_tone_samples(nprfx_context *ctx, const nprfx_image *tone,
+                                          const nprfx_image *albedo, const nprfx_image *coverage,
+                                          float **values, size_t *n, unsigned long long *hash);
+
+/* Render `window` of the tone node at frame `time` of the shot [first_frame, last_frame]:
+ * measures [lo, hi] as p->range says (fetching the inputs numbered input[0] (tone), input[1]
+ * (albedo) and input[2] (coverage) at other frames through fetch; without fetch only the
+ * current frame can be measured), keeping what it measured in *state (freed by
+ * nprfx_tone_state_free; state NULL: nothing kept) so that a shot is measured once, then maps
+ * every pixel. albedo and coverage may be NULL. Output: one channel. */
+NPRFX_API nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
+                                         const nprfx_image *tone, const nprfx_image *albedo,
+                                         const nprfx_image *coverage, double time, int first_frame,
+                                         int last_frame, nprfx_fetch_fn fetch, void *fetch_user,
+                                         const int input[3], void **state, nprfx_rect window,
+                                         nprfx_image *out);
+
+/* The range the last render used (for tests and logs); 0 when none was measured yet. */
+NPRFX_API int nprfx_tone_state_range(const void *state, double *lo, double *hi);
+
+NPRFX_API void nprfx_tone_state_free(void *state);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

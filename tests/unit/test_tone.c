@@ -1,0 +1,364 @@
+/* The tone and matte nodes: the mapping and percentiles against hand-computed values, a range
+ * measured once over the shot (the same value maps the same at every frame, whatever the order
+ * frames are rendered in), a cache that notices a changed input, coverage, and the matte's rules,
+ * softening and tile invariance. */
+#include <math.h>
+#include <string.h>
+
+#include "check.h"
+#include "node_harness.h"
+#include "nprfx/exec.h"
+#include "nprfx/matte.h"
+#include "nprfx/tone.h"
+
+extern const nprfx_node_desc nprfx_node_tone;
+extern const nprfx_node_desc nprfx_node_matte;
+
+static float px(const nprfx_image *im, int x, int y)
+{
+    return nprfx_image_at(im, x, y)[0];
+}
+
+static nprfx_tone_params plain(void)
+{
+    nprfx_tone_params p;
+    memset(&p, 0, sizeof p);
+    p.range = NPRFX_TONE_RANGE_MANUAL;
+    p.high = 100;
+    p.white = 1;
+    p.gamma = 1;
+    p.out_high = 1;
+    p.background = 1;
+    return p;
+}
+
+static void test_map(void)
+{
+    nprfx_tone_params p = plain();
+    CHECK(nprfx_tone_map(&p, 2, 4, 3, 1) == 0.5);
+    CHECK(nprfx_tone_map(&p, 2, 4, 1, 1) == 0.0);
+    CHECK(nprfx_tone_map(&p, 2, 4, 9, 1) == 1.0);
+    CHECK(nprfx_tone_map(&p, 2, 4, NAN, 1) == 0.0);
+    /* coverage mixes towards the background */
+    CHECK(nprfx_tone_map(&p, 2, 4, 3, 0.25) == 0.875);
+    CHECK(nprfx_tone_map(&p, 2, 4, 3, 0) == 1.0);
+    /* exposure: one stop doubles t */
+    p.exposure = 1;
+    CHECK(nprfx_tone_map(&p, 2, 4, 2.5, 1) == 0.5);
+    CHECK(nprfx_tone_map(&p, 2, 4, 3, 1) == 1.0);
+    p.exposure = 0;
+    p.gamma = 2;
+    CHECK_NEAR(nprfx_tone_map(&p, 2, 4, 3, 1), sqrt(0.5), 1e-15);
+    p.gamma = 1;
+    p.out_low = 0.2;
+    p.out_high = 0.8;
+    CHECK_NEAR(nprfx_tone_map(&p, 2, 4, 2.5, 1), 0.35, 1e-15);
+    /* an empty range is a step at lo */
+    p = plain();
+    CHECK(nprfx_tone_map(&p, 2, 2, 2, 1) == 0.0 && nprfx_tone_map(&p, 2, 2, 2.001, 1) == 1.0);
+    /* luminance and light */
+    float rgb[3] = {1, 0, 0}, g[1] = {0.25f};
+    CHECK_NEAR(nprfx_tone_value(rgb, 3), 0.2126, 1e-15);
+    CHECK(nprfx_tone_value(g, 1) == 0.25);
+    CHECK(nprfx_tone_light(0.3, 0.6) == 0.5 && nprfx_tone_light(0.3, 0) == 0.0);
+}
+
+static void test_percentile(void)
+{
+    float v[101];
+    /* 1..101 in a scrambled order (37 is coprime with 101) */
+    for (int i = 0; i < 101; i++)
+        v[i] = (float)(1 + (i * 37) % 101);
+    CHECK(nprfx_tone_percentile(v, 101, 50) == 51.0);
+    CHECK(nprfx_tone_percentile(v, 101, 0) == 1.0);
+    CHECK(nprfx_tone_percentile(v, 101, 100) == 101.0);
+    CHECK_NEAR(nprfx_tone_percentile(v, 101, 2.5), 3.5, 1e-12);
+    float d[6] = {5, 5, 5, 1, 5, 5};
+    CHECK(nprfx_tone_percentile(d, 6, 50) == 5.0);
+    CHECK(nprfx_tone_percentile(d, 6, 0) == 1.0);
+    float one[1] = {7};
+    CHECK(nprfx_tone_percentile(one, 1, 30) == 7.0);
+    CHECK(nprfx_tone_percentile(one, 0, 30) == 0.0);
+}
+
+/* A 5-frame shot of 16x8 frames: frame f holds f + x / 15 (so the shot spans [1, 6]), except
+ * the right quarter (x >= 12), which holds 100 and is uncovered. */
+enum { W = 16, H = 8, NF = 5 };
+typedef struct shot {
+    nprfx_image tone[NF + 1], cov[NF + 1];
+    int calls;
+} shot;
+
+static nprfx_result fetch_shot(void *user, int input, double time, nprfx_image *out)
+{
+    shot *s = user;
+    s->calls++;
+    int f = (int)time;
+    if (f < 1 || f > NF) return NPRFX_ERR_INVALID_ARGUMENT;
+    if (input == 0)
+        *out = s->tone[f];
+    else if (input == 2)
+        *out = s->cov[f];
+    else
+        return NPRFX_ERR_MISSING_INPUT;
+    return NPRFX_OK;
+}
+
+static void make_shot(nprfx_context *ctx, shot *s)
+{
+    memset(s, 0, sizeof *s);
+    for (int f = 1; f <= NF; f++) {
+        nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &s->tone[f]);
+        nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &s->cov[f]);
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                nprfx_image_at(&s->tone[f], x, y)[0] = x >= 12 ? 100.0f : (float)(f + x / 15.0);
+                nprfx_image_at(&s->cov[f], x, y)[0] = x >= 12 ? 0.0f : 1.0f;
+            }
+    }
+}
+
+static void free_shot(shot *s)
+{
+    for (int f = 1; f <= NF; f++) {
+        nprfx_image_free(&s->tone[f]);
+        nprfx_image_free(&s->cov[f]);
+    }
+}
+
+/* Render frame f of the shot through the descriptor. */
+static nprfx_result render_frame(nprfx_context *ctx, shot *s, const nprfx_value *pv, int f,
+                                 void **state, nprfx_image *out, int fetch)
+{
+    const nprfx_node_desc *n = &nprfx_node_tone;
+    nprfx_image in[3];
+    memset(in, 0, sizeof in);
+    in[th_input(n, "tone")] = s->tone[f];
+    in[th_input(n, "coverage")] = s->cov[f];
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = ctx;
+    a.node = n;
+    a.time = f;
+    a.render_scale = 1;
+    a.frame = out->bounds;
+    a.window = out->bounds;
+    a.first_frame = 1;
+    a.last_frame = NF;
+    a.inputs = in;
+    a.params = pv;
+    a.output = out;
+    a.fetch = fetch ? fetch_shot : NULL;
+    a.fetch_user = s;
+    a.state = state;
+    return nprfx_node_render(&a);
+}
+
+static void test_shot_range(nprfx_context *ctx)
+{
+    const nprfx_node_desc *n = &nprfx_node_tone;
+    CHECK(th_input(n, "tone") == 0 && th_input(n, "coverage") == 2);
+    shot s;
+    make_shot(ctx, &s);
+    nprfx_value pv[16];
+    nprfx_node_defaults(n, pv);
+    pv[th_param(n, "low")].v[0] = 0;
+    pv[th_param(n, "high")].v[0] = 100;
+    nprfx_image out, again;
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &out);
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &again);
+    void *state = NULL;
+    /* frames out of order: every one maps with the shot's range [1, 1 + 4 + 11/15] */
+    int order[NF] = {3, 5, 1, 4, 2};
+    double hi = 5 + 11 / 15.0;
+    for (int k = 0; k < NF; k++) {
+        int f = order[k];
+        CHECK_OK(render_frame(ctx, &s, pv, f, &state, &out, 1));
+        for (int x = 0; x < 12; x++) {
+            double v = (float)(f + x / 15.0);
+            CHECK_NEAR(px(&out, x, 3), (v - 1) / (hi - 1), 1e-6);
+        }
+        /* uncovered: the background, and the 100s were not measured */
+        CHECK(px(&out, 12, 0) == 1.0f && px(&out, 15, 7) == 1.0f);
+    }
+    double lo_m = 0, hi_m = 0;
+    CHECK(nprfx_tone_state_range(state, &lo_m, &hi_m) && lo_m == 1.0);
+    CHECK_NEAR(hi_m, hi, 1e-6);
+    /* measured once: after the first frame, a render fetches nothing but its own frame */
+    s.calls = 0;
+    CHECK_OK(render_frame(ctx, &s, pv, 2, &state, &out, 1));
+    CHECK(s.calls == 0);
+    /* a fresh instance gives the same pixels (the cache never changes a result) */
+    void *fresh = NULL;
+    CHECK_OK(render_frame(ctx, &s, pv, 2, &fresh, &again, 1));
+    CHECK(memcmp(out.data, again.data, sizeof(float) * W * H) == 0);
+    nprfx_tone_state_free(fresh);
+    /* an upstream change at the rendered frame is noticed: the range is measured again */
+    for (int y = 0; y < H; y++)
+        nprfx_image_at(&s.tone[2], 0, y)[0] = 0.0f;
+    CHECK_OK(render_frame(ctx, &s, pv, 2, &state, &out, 1));
+    fresh = NULL;
+    CHECK_OK(render_frame(ctx, &s, pv, 2, &fresh, &again, 1));
+    CHECK(memcmp(out.data, again.data, sizeof(float) * W * H) == 0);
+    CHECK(px(&out, 0, 0) == 0.0f && px(&out, 1, 0) > 0.0f);
+    nprfx_tone_state_free(fresh);
+    nprfx_tone_state_free(state);
+    state = NULL;
+    /* range 'frame': frame 3 alone spans [3, 3 + 11/15] */
+    th_set_choice(n, pv, "range", "frame");
+    pv[th_param(n, "reference_frame")].v[0] = 3;
+    CHECK_OK(render_frame(ctx, &s, pv, 5, &state, &out, 1));
+    CHECK(px(&out, 0, 0) == 1.0f); /* 5 is above frame 3's range */
+    CHECK_OK(render_frame(ctx, &s, pv, 3, &state, &out, 1));
+    CHECK(px(&out, 0, 0) == 0.0f && px(&out, 11, 0) == 1.0f);
+    CHECK_NEAR(px(&out, 5, 0), 5.0 / 11.0, 1e-6);
+    nprfx_tone_state_free(state);
+    state = NULL;
+    /* a host that cannot fetch: 'frame' works on the reference frame, 'shot' says why not */
+    CHECK_OK(render_frame(ctx, &s, pv, 3, &state, &out, 0));
+    CHECK(render_frame(ctx, &s, pv, 4, &state, &out, 0) == NPRFX_ERR_UNSUPPORTED);
+    CHECK(strstr(th_error(ctx), "range 'frame' measures frame 3") != NULL);
+    th_set_choice(n, pv, "range", "shot");
+    CHECK(render_frame(ctx, &s, pv, 4, &state, &out, 0) == NPRFX_ERR_UNSUPPORTED);
+    CHECK(strstr(th_error(ctx), "range 'shot' measures every frame of the shot (1-5)") != NULL);
+    nprfx_tone_state_free(state);
+    /* bad params are refused with the param's name */
+    pv[th_param(n, "low")].v[0] = 60;
+    pv[th_param(n, "high")].v[0] = 40;
+    CHECK(render_frame(ctx, &s, pv, 1, NULL, &out, 1) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(strstr(th_error(ctx), "low (60) must be below high (40)") != NULL);
+    nprfx_image_free(&out);
+    nprfx_image_free(&again);
+    free_shot(&s);
+}
+
+static void test_albedo(nprfx_context *ctx)
+{
+    /* tone / albedo: a checker texture under even light maps to one value */
+    nprfx_image tone = th_image(4, 1, 3, NULL), alb = th_image(4, 1, 3, NULL), out;
+    float a[2] = {0.2f, 0.8f};
+    for (int x = 0; x < 4; x++)
+        for (int c = 0; c < 3; c++) {
+            nprfx_image_at(&alb, x, 0)[c] = a[x & 1];
+            nprfx_image_at(&tone, x, 0)[c] = a[x & 1] * (x < 2 ? 0.5f : 1.0f);
+        }
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 4, 1), 1, &out);
+    nprfx_tone_params p = plain();
+    const int input[3] = {0, 1, 2};
+    CHECK_OK(nprfx_tone_render(ctx, &p, &tone, &alb, NULL, 1, 1, 1, NULL, NULL, input, NULL,
+                               out.bounds, &out));
+    CHECK_NEAR(px(&out, 0, 0), 0.5, 1e-6);
+    CHECK_NEAR(px(&out, 1, 0), 0.5, 1e-6);
+    CHECK_NEAR(px(&out, 2, 0), 1.0, 1e-6);
+    CHECK_NEAR(px(&out, 3, 0), 1.0, 1e-6);
+    nprfx_image_free(&tone);
+    nprfx_image_free(&alb);
+    nprfx_image_free(&out);
+}
+
+static void test_matte(nprfx_context *ctx)
+{
+    nprfx_matte_params p = {.far = 1e9, .background_id = 0, .soften = 0, .invert = 0};
+    float z_obj = 5, z_sky = INFINITY, z_blender = 1e10f, z_zero = 0, id0 = 0, id3 = 3,
+          id_near0 = 0.2f, a_half = 0.5f;
+    CHECK(nprfx_matte_pixel(&p, NULL, &z_obj, NULL) == 1.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, &z_sky, NULL) == 0.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, &z_blender, NULL) == 0.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, &z_zero, NULL) == 0.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id0) == 0.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_near0) == 0.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id3) == 1.0);
+    CHECK(nprfx_matte_pixel(&p, &a_half, &z_obj, &id3) == 0.5);
+    p.background_id = -1;
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id0) == 1.0);
+    p.background_id = 0;
+
+    /* a disc of depth 5 on an infinite background, through the descriptor */
+    const nprfx_node_desc *n = &nprfx_node_matte;
+    enum { S = 40 };
+    nprfx_image in[3], out, whole;
+    memset(in, 0, sizeof in);
+    int di = th_input(n, "depth");
+    in[di] = th_image(S, S, 1, NULL);
+    for (int y = 0; y < S; y++)
+        for (int x = 0; x < S; x++)
+            nprfx_image_at(&in[di], x, y)[0] =
+                (x - 19.3) * (x - 19.3) + (y - 20.6) * (y - 20.6) < 100 ? 5.0f : INFINITY;
+    nprfx_value pv[8];
+    nprfx_node_defaults(n, pv);
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, S, S), 1, &out);
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, S, S), 1, &whole);
+    CHECK_OK(th_render(ctx, n, in, pv, &whole, whole.bounds));
+    /* softened: 1 deep inside, 0 far outside, in between at the rim, monotone along a ray */
+    CHECK(px(&whole, 19, 21) == 1.0f && px(&whole, 0, 0) == 0.0f);
+    CHECK(px(&whole, 29, 21) > 0.0f && px(&whole, 29, 21) < 1.0f);
+    for (int x = 20; x < S - 1; x++)
+        CHECK(px(&whole, x, 21) >= px(&whole, x + 1, 21));
+    /* tiles agree with the whole frame */
+    for (int t = 0; t < 4; t++) {
+        nprfx_rect win =
+            nprfx_rect_make((t & 1) * 17, (t >> 1) * 23, (t & 1) ? S : 17, (t >> 1) ? S : 23);
+        CHECK_OK(th_render(ctx, n, in, pv, &out, win));
+    }
+    CHECK(memcmp(out.data, whole.data, sizeof(float) * S * S) == 0);
+    /* soften 0: exactly the hard rule; invert */
+    pv[th_param(n, "soften")].v[0] = 0;
+    pv[th_param(n, "invert")].v[0] = 1;
+    CHECK_OK(th_render(ctx, n, in, pv, &out, out.bounds));
+    CHECK(px(&out, 19, 21) == 0.0f && px(&out, 29, 21) == 0.0f && px(&out, 30, 21) == 1.0f);
+    /* no input: the error names the inputs */
+    nprfx_image none[3];
+    memset(none, 0, sizeof none);
+    CHECK(th_render(ctx, n, none, pv, &out, out.bounds) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(strstr(th_error(ctx), "'alpha', 'depth', 'id'") != NULL);
+    nprfx_image_free(&in[di]);
+    nprfx_image_free(&out);
+    nprfx_image_free(&whole);
+}
+
+/* The pixels do not depend on the thread count. */
+static void test_threads(void)
+{
+    nprfx_pool *pool = NULL;
+    CHECK_OK(nprfx_pool_create(3, &pool));
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    ci.executor = nprfx_pool_executor(pool);
+    nprfx_context *mt = NULL, *st = NULL;
+    CHECK_OK(nprfx_context_create(&ci, &mt));
+    nprfx_context_init cs = NPRFX_CONTEXT_INIT_DEFAULT;
+    CHECK_OK(nprfx_context_create(&cs, &st));
+    shot s;
+    make_shot(st, &s);
+    nprfx_value pv[16];
+    nprfx_node_defaults(&nprfx_node_tone, pv);
+    nprfx_image a, b;
+    nprfx_image_alloc(st, nprfx_rect_make(0, 0, W, H), 1, &a);
+    nprfx_image_alloc(st, nprfx_rect_make(0, 0, W, H), 1, &b);
+    CHECK_OK(render_frame(st, &s, pv, 4, NULL, &a, 1));
+    CHECK_OK(render_frame(mt, &s, pv, 4, NULL, &b, 1));
+    CHECK(memcmp(a.data, b.data, sizeof(float) * W * H) == 0);
+    nprfx_image_free(&a);
+    nprfx_image_free(&b);
+    free_shot(&s);
+    nprfx_context_destroy(mt);
+    nprfx_context_destroy(st);
+    nprfx_pool_destroy(pool);
+}
+
+int main(void)
+{
+    nprfx_context *ctx = NULL;
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    nprfx_context_create(&ci, &ctx);
+    CHECK_OK(nprfx_node_lint(ctx, &nprfx_node_tone));
+    CHECK_OK(nprfx_node_lint(ctx, &nprfx_node_matte));
+    test_map();
+    test_percentile();
+    test_shot_range(ctx);
+    test_albedo(ctx);
+    test_matte(ctx);
+    test_threads();
+    nprfx_context_destroy(ctx);
+    return check_finish();
+}
