@@ -22,11 +22,74 @@ static void list_scenes(FILE *f)
     }
 }
 
+/* --layout blender: the channels as Blender's multilayer EXR names them (layer ViewLayer), so a
+ * graph written for Blender plates runs on a synthetic plate with only the read path changed.
+ * Each output channel is a synth channel times a sign; Vector packs the motion in Blender's
+ * convention (docs/design.md §2.1: motion_prev = (X, -Y), motion_next = (-Z, W)). */
+typedef struct layout_channel {
+    const char *name, *src;
+    float sign;
+} layout_channel;
+static const layout_channel blender_layout[] = {
+    {"ViewLayer.Combined.R", "R", 1},
+    {"ViewLayer.Combined.G", "G", 1},
+    {"ViewLayer.Combined.B", "B", 1},
+    {"ViewLayer.Combined.A", "A", 1},
+    {"ViewLayer.Depth.Z", "Z", 1},
+    {"ViewLayer.DiffCol.R", "albedo.R", 1},
+    {"ViewLayer.DiffCol.G", "albedo.G", 1},
+    {"ViewLayer.DiffCol.B", "albedo.B", 1},
+    {"ViewLayer.DiffDir.R", "diffuse", 1},
+    {"ViewLayer.DiffDir.G", "diffuse", 1},
+    {"ViewLayer.DiffDir.B", "diffuse", 1},
+    {"ViewLayer.IndexOB.X", "id", 1},
+    {"ViewLayer.Normal.X", "N.X", 1},
+    {"ViewLayer.Normal.Y", "N.Y", 1},
+    {"ViewLayer.Normal.Z", "N.Z", 1},
+    {"ViewLayer.Position.X", "P.X", 1},
+    {"ViewLayer.Position.Y", "P.Y", 1},
+    {"ViewLayer.Position.Z", "P.Z", 1},
+    {"ViewLayer.Pref.R", "Pref.X", 1},
+    {"ViewLayer.Pref.G", "Pref.Y", 1},
+    {"ViewLayer.Pref.B", "Pref.Z", 1},
+    {"ViewLayer.Pref.A", "coverage", 1},
+    {"ViewLayer.UV.U", "UV.U", 1},
+    {"ViewLayer.UV.V", "UV.V", 1},
+    {"ViewLayer.Vector.X", "motion_prev.X", 1},
+    {"ViewLayer.Vector.Y", "motion_prev.Y", -1},
+    {"ViewLayer.Vector.Z", "motion_next.X", -1},
+    {"ViewLayer.Vector.W", "motion_next.Y", 1},
+};
+enum { BLENDER_CHANNELS = (int)(sizeof blender_layout / sizeof blender_layout[0]) };
+
+static int synth_index(const char *name)
+{
+    const char *const *n = nprfx_synth_channel_names();
+    for (int i = 0; n[i]; i++)
+        if (!strcmp(n[i], name)) return i;
+    return -1;
+}
+
+/* Repack a synth frame into the Blender layout. */
+static void to_blender(const nprfx_image *src, nprfx_image *dst)
+{
+    int idx[BLENDER_CHANNELS];
+    for (int c = 0; c < BLENDER_CHANNELS; c++)
+        idx[c] = synth_index(blender_layout[c].src);
+    for (int y = dst->bounds.y0; y < dst->bounds.y1; y++)
+        for (int x = dst->bounds.x0; x < dst->bounds.x1; x++) {
+            const float *s = nprfx_image_at(src, x, y);
+            float *d = nprfx_image_at(dst, x, y);
+            for (int c = 0; c < BLENDER_CHANNELS; c++)
+                d[c] = s[idx[c]] * blender_layout[c].sign;
+        }
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: nprfx synth SCENE -o PATH [--frames LIST] [--size WxH] [--half]\n"
-            "                   [--compression C] [--threads N]\n"
+            "                   [--layout synth|blender] [--compression C] [--threads N]\n"
             "       nprfx synth --list\n\n"
             "Ray-casts an analytic scene and writes one multi-channel EXR per frame with exact\n"
             "AOVs: ground truth for the coherence metrics and plates for trying the nodes.\n\n"
@@ -38,6 +101,10 @@ static void usage(FILE *f)
             "  --size WxH       image size (default 256x256); the composition is the same at\n"
             "                   any size, so motion in pixels scales with the width\n"
             "  --half           store channels as half floats (Z's 1e10 background becomes inf)\n"
+            "  --layout L       channel names: synth (below, the default) or blender (Blender's\n"
+            "                   multilayer names and Vector convention, as samples/plates has:\n"
+            "                   a graph written for Blender plates runs with only its read\n"
+            "                   path changed; the read node needs \"vectors\": \"blender\")\n"
             "  --compression C  EXR compression: zip (default), piz, none, dwaa, ...\n"
             "  --threads N      worker threads (default $NPRFX_THREADS, else all cores)\n"
             "  --list           list the scenes\n\n"
@@ -59,7 +126,7 @@ int nprfx_cmd_synth(int argc, char **argv)
 {
     const char *scene = NULL, *out = NULL, *frames_spec = "1", *size = "256x256";
     const char *compression = NULL;
-    int half = 0, threads = 0;
+    int half = 0, threads = 0, blender = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has = i + 1 < argc;
@@ -79,6 +146,13 @@ int nprfx_cmd_synth(int argc, char **argv)
             threads = atoi(argv[++i]);
         } else if (!strcmp(a, "--compression") && has) {
             compression = argv[++i];
+        } else if (!strcmp(a, "--layout") && has) {
+            const char *l = argv[++i];
+            if (strcmp(l, "synth") && strcmp(l, "blender")) {
+                fprintf(stderr, "nprfx synth: --layout must be synth or blender, not '%s'\n", l);
+                return SYNTH_USAGE;
+            }
+            blender = !strcmp(l, "blender");
         } else if (!strcmp(a, "--half")) {
             half = 1;
         } else if (a[0] != '-' && !scene) {
@@ -115,7 +189,11 @@ int nprfx_cmd_synth(int argc, char **argv)
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return SYNTH_FAILED;
     nprfx_frame_list frames = {NULL, 0};
-    nprfx_image im = {0};
+    nprfx_image im = {0}, packed = {0};
+    const char *bnames[BLENDER_CHANNELS + 1];
+    for (int c = 0; c < BLENDER_CHANNELS; c++)
+        bnames[c] = blender_layout[c].name;
+    bnames[BLENDER_CHANNELS] = NULL;
     int status = SYNTH_OK;
     if (nprfx_seq_parse_frames(env.ctx, frames_spec, &frames) != NPRFX_OK) {
         fprintf(stderr, "nprfx synth: --frames: %s\n", nprfx_cli_message(env.ctx));
@@ -136,24 +214,32 @@ int nprfx_cmd_synth(int argc, char **argv)
         status = SYNTH_FAILED;
         goto done;
     }
+    if (blender && nprfx_image_alloc(env.ctx, im.bounds, BLENDER_CHANNELS, &packed) != NPRFX_OK) {
+        fprintf(stderr, "nprfx synth: %s\n", nprfx_cli_message(env.ctx));
+        status = SYNTH_FAILED;
+        goto done;
+    }
+    const nprfx_image *written = blender ? &packed : &im;
+    const char *const *names = blender ? bnames : nprfx_synth_channel_names();
     nprfx_write_options opt = {sizeof opt, compression, half};
     for (int i = 0; i < frames.count; i++) {
         int frame = frames.frames[i];
         char path[4096];
         if (nprfx_seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
             nprfx_synth_render(env.ctx, scene, frame, &im) != NPRFX_OK ||
-            nprfx_io_write(env.ctx, path, &im, nprfx_synth_channel_names(), NULL, &opt) !=
-                NPRFX_OK) {
+            (blender && (to_blender(&im, &packed), 0)) ||
+            nprfx_io_write(env.ctx, path, written, names, NULL, &opt) != NPRFX_OK) {
             fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, nprfx_cli_message(env.ctx));
             status = SYNTH_FAILED;
             goto done;
         }
         printf("wrote %s (%s frame %d, %dx%d, %d channels%s)\n", path, scene, frame, w, h,
-               nprfx_synth_channel_count(), half ? ", half" : "");
+               written->channels, half ? ", half" : "");
         fflush(stdout);
     }
 done:
     nprfx_image_free(&im);
+    nprfx_image_free(&packed);
     nprfx_seq_frames_free(&frames);
     nprfx_cli_env_free(&env);
     return status;

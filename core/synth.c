@@ -68,6 +68,9 @@ enum {
     CH_ID,
     CH_DIFFUSE,
     CH_COVERAGE,
+    CH_ALBEDO_R,
+    CH_ALBEDO_G,
+    CH_ALBEDO_B,
     CH_COUNT
 };
 
@@ -94,6 +97,9 @@ static const char *const channel_names[CH_COUNT + 1] = {"R",
                                                         "id",
                                                         "diffuse",
                                                         "coverage",
+                                                        "albedo.R",
+                                                        "albedo.G",
+                                                        "albedo.B",
                                                         NULL};
 
 int nprfx_synth_channel_count(void)
@@ -395,7 +401,8 @@ static void shade_pixel(const render_job *job, int x, int y, float *px)
     sg_vec3 N = sg_normalize(sg_apply(p->rot, best.n));
     double diffuse = sg_dot(N, light_dir());
     if (diffuse < 0) diffuse = 0;
-    double shade = texture(o, best.u, best.v) * (k_ambient + (1 - k_ambient) * diffuse);
+    double albedo = texture(o, best.u, best.v);
+    double shade = albedo * (k_ambient + (1 - k_ambient) * diffuse);
 
     px[CH_R] = (float)(o->colour[0] * shade);
     px[CH_G] = (float)(o->colour[1] * shade);
@@ -418,6 +425,10 @@ static void shade_pixel(const render_job *job, int x, int y, float *px)
     px[CH_ID] = (float)(best_obj + 1);
     px[CH_DIFFUSE] = (float)diffuse;
     px[CH_COVERAGE] = 1.0f;
+    /* the surface colour, so that RGB = albedo * (ambient + (1 - ambient) diffuse) */
+    px[CH_ALBEDO_R] = (float)(o->colour[0] * albedo);
+    px[CH_ALBEDO_G] = (float)(o->colour[1] * albedo);
+    px[CH_ALBEDO_B] = (float)(o->colour[2] * albedo);
 }
 
 static void render_rows(void *user, int begin, int end, int worker)

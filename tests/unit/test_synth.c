@@ -38,7 +38,7 @@ static const float *px(const nprfx_image *im, int x, int y)
 
 static void test_channels_and_scenes(void)
 {
-    CHECK(nprfx_synth_channel_count() == 23);
+    CHECK(nprfx_synth_channel_count() == 26);
     const char *const *n = nprfx_synth_channel_names();
     const char *want[] = {"R",
                           "G",
@@ -62,10 +62,13 @@ static void test_channels_and_scenes(void)
                           "UV.V",
                           "id",
                           "diffuse",
-                          "coverage"};
-    for (int i = 0; i < 23; i++)
+                          "coverage",
+                          "albedo.R",
+                          "albedo.G",
+                          "albedo.B"};
+    for (int i = 0; i < 26; i++)
         CHECK(n[i] && !strcmp(n[i], want[i]));
-    CHECK(n[23] == NULL);
+    CHECK(n[26] == NULL);
 
     const char *scenes[] = {"orbit", "dolly", "translate", "rotate", "zoom"};
     CHECK(nprfx_synth_scene_count() == 5);
@@ -76,7 +79,7 @@ static void test_channels_and_scenes(void)
     CHECK(nprfx_synth_scene_at(5) == NULL);
 
     nprfx_image im;
-    CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 8, 8), 23, &im));
+    CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 8, 8), 26, &im));
     CHECK(nprfx_synth_render(ctx, "nope", 1, &im) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(th_error(ctx), "nope") != NULL);
     nprfx_image few = nprfx_image_channels(&im, 0, 4);
