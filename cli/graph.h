@@ -19,12 +19,24 @@ typedef struct nprfx_render_hook {
     void *user;
 } nprfx_render_hook;
 
+/* How the graph's plates and seeds are altered, for measuring a look against its baselines
+ * (nprfx measure). */
+typedef enum nprfx_graph_variant {
+    NPRFX_VARIANT_NONE = 0, /* the graph as it is */
+    /* Patterns stuck to the screen: the plates' motion vectors are zeroed and their anchors
+     * (Pref, rest, UV, P, Position) replaced by screen position, x / width and y / width. */
+    NPRFX_VARIANT_SHOWER_DOOR = 1,
+    /* Patterns drawn anew every frame: every node's 'seed' param is changed each frame. */
+    NPRFX_VARIANT_WHITE = 2
+} nprfx_graph_variant;
+
 typedef struct nprfx_graph_options {
     size_t size;                   /* sizeof(nprfx_graph_options) */
     size_t cache_bytes;            /* bound on cached node results (0: 2 GiB) */
     int tile;                      /* > 0: render nodes in tiles of this size (tests invariance) */
     const char *output_dir;        /* prefix for relative write paths (NULL: current directory) */
     const nprfx_render_hook *hook; /* NULL: call the node's render function */
+    int variant;                   /* nprfx_graph_variant (appended: read when size covers it) */
 } nprfx_graph_options;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write

@@ -207,6 +207,7 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     im->row_stride = (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels;
     im->bounds = plate.bounds;
     *names = plate.names;
+    internal_graph_variant_plate(g, im, *names);
     plate.pixels = NULL;
     plate.names = NULL;
     plate.nchannels = 0;
@@ -225,7 +226,9 @@ static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image 
         return r;
     }
     *names = internal_graph_names_dup(nprfx_synth_channel_names(), nc);
-    return *names ? NPRFX_OK : nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    if (!*names) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    internal_graph_variant_plate(g, im, *names);
+    return NPRFX_OK;
 }
 
 /* Pick the channels of entry e that input k of node n uses; the view shares e's pixels when
@@ -466,7 +469,8 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     a.first_frame = g->first_frame;
     a.last_frame = g->last_frame;
     a.inputs = inputs;
-    a.params = n->params;
+    nprfx_value varied[64];
+    a.params = d->num_params <= 64 ? internal_graph_variant_params(g, n, frame, varied) : n->params;
     a.output = im;
     a.fetch = fetch_cb;
     a.fetch_user = &rf;

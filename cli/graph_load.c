@@ -344,10 +344,12 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     g->base_dir = internal_graph_strdup(base_dir ? base_dir : ".");
     g->cache_limit = (opt && opt->cache_bytes) ? opt->cache_bytes : (size_t)2 << 30;
     g->tile = opt ? opt->tile : 0;
-    if (opt && opt->size >= sizeof *opt && opt->hook) {
+    if (opt && opt->size >= offsetof(nprfx_graph_options, hook) + sizeof opt->hook && opt->hook) {
         g->hook = *opt->hook;
         g->has_hook = 1;
     }
+    if (opt && opt->size >= offsetof(nprfx_graph_options, variant) + sizeof opt->variant)
+        g->variant = opt->variant;
     g->out_dir = opt && opt->output_dir ? internal_graph_strdup(opt->output_dir) : NULL;
     g->first_frame = 1;
     g->last_frame = 1;

@@ -57,6 +57,7 @@ struct nprfx_graph {
     long long render_items; /* what nodes counted (nprfx_render_args.items) */
     nprfx_render_hook hook;
     int has_hook;
+    int variant;              /* nprfx_graph_variant */
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
 };
 
@@ -74,6 +75,11 @@ void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const ch
  * adjacent, else *scratch (malloc'd, the caller frees). */
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
                                          nprfx_image *view, float **scratch);
+/* NPRFX_VARIANT_SHOWER_DOOR: alter a plate just read (graph_variant.c). */
+void internal_graph_variant_plate(const nprfx_graph *g, nprfx_image *im, char **names);
+/* NPRFX_VARIANT_WHITE: the params node n renders frame with (its own, or *copy altered). */
+const nprfx_value *internal_graph_variant_params(const nprfx_graph *g, const gnode *n, int frame,
+                                                 nprfx_value *copy);
 /* The cache entry of node at frame, evaluated (and its inputs) when not cached. */
 nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out);
 

@@ -19,6 +19,8 @@ static const command commands[] = {
     {"diff", nprfx_cmd_diff,
      "compare two images or sequences (idiff-style thresholds and exit codes)"},
     {"synth", nprfx_cmd_synth, "write analytic test plates with exact AOVs"},
+    {"measure", nprfx_cmd_measure,
+     "measure a look over its shot: warp error along the motion, background, tone curve"},
     {"bench", nprfx_cmd_bench, "time a node: Mpixel/s, ms per frame, peak memory"},
     {"docs", nprfx_cmd_docs, "write the node reference (Markdown) generated from the descriptors"},
     {"ivs", nprfx_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
@@ -31,7 +33,7 @@ static void usage(FILE *f)
             "usage: nprfx COMMAND [options]\n\ncommands:\n",
             NPRFX_VERSION_STRING);
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-6s %s\n", commands[i].name, commands[i].summary);
+        fprintf(f, "  %-7s %s\n", commands[i].name, commands[i].summary);
     fprintf(f, "\n'nprfx COMMAND --help' explains a command; 'nprfx help NODE' a node.\n"
                "Example: nprfx run samples/graphs/threshold.json --frames 1-4\n");
 }
