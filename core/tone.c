@@ -23,6 +23,19 @@ double nprfx_tone_value(const float *px, int channels)
     return px[0];
 }
 
+double nprfx_tone_band(double t, int bands, double softness)
+{
+    double x = t * bands;
+    double k = floor(x), f = x - k;
+    /* The ramp ends at the band's top, so a level starts exactly where the hard step would
+     * put it and the bands keep their width whatever the softness. */
+    double up = softness > 0.0 ? (f - 1.0 + softness) / softness : (f >= 1.0 ? 1.0 : 0.0);
+    up = up > 0.0 ? (up < 1.0 ? up : 1.0) : 0.0;
+    double level = k + up;
+    if (level > bands - 1) level = bands - 1;
+    return level / (bands - 1);
+}
+
 double nprfx_tone_map(const nprfx_tone_params *p, double lo, double hi, double v, double coverage)
 {
     if (v != v) v = lo;
@@ -34,6 +47,7 @@ double nprfx_tone_map(const nprfx_tone_params *p, double lo, double hi, double v
     t *= exp2(p->exposure);
     t = t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0;
     if (p->gamma != 1.0 && t > 0.0 && t < 1.0) t = pow(t, 1.0 / p->gamma);
+    if (p->bands >= 2) t = nprfx_tone_band(t, p->bands, p->band_softness);
     double out = p->out_low + (p->out_high - p->out_low) * t;
     if (coverage != coverage || coverage < 0.0) coverage = 0.0;
     if (coverage < 1.0) out = coverage * out + (1.0 - coverage) * p->background;

@@ -30,6 +30,8 @@ typedef struct nprfx_tone_params {
     double black, white;      /* RANGE_MANUAL: the values that map to 0 and 1 */
     double exposure;          /* stops, applied after the range: t * 2^exposure */
     double gamma;             /* t^(1/gamma) */
+    int bands;                /* >= 2: the tone cut into this many flat levels (toon) */
+    double band_softness;     /* width of the ramp between levels, in levels (0: a hard step) */
     double out_low, out_high; /* the output spans [out_low, out_high] */
     double background;        /* output where coverage is 0 */
 } nprfx_tone_params;
@@ -47,10 +49,15 @@ NPRFX_API double nprfx_tone_light(double tone, double albedo);
 
 /* The mapping of one value v with the range [lo, hi] (hi <= lo: a step at lo):
  *   t = clamp((v - lo) / (hi - lo) * 2^exposure, 0, 1)^(1 / gamma)
+ *   with bands n >= 2: x = t n, k = floor(x), f = x - k, s = band_softness,
+ *     t = min(k + clamp((f - 1 + s) / s, 0, 1), n - 1) / (n - 1)   (s = 0: the step f >= 1)
  *   out = out_low + (out_high - out_low) t,
  * and where coverage c < 1, out = c out + (1 - c) background. NaN v maps as lo. */
 NPRFX_API double nprfx_tone_map(const nprfx_tone_params *p, double lo, double hi, double v,
                                 double coverage);
+
+/* The toon quantisation of t in [0, 1] into `bands` levels (see nprfx_tone_map). */
+NPRFX_API double nprfx_tone_band(double t, int bands, double softness);
 
 /* The q-th percentile (0-100) of n values, linear between order statistics; values is
  * reordered. n == 0 gives 0. */

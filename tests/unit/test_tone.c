@@ -56,6 +56,20 @@ static void test_map(void)
     /* an empty range is a step at lo */
     p = plain();
     CHECK(nprfx_tone_map(&p, 2, 2, 2, 1) == 0.0 && nprfx_tone_map(&p, 2, 2, 2.001, 1) == 1.0);
+    /* bands: 4 levels 0, 1/3, 2/3, 1; a hard step at each quarter; softness ramps up to it */
+    p = plain();
+    p.bands = 4;
+    CHECK(nprfx_tone_map(&p, 0, 1, 0.1, 1) == 0.0);
+    CHECK(nprfx_tone_map(&p, 0, 1, 0.3, 1) == 1.0 / 3.0);
+    CHECK(nprfx_tone_map(&p, 0, 1, 0.6, 1) == 2.0 / 3.0);
+    CHECK(nprfx_tone_map(&p, 0, 1, 0.8, 1) == 1.0 && nprfx_tone_map(&p, 0, 1, 1.0, 1) == 1.0);
+    p.band_softness = 0.2;
+    /* x = 0.7 * 4 = 2.8: f = 0.8 is where the ramp to level 3 starts; x = 2.9: halfway */
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.7, 1), 2.0 / 3.0, 1e-12);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.725, 1), 2.5 / 3.0, 1e-12);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.2, 1), 0.0, 1e-12);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.225, 1), 0.5 / 3.0, 1e-12);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.2375, 1), 0.75 / 3.0, 1e-12);
     /* luminance and light */
     float rgb[3] = {1, 0, 0}, g[1] = {0.25f};
     CHECK_NEAR(nprfx_tone_value(rgb, 3), 0.2126, 1e-15);
