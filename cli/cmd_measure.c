@@ -22,7 +22,7 @@ static void usage(FILE *f)
 {
     fprintf(
         f,
-        "usage: nprfx measure GRAPH.json --node NAME [--plate NAME] [--frames SPEC]\n"
+        "usage: nprfx measure GRAPH.json --node NAME [--plate NAME] [--frames SPEC] [--shot SPEC]\n"
         "                     [--variant coherent|shower-door|white] [--matte NAME]\n"
         "                     [--paper NAME] [--light NODE[:CHANNELS]] [--set N.P=V ...]\n"
         "                     [--threads N]\n\n"
@@ -42,6 +42,7 @@ static void usage(FILE *f)
         "options:\n"
         "  --plate NAME     the read or synth node with the motion (default: the only one)\n"
         "  --frames SPEC    frames to measure, e.g. 1-24 (default: the graph's)\n"
+        "  --shot SPEC      the shot, replacing the graph's \"frames\" (as in nprfx run)\n"
         "  --variant V      coherent: the graph as it is (default); shower-door: the plate's\n"
         "                   motion zeroed and its anchors (Pref, UV, P) replaced by screen\n"
         "                   position, so patterns stick to the screen; white: every 'seed'\n"
@@ -115,7 +116,7 @@ static int only_plate(const nprfx_graph *g)
 }
 
 typedef struct measure_opts {
-    const char *graph, *node, *plate, *frames, *matte, *paper, *light;
+    const char *graph, *node, *plate, *frames, *shot, *matte, *paper, *light;
     const char *sets[64];
     int nsets, variant, threads;
 } measure_opts;
@@ -128,6 +129,7 @@ static nprfx_result load(nprfx_context *ctx, const measure_opts *o, int variant,
     opt.cache_bytes = (size_t)1 << 30;
     opt.variant = variant;
     nprfx_result r = nprfx_graph_load(ctx, o->graph, &opt, g);
+    if (!r && o->shot) r = nprfx_graph_set_shot(*g, o->shot);
     for (int i = 0; !r && i < o->nsets; i++)
         r = nprfx_graph_set(*g, o->sets[i]);
     return r;
@@ -319,6 +321,8 @@ int nprfx_cmd_measure(int argc, char **argv)
             o.plate = argv[++i];
         } else if (!strcmp(a, "--frames") && has) {
             o.frames = argv[++i];
+        } else if (!strcmp(a, "--shot") && has) {
+            o.shot = argv[++i];
         } else if (!strcmp(a, "--matte") && has) {
             o.matte = argv[++i];
         } else if (!strcmp(a, "--paper") && has) {

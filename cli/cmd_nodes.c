@@ -157,8 +157,7 @@ static void print_node(FILE *f, const nprfx_node_desc *d, int md)
             md_cell(f, rng);
             fputs(" | ", f);
             md_cell(f, p->help);
-            for (int c = 0; p->type == NPRFX_PARAM_CHOICE && p->choice_help && p->choices[c];
-                 c++) {
+            for (int c = 0; p->type == NPRFX_PARAM_CHOICE && p->choice_help && p->choices[c]; c++) {
                 fprintf(f, "<br>`%s`: ", p->choices[c]);
                 md_cell(f, p->choice_help[c]);
             }

@@ -18,6 +18,9 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "options:\n"
         "  --frames SPEC       frames to render: 12, 1-24, 1-24x2, 24-1, 1,5,9-12 (default:\n"
         "                      the graph's \"frames\"; temporal nodes still see the whole shot)\n"
+        "  --shot SPEC         the shot: replaces the graph's \"frames\" (what temporal nodes\n"
+        "                      see, and what is rendered without --frames), e.g. 1-100 for a\n"
+        "                      longer shot than the graph was written for\n"
         "  --set N.P=VALUE     override param P of node N (repeatable), e.g. --set "
         "blend.opacity=0.5\n"
         "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
@@ -56,7 +59,7 @@ int nprfx_cmd_run(int argc, char **argv)
 int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext)
 {
     const char *prog = ext && ext->program ? ext->program : "nprfx";
-    const char *graph_path = NULL, *frames = NULL, *outdir = NULL;
+    const char *graph_path = NULL, *frames = NULL, *outdir = NULL, *shot = NULL;
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0;
     long cache_mb = 2048;
@@ -68,6 +71,8 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
             return 0;
         } else if (!strcmp(a, "--frames") && has)
             frames = argv[++i];
+        else if (!strcmp(a, "--shot") && has)
+            shot = argv[++i];
         else if (!strcmp(a, "--set") && has && nsets < 256)
             sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--threads") && has)
@@ -117,6 +122,11 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     if (!nprfx_graph_write_count(g)) {
         fprintf(stderr, "%s run: %s: the graph has no write node, so it would produce nothing\n",
                 prog, graph_path);
+        status = 2;
+        goto done;
+    }
+    if (shot && nprfx_graph_set_shot(g, shot)) {
+        fprintf(stderr, "%s run: --shot: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
     }

@@ -52,6 +52,9 @@ void nprfx_graph_free(nprfx_graph *g);
  * and write nodes). */
 nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment);
 
+/* Replace the graph's "frames" (the shot temporal nodes see, and the frames rendered by
+ * default), e.g. for a shot longer or shorter than the graph was written for (--shot). */
+nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames);
 /* The shot's frames from the graph's "frames" entry (or `override`, e.g. from --frames, which
  * must lie inside the shot when the graph declares one). Free with nprfx_seq_frames_free. */
 nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_frame_list *out);

@@ -323,6 +323,22 @@ static nprfx_result link_graph(nprfx_graph *g)
     return NPRFX_OK;
 }
 
+/* first_frame and last_frame from frames_text: the shot temporal nodes see. */
+static nprfx_result shot_range(nprfx_graph *g)
+{
+    nprfx_frame_list fl;
+    nprfx_result r = nprfx_seq_parse_frames(g->ctx, g->frames_text, &fl);
+    if (r) return r;
+    g->first_frame = INT_MAX;
+    g->last_frame = INT_MIN;
+    for (int k = 0; k < fl.count; k++) {
+        if (fl.frames[k] < g->first_frame) g->first_frame = fl.frames[k];
+        if (fl.frames[k] > g->last_frame) g->last_frame = fl.frames[k];
+    }
+    nprfx_seq_frames_free(&fl);
+    return NPRFX_OK;
+}
+
 nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char *base_dir,
                                const nprfx_graph_options *opt, nprfx_graph **out)
 {
@@ -395,17 +411,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         }
         if ((r = parse_node(g, &g->nodes[i], e))) goto done;
     }
-    if (g->frames_text) {
-        nprfx_frame_list fl;
-        if ((r = nprfx_seq_parse_frames(ctx, g->frames_text, &fl))) goto done;
-        g->first_frame = INT_MAX;
-        g->last_frame = INT_MIN;
-        for (int k = 0; k < fl.count; k++) {
-            if (fl.frames[k] < g->first_frame) g->first_frame = fl.frames[k];
-            if (fl.frames[k] > g->last_frame) g->last_frame = fl.frames[k];
-        }
-        nprfx_seq_frames_free(&fl);
-    }
+    if (g->frames_text && (r = shot_range(g))) goto done;
     r = link_graph(g);
 done:
     cJSON_Delete(root);
@@ -527,6 +533,33 @@ nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment)
         n->state = NULL;
     }
     return r;
+}
+
+nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames)
+{
+    char *old = g->frames_text;
+    int first = g->first_frame, last = g->last_frame;
+    g->frames_text = internal_graph_strdup(frames);
+    if (!g->frames_text) {
+        g->frames_text = old;
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    nprfx_result r = shot_range(g);
+    if (r) {
+        free(g->frames_text);
+        g->frames_text = old;
+        g->first_frame = first;
+        g->last_frame = last;
+        return r;
+    }
+    free(old);
+    /* temporal nodes' caches hold results for the old shot (a tone range, noise states) */
+    for (int i = 0; i < g->count; i++) {
+        gnode *n = &g->nodes[i];
+        if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
+        n->state = NULL;
+    }
+    return NPRFX_OK;
 }
 
 nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_frame_list *out)
