@@ -100,7 +100,7 @@ static const nprfx_param_desc params[P_COUNT] = {
              "d = min(1 + edge_darkening g, 2), g the colour gradient (a step of height h gives "
              "g = h/2 beside it, whatever edge_width). 0: no darkening.",
      .type = NPRFX_PARAM_DOUBLE,
-     .def = {6},
+     .def = {12},
      .soft_min = 0,
      .soft_max = 12,
      .hard_min = 0,
@@ -111,7 +111,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .help = "How far the darkening spreads from an edge: the sigma of a Gaussian blur of the "
              "colour before its gradient. 0: only the two pixels beside an edge.",
      .type = NPRFX_PARAM_DOUBLE,
-     .def = {2},
+     .def = {2.5},
      .soft_min = 0,
      .soft_max = 8,
      .hard_min = 0,
