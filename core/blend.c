@@ -10,6 +10,7 @@
 
 #include "nprfx/blend.h"
 #include "nprfx/exec.h"
+#include "internal_blend.h"
 
 /* ---- the formulas ---------------------------------------------------------------------------- */
 
@@ -33,18 +34,11 @@ static inline double screen(double c0, double c1)
 {
     return 1.0 - (1.0 - c0) * (1.0 - c1);
 }
-static inline double pigment(double c, double d)
-{
-    return c - (c - c * c) * (d - 1.0);
-}
 static inline double difference(double c0, double c1, double f)
 {
     return f * fabs(c0 - c1);
 }
-static inline double pigment_density(double t, double beta)
-{
-    return 1.0 + beta * (t - 0.5);
-}
+/* pigment and its density are in internal_blend.h: the watercolor node applies the same formula. */
 
 /* The opacity rule of nprfx_blend_apply (see nprfx/blend.h). */
 static inline double apply_mode(nprfx_blend_mode mode, double back, double c0, double c1, double f,
@@ -62,7 +56,7 @@ static inline double apply_mode(nprfx_blend_mode mode, double back, double c0, d
     case NPRFX_BLEND_SCREEN:
         return alpha_blend(c0, screen(c0, c1), a);
     case NPRFX_BLEND_PIGMENT:
-        return alpha_blend(c0, pigment(c0, pigment_density(c1, f)), a);
+        return alpha_blend(c0, internal_pigment(c0, internal_pigment_density(c1, f)), a);
     case NPRFX_BLEND_DIFFERENCE:
         return alpha_blend(c0, difference(c0, c1, f), a);
     default:
@@ -92,7 +86,7 @@ double nprfx_blend_screen(double c0, double c1)
 }
 double nprfx_blend_pigment(double c, double d)
 {
-    return pigment(c, d);
+    return internal_pigment(c, d);
 }
 double nprfx_blend_difference(double c0, double c1, double f)
 {
@@ -100,7 +94,7 @@ double nprfx_blend_difference(double c0, double c1, double f)
 }
 double nprfx_blend_pigment_density(double t, double beta)
 {
-    return pigment_density(t, beta);
+    return internal_pigment_density(t, beta);
 }
 double nprfx_blend_apply(nprfx_blend_mode mode, double back, double c0, double c1, double f,
                          double a)
