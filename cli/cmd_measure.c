@@ -24,7 +24,9 @@ static void usage(FILE *f)
         f,
         "usage: nprfx measure GRAPH.json --node NAME [--plate NAME] [--frames SPEC] [--shot SPEC]\n"
         "                     [--variant coherent|shower-door|white] [--matte NAME]\n"
-        "                     [--paper NAME] [--light NODE[:CHANNELS]] [--set N.P=V ...]\n"
+        "                     [--paper NAME] [--margin PX] [--light NODE[:CHANNELS]]\n"
+        "                     [--inset PX]\n"
+        "                     [--set N.P=V ...]\n"
         "                     [--threads N]\n\n"
         "Measures a look (node NAME of the graph) over its shot and prints one 'key value'\n"
         "line per measure:\n"
@@ -38,7 +40,7 @@ static void usage(FILE *f)
         "  tone_curve, tone_monotone\n"
         "                       with --light: the look's mean luminance in ten equal steps of\n"
         "                       the light (covered pixels only, with --matte), and 1 when it\n"
-        "                       never falls by more than 0.02 as the light rises.\n\n"
+        "                       never falls by more than 0.04 as the light rises.\n\n"
         "options:\n"
         "  --plate NAME     the read or synth node with the motion (default: the only one)\n"
         "  --frames SPEC    frames to measure, e.g. 1-24 (default: the graph's)\n"
@@ -48,6 +50,10 @@ static void usage(FILE *f)
         "                   position, so patterns stick to the screen; white: every 'seed'\n"
         "                   param changed each frame, so patterns are drawn anew. The warp\n"
         "                   always uses the plate's true motion.\n"
+        "  --margin PX      background_max_diff looks only at pixels at least PX from any\n"
+        "                   covered pixel (for looks whose edges wobble or bleed on purpose)\n"
+        "  --inset PX       the tone curve looks only at pixels at least PX inside an object\n"
+        "                   (with --matte), away from silhouettes where a look mixes in paper\n"
         "  --set N.P=V      override a param, as in nprfx run\n"
         "  --threads N      worker threads\n\n"
         "example:\n"
@@ -118,8 +124,34 @@ static int only_plate(const nprfx_graph *g)
 typedef struct measure_opts {
     const char *graph, *node, *plate, *frames, *shot, *matte, *paper, *light;
     const char *sets[64];
-    int nsets, variant, threads;
+    int nsets, variant, threads, margin, inset;
 } measure_opts;
+
+/* Is (x, y) well inside an object: the matte at least 0.999 at every pixel within `inset`? The
+ * tone curve leaves out the silhouettes, where a look mixes in the paper. */
+static int interior(const nprfx_image *matte, int x, int y, int inset)
+{
+    for (int dy = -inset; dy <= inset; dy++)
+        for (int dx = -inset; dx <= inset; dx++) {
+            int xx = x + dx, yy = y + dy;
+            if (!nprfx_rect_contains(matte->bounds, xx, yy)) continue;
+            if (!(nprfx_image_at(matte, xx, yy)[0] >= 0.999f)) return 0;
+        }
+    return 1;
+}
+
+/* Is (x, y) background with a margin: the matte 0 at every pixel within `margin` (a square)?
+ * Looks whose edges wobble or bleed (watercolor) reach past the silhouette on purpose. */
+static int far_background(const nprfx_image *matte, int x, int y, int margin)
+{
+    for (int dy = -margin; dy <= margin; dy++)
+        for (int dx = -margin; dx <= margin; dx++) {
+            int xx = x + dx, yy = y + dy;
+            if (!nprfx_rect_contains(matte->bounds, xx, yy)) continue;
+            if (nprfx_image_at(matte, xx, yy)[0] != 0.0f) return 0;
+        }
+    return 1;
+}
 
 static nprfx_result load(nprfx_context *ctx, const measure_opts *o, int variant, nprfx_graph **g)
 {
@@ -201,7 +233,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
             int nc = paper.channels < full.channels ? paper.channels : full.channels;
             for (int y = full.bounds.y0; y < full.bounds.y1; y++)
                 for (int x = full.bounds.x0; x < full.bounds.x1; x++) {
-                    if (nprfx_image_at(&matte, x, y)[0] != 0.0f) continue;
+                    if (!far_background(&matte, x, y, o->margin)) continue;
                     const float *a = nprfx_image_at(&full, x, y), *b = nprfx_image_at(&paper, x, y);
                     for (int c = 0; c < nc; c++) {
                         double d = fabs((double)a[c] - b[c]);
@@ -230,7 +262,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
             }
             for (int y = cur.bounds.y0; y < cur.bounds.y1; y++)
                 for (int x = cur.bounds.x0; x < cur.bounds.x1; x++) {
-                    if (o->matte && !(nprfx_image_at(&matte, x, y)[0] >= 0.999f)) continue;
+                    if (o->matte && !interior(&matte, x, y, o->inset)) continue;
                     float l = nprfx_image_at(&light, x, y)[0];
                     if (!isfinite(l)) continue;
                     lights[nl] = l;
@@ -283,7 +315,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
             }
             double m = b.sum[i] / b.count[i];
             printf(" %.4f", m);
-            if (m < last - 0.02) monotone = 0;
+            if (m < last - 0.04) monotone = 0;
             if (m > last) last = m;
         }
         printf("\ntone_monotone %d\n", monotone);
@@ -325,6 +357,10 @@ int nprfx_cmd_measure(int argc, char **argv)
             o.shot = argv[++i];
         } else if (!strcmp(a, "--matte") && has) {
             o.matte = argv[++i];
+        } else if (!strcmp(a, "--margin") && has) {
+            o.margin = atoi(argv[++i]);
+        } else if (!strcmp(a, "--inset") && has) {
+            o.inset = atoi(argv[++i]);
         } else if (!strcmp(a, "--paper") && has) {
             o.paper = argv[++i];
         } else if (!strcmp(a, "--light") && has) {

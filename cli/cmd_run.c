@@ -13,8 +13,10 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
 {
     fprintf(
         f,
-        "usage: %s run GRAPH.json [options]\n\n"
-        "Renders a node graph: every write node's sequence over the frames.\n\n"
+        "usage: %s run GRAPH.json [GRAPH.json ...] [options]\n\n"
+        "Renders a node graph: every write node's sequence over the frames. Several graphs\n"
+        "render one after the other with the same options (a --set applies to the graphs\n"
+        "that have the node); the status is the worst of them.\n\n"
         "options:\n"
         "  --frames SPEC       frames to render: 12, 1-24, 1-24x2, 24-1, 1,5,9-12 (default:\n"
         "                      the graph's \"frames\"; temporal nodes still see the whole shot)\n"
@@ -51,69 +53,36 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int nprfx_cmd_run(int argc, char **argv)
+/* What `run` applies to every graph it renders. */
+typedef struct run_opts {
+    const char *prog, *frames, *shot;
+    const char *const *sets;
+    int nsets, keep_going, quiet, several;
+} run_opts;
+
+/* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
+ * them have. */
+static int graph_has_node_of(nprfx_graph *g, const char *assignment)
 {
-    return nprfx_cmd_run_extended(argc, argv, NULL);
+    const char *dot = strchr(assignment, '.');
+    char name[256];
+    if (!dot) return 1;
+    snprintf(name, sizeof name, "%.*s", (int)(dot - assignment), assignment);
+    return nprfx_graph_has_node(g, name);
 }
 
-int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext)
+/* Load and render one graph; the exit status: 0 ok, 1 frames failed, 2 not rendered. */
+static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const char *graph_path,
+                     const run_opts *ro)
 {
-    const char *prog = ext && ext->program ? ext->program : "nprfx";
-    const char *graph_path = NULL, *frames = NULL, *outdir = NULL, *shot = NULL;
-    const char *sets[256];
-    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0;
-    long cache_mb = 2048;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        int has = i + 1 < argc, took = 0;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            usage(stdout, prog, ext);
-            return 0;
-        } else if (!strcmp(a, "--frames") && has)
-            frames = argv[++i];
-        else if (!strcmp(a, "--shot") && has)
-            shot = argv[++i];
-        else if (!strcmp(a, "--set") && has && nsets < 256)
-            sets[nsets++] = argv[++i];
-        else if (!strcmp(a, "--threads") && has)
-            threads = atoi(argv[++i]);
-        else if (!strcmp(a, "--tile") && has)
-            tile = atoi(argv[++i]);
-        else if (!strcmp(a, "--cache-mb") && has)
-            cache_mb = atol(argv[++i]);
-        else if (!strcmp(a, "--output-dir") && has)
-            outdir = argv[++i];
-        else if (!strcmp(a, "--keep-going"))
-            keep_going = 1;
-        else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
-            quiet = 1;
-        else if (a[0] != '-' && !graph_path)
-            graph_path = a;
-        else if (ext && ext->option &&
-                 (took = ext->option(ext->user, a, has ? argv[i + 1] : NULL)) > 0)
-            i += took - 1;
-        else {
-            fprintf(stderr, "%s run: unexpected argument '%s'\n\n", prog, a);
-            usage(stderr, prog, ext);
-            return 2;
-        }
-    }
-    if (!graph_path) {
-        usage(stderr, prog, ext);
-        return 2;
-    }
-    if (cache_mb < 16) cache_mb = 16;
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, threads)) return 1;
-    nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
+    nprfx_cli_env env = *envp;
+    nprfx_graph_options opt = *optp;
+    const char *prog = ro->prog, *frames = ro->frames, *shot = ro->shot;
+    const char *const *sets = ro->sets;
+    int nsets = ro->nsets, keep_going = ro->keep_going, quiet = ro->quiet;
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
     int status = 0;
-    if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
-        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
-        status = 2;
-        goto done;
-    }
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
@@ -131,7 +100,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
         goto done;
     }
     for (int i = 0; i < nsets; i++)
-        if (nprfx_graph_set(g, sets[i])) {
+        if ((!ro->several || graph_has_node_of(g, sets[i])) && nprfx_graph_set(g, sets[i])) {
             fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
             status = 2;
             goto done;
@@ -179,6 +148,78 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
 done:
     nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
+    return status;
+}
+
+int nprfx_cmd_run(int argc, char **argv)
+{
+    return nprfx_cmd_run_extended(argc, argv, NULL);
+}
+
+int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext)
+{
+    const char *prog = ext && ext->program ? ext->program : "nprfx";
+    const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
+    int ngraphs = 0;
+    const char *sets[256];
+    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0;
+    long cache_mb = 2048;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        int has = i + 1 < argc, took = 0;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout, prog, ext);
+            return 0;
+        } else if (!strcmp(a, "--frames") && has)
+            frames = argv[++i];
+        else if (!strcmp(a, "--shot") && has)
+            shot = argv[++i];
+        else if (!strcmp(a, "--set") && has && nsets < 256)
+            sets[nsets++] = argv[++i];
+        else if (!strcmp(a, "--threads") && has)
+            threads = atoi(argv[++i]);
+        else if (!strcmp(a, "--tile") && has)
+            tile = atoi(argv[++i]);
+        else if (!strcmp(a, "--cache-mb") && has)
+            cache_mb = atol(argv[++i]);
+        else if (!strcmp(a, "--output-dir") && has)
+            outdir = argv[++i];
+        else if (!strcmp(a, "--keep-going"))
+            keep_going = 1;
+        else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
+            quiet = 1;
+        else if (a[0] != '-' && ngraphs < 64)
+            graphs[ngraphs++] = a;
+        else if (ext && ext->option &&
+                 (took = ext->option(ext->user, a, has ? argv[i + 1] : NULL)) > 0)
+            i += took - 1;
+        else {
+            fprintf(stderr, "%s run: unexpected argument '%s'\n\n", prog, a);
+            usage(stderr, prog, ext);
+            return 2;
+        }
+    }
+    if (!ngraphs) {
+        usage(stderr, prog, ext);
+        return 2;
+    }
+    if (cache_mb < 16) cache_mb = 16;
+    nprfx_cli_env env;
+    if (nprfx_cli_env_init(&env, threads)) return 1;
+    nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
+    int status = 0;
+    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1};
+    if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    for (int i = 0; i < ngraphs; i++) {
+        int st = run_graph(&env, &opt, graphs[i], &ro);
+        if (st > status) status = st;
+        if (st == 2 && ngraphs > 1) fprintf(stderr, "%s run: %s: not rendered\n", prog, graphs[i]);
+    }
+done:
     if (ext && ext->close) ext->close(ext->user); /* after the graph, which releases the hook */
     nprfx_cli_env_free(&env);
     return status;

@@ -65,6 +65,8 @@ nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written);
 /* Describe the write nodes' outputs ("out/x.####.exr (preview out/x.####.png)"), one per line. */
 void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
 
+/* Whether the graph has a node called name. */
+int nprfx_graph_has_node(const nprfx_graph *g, const char *name);
 /* Number of write nodes (a graph to run needs at least one). */
 int nprfx_graph_write_count(const nprfx_graph *g);
 

@@ -162,6 +162,11 @@ int nprfx_graph_write_count(const nprfx_graph *g)
     return writes;
 }
 
+int nprfx_graph_has_node(const nprfx_graph *g, const char *name)
+{
+    return internal_graph_find_node(g, name) >= 0;
+}
+
 nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out)
 {
     int i = internal_graph_find_node(g, name);

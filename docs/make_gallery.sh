@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Regenerate the gallery of docs/styles.md: every style graph of samples/graphs/ (those with a
+# "look" node) on the Blender shots at 1280x720, as
+#   docs/images/styles/NAME.jpg        crossing, frame 12, 1280x720
+#   docs/images/styles/NAME-strip.jpg  crossing, frames 4, 8 and 12 side by side (640x360 each)
+#   docs/images/styles/NAME-dolly.jpg  dolly, frame 12, 1280x720 (a second shot, with sky)
+# usage: docs/make_gallery.sh build/nprfx [HD_DIR]
+# HD_DIR (default build/hd) holds the 1280x720 plates; when they are missing they are rendered
+# first with Blender (samples/blender/make_plates.py --res 1280x720, frames 1-12 of crossing and
+# dolly: about 25 minutes on 2 cores; apt-get install blender). Only frames 1-12 are read, so
+# plates rendered for all 24 frames serve as well. The styles themselves take a few minutes.
+set -euo pipefail
+NPRFX=$(realpath "${1:?usage: docs/make_gallery.sh PATH/TO/nprfx [HD_DIR]}")
+here=$(cd "$(dirname "$0")" && pwd)
+src=$(cd "$here/.." && pwd)
+hd=$(realpath -m "${2:-$src/build/hd}")
+for shot in crossing dolly; do
+  if [ ! -f "$hd/$shot/$shot.0012.exr" ]; then
+    command -v blender >/dev/null || { echo "make_gallery: $hd/$shot has no plates and blender is not installed (apt-get install blender)" >&2; exit 1; }
+    echo "make_gallery: rendering $shot at 1280x720 with Blender into $hd"
+    blender -b --factory-startup --python "$src/samples/blender/make_plates.py" -- \
+      --out "$hd" --res 1280x720 --shots "$shot" --frame-range 1-12 >"$hd.$shot.log" 2>&1
+  fi
+done
+out="$here/images/styles"
+mkdir -p "$out"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for g in $(grep -l '"look": *{' "$src"/samples/graphs/*.json); do
+  name=$(basename "$g" .json)
+  for shot in crossing dolly; do
+    # the graph's own write node writes the PNG previews
+    "$NPRFX" run "$g" --set "plate.path=$hd/$shot/$shot.####.exr" --shot 1-12 \
+      --output-dir "$tmp/$name-$shot" --quiet
+  done
+  c=$(find "$tmp/$name-crossing" -name '*.0012.png' | head -1)
+  d=$(find "$tmp/$name-dolly" -name '*.0012.png' | head -1)
+  oiiotool "$c" --ch R,G,B --compression jpeg:90 -o "$out/$name.jpg"
+  oiiotool "$d" --ch R,G,B --compression jpeg:90 -o "$out/$name-dolly.jpg"
+  args=()
+  for f in 0004 0008 0012; do
+    args+=("$(find "$tmp/$name-crossing" -name "*.$f.png" | head -1)" --ch R,G,B --resize 640x360)
+  done
+  oiiotool "${args[@]}" --mosaic 3x1 --compression jpeg:90 -o "$out/$name-strip.jpg"
+  echo "make_gallery: $name"
+done
+ls -la "$out"
