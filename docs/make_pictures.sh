@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Regenerate the pictures of docs/styles.md: frame 12 of every sample graph, each PNG preview it
-# writes copied to docs/images/<graph>-<preview>.png. Usage: docs/make_pictures.sh build/nprfx
+# Regenerate the small pictures of docs/styles.md: frame 12 of every sample graph that is not a
+# style (the styles, graphs with a "look" node, are in the 1280x720 gallery of
+# docs/make_gallery.sh), each PNG preview it writes copied to docs/images/<graph>-<preview>.png.
+# Usage: docs/make_pictures.sh build/nprfx
 set -euo pipefail
 NPRFX=$(realpath "${1:?usage: docs/make_pictures.sh PATH/TO/nprfx}")
 here=$(cd "$(dirname "$0")" && pwd)
@@ -8,6 +10,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for g in "$here"/../samples/graphs/*.json; do
   name=$(basename "$g" .json)
+  grep -q '"look": *{' "$g" && continue
   "$NPRFX" run "$g" --frames 12 --output-dir "$tmp/$name" --quiet
   find "$tmp/$name" -name '*.0012.png' | while read -r png; do
     cp "$png" "$here/images/$name-$(basename "$png" .0012.png).png"

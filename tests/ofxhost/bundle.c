@@ -227,7 +227,13 @@ nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, nprfx_o
     if (!h) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     h->ctx = ctx;
     h->exec = nprfx_context_executor(ctx);
-    pthread_mutex_init(&h->lock, NULL);
+    /* Recursive: a clip fetch evaluates the upstream graph, whose nodes are plug-ins that fetch
+     * their own clips on the same thread (tone's coverage from a matte node, at other frames). */
+    pthread_mutexattr_t at;
+    pthread_mutexattr_init(&at);
+    pthread_mutexattr_settype(&at, PTHREAD_MUTEX_RECURSIVE);
+    pthread_mutex_init(&h->lock, &at);
+    pthread_mutexattr_destroy(&at);
     internal_props_init(&h->props, K_PLAIN);
     host_properties(h);
     h->ofx.host = (OfxPropertySetHandle)&h->props;
