@@ -33,13 +33,16 @@ for g in $(grep -l '"look": *{' "$src"/samples/graphs/*.json); do
     "$NPRFX" run "$g" --set "plate.path=$hd/$shot/$shot.####.exr" --shot 1-12 \
       --output-dir "$tmp/$name-$shot" --quiet
   done
-  c=$(find "$tmp/$name-crossing" -name '*.0012.png' | head -1)
-  d=$(find "$tmp/$name-dolly" -name '*.0012.png' | head -1)
+  # the preview of the write node of "look" (a graph may write other images too)
+  preview=$(grep '"image": *"look"' "$g" | grep -o '"preview": *"[^"]*"' | sed 's/.*"\([^"]*\)"$/\1/')
+  frame() { printf '%s/%s' "$1" "${preview//####/$2}"; }
+  c=$(frame "$tmp/$name-crossing" 0012)
+  d=$(frame "$tmp/$name-dolly" 0012)
   oiiotool "$c" --ch R,G,B --compression jpeg:90 -o "$out/$name.jpg"
   oiiotool "$d" --ch R,G,B --compression jpeg:90 -o "$out/$name-dolly.jpg"
   args=()
   for f in 0004 0008 0012; do
-    args+=("$(find "$tmp/$name-crossing" -name "*.$f.png" | head -1)" --ch R,G,B --resize 640x360)
+    args+=("$(frame "$tmp/$name-crossing" $f)" --ch R,G,B --resize 640x360)
   done
   oiiotool "${args[@]}" --mosaic 3x1 --compression jpeg:90 -o "$out/$name-strip.jpg"
   echo "make_gallery: $name"
