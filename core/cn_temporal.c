@@ -443,8 +443,8 @@ static void cn_copy_window(const nprfx_render_args *args, const nprfx_image *src
 nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
                                          const nprfx_coherent_noise_params *np)
 {
-    if (!args || args->size < sizeof(nprfx_render_args) || !np ||
-        !args->output || !args->inputs || !args->state)
+    if (!args || args->size < sizeof(nprfx_render_args) || !np || !args->output || !args->inputs ||
+        !args->state)
         return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
                            "coherent-noise: incomplete render arguments");
     nprfx_context *ctx = args->ctx;

@@ -304,8 +304,7 @@ static nprfx_result bind_params(nprfx_context *ctx, const nprfx_node_desc *node,
 
 /* The shared checks of nprfx_node_render/export; on success *a is a full-size copy of args. A
  * text export writes no pixels: it needs no output image (when one is given it is checked). */
-static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args *a,
-                               int need_output)
+static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args *a, int need_output)
 {
     if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
     nprfx_context *ctx = args->ctx;
@@ -505,8 +504,7 @@ static nprfx_result lint_param(nprfx_context *ctx, const nprfx_node_desc *d, int
             for (int m = 0; m < k; m++)
                 if (!strcmp(p->choices[k], p->choices[m]))
                     return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "%s.%s: two options named '%s'", id, p->name,
-                                       p->choices[k]);
+                                       "%s.%s: two options named '%s'", id, p->name, p->choices[k]);
     } else if (p->choices) {
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s.%s: options on a non-choice param",
                            id, p->name);

@@ -166,8 +166,8 @@ struct nprfx_node_desc {
      * the NPRFX_PARAM_EXPORT param's value expanded for this frame, whose extension picks the
      * format. *text is malloc'd; the caller writes it (the library does no file I/O). Called
      * through nprfx_node_export, which binds `params` as for render. */
-    nprfx_result (*export_text)(const nprfx_render_args *args, const void *params,
-                                const char *path, char **text, size_t *len);
+    nprfx_result (*export_text)(const nprfx_render_args *args, const void *params, const char *path,
+                                char **text, size_t *len);
     /* Optional: what the node counts into args->items, a plural noun ("stipples"). */
     const char *item_name;
     /* Size of the node's typed params struct (0: the node reads args->params itself). */

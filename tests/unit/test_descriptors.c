@@ -233,18 +233,18 @@ static void test_lint_catches(nprfx_context *ctx)
 {
     nprfx_param_desc pd[PROBE_NPARAMS];
     nprfx_node_desc d;
-#define RESET()                                                                                  \
-    do {                                                                                         \
-        memcpy(pd, probe_params_desc, sizeof pd);                                                \
-        d = probe;                                                                               \
-        d.params = pd;                                                                           \
+#define RESET()                                                                                    \
+    do {                                                                                           \
+        memcpy(pd, probe_params_desc, sizeof pd);                                                  \
+        d = probe;                                                                                 \
+        d.params = pd;                                                                             \
     } while (0)
-#define EXPECT_LINT(what)                                                                        \
-    do {                                                                                         \
-        CHECK(nprfx_node_lint(ctx, &d) == NPRFX_ERR_INVALID_ARGUMENT);                           \
-        CHECK(strstr(th_error(ctx), what) != NULL);                                              \
-        if (!strstr(th_error(ctx), what)) fprintf(stderr, "  lint said: %s\n", th_error(ctx));  \
-        RESET();                                                                                 \
+#define EXPECT_LINT(what)                                                                          \
+    do {                                                                                           \
+        CHECK(nprfx_node_lint(ctx, &d) == NPRFX_ERR_INVALID_ARGUMENT);                             \
+        CHECK(strstr(th_error(ctx), what) != NULL);                                                \
+        if (!strstr(th_error(ctx), what)) fprintf(stderr, "  lint said: %s\n", th_error(ctx));     \
+        RESET();                                                                                   \
     } while (0)
     RESET();
     CHECK_OK(nprfx_node_lint(ctx, &d));

@@ -28,8 +28,7 @@ static void test_rects(void)
 static int last_code;
 static char last_message[256];
 static const nprfx_context *last_ctx;
-static void on_error(void *user, const nprfx_context *ctx, nprfx_result code,
-                     const char *message)
+static void on_error(void *user, const nprfx_context *ctx, nprfx_result code, const char *message)
 {
     (*(int *)user)++;
     last_code = code;
