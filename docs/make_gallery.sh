@@ -4,7 +4,7 @@
 #   docs/images/styles/NAME.jpg        crossing, frame 12, 1280x720
 #   docs/images/styles/NAME-strip.jpg  crossing, frames 4, 8 and 12 side by side (640x360 each)
 #   docs/images/styles/NAME-dolly.jpg  dolly, frame 12, 1280x720 (a second shot, with sky)
-# usage: docs/make_gallery.sh build/nprfx [HD_DIR]
+# usage: docs/make_gallery.sh build/nprfx [HD_DIR [STYLE ...]]   (STYLE: only these graphs)
 # HD_DIR (default build/hd) holds the 1280x720 plates; when they are missing they are rendered
 # first with Blender (samples/blender/make_plates.py --res 1280x720, frames 1-12 of crossing and
 # dolly: about 25 minutes on 2 cores; apt-get install blender). Only frames 1-12 are read, so
@@ -14,6 +14,8 @@ NPRFX=$(realpath "${1:?usage: docs/make_gallery.sh PATH/TO/nprfx [HD_DIR]}")
 here=$(cd "$(dirname "$0")" && pwd)
 src=$(cd "$here/.." && pwd)
 hd=$(realpath -m "${2:-$src/build/hd}")
+shift $(( $# < 2 ? $# : 2 ))
+only=" $* "
 for shot in crossing dolly; do
   if [ ! -f "$hd/$shot/$shot.0012.exr" ]; then
     command -v blender >/dev/null || { echo "make_gallery: $hd/$shot has no plates and blender is not installed (apt-get install blender)" >&2; exit 1; }
@@ -28,6 +30,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for g in $(grep -l '"look": *{' "$src"/samples/graphs/*.json); do
   name=$(basename "$g" .json)
+  [ "$only" = "  " ] || [[ "$only" == *" $name "* ]] || continue
   for shot in crossing dolly; do
     # the graph's own write node writes the PNG previews
     "$NPRFX" run "$g" --set "plate.path=$hd/$shot/$shot.####.exr" --shot 1-12 \
