@@ -25,7 +25,7 @@ static void usage(FILE *f)
         "usage: nprfx measure GRAPH.json --node NAME [--plate NAME] [--frames SPEC] [--shot SPEC]\n"
         "                     [--variant coherent|shower-door|white] [--matte NAME]\n"
         "                     [--paper NAME] [--margin PX] [--light NODE[:CHANNELS]]\n"
-        "                     [--inset PX]\n"
+        "                     [--inset PX] [--moving PX]\n"
         "                     [--set N.P=V ...]\n"
         "                     [--threads N]\n\n"
         "Measures a look (node NAME of the graph) over its shot and prints one 'key value'\n"
@@ -50,6 +50,8 @@ static void usage(FILE *f)
         "                   position, so patterns stick to the screen; white: every 'seed'\n"
         "                   param changed each frame, so patterns are drawn anew. The warp\n"
         "                   always uses the plate's true motion.\n"
+        "  --moving PX      the warp error only where the motion is over PX pixels a frame\n"
+        "                   (static pixels are alike in every variant and dilute it)\n"
         "  --margin PX      background_max_diff looks only at pixels at least PX from any\n"
         "                   covered pixel (for looks whose edges wobble or bleed on purpose)\n"
         "  --inset PX       the tone curve looks only at pixels at least PX inside an object\n"
@@ -125,6 +127,7 @@ typedef struct measure_opts {
     const char *graph, *node, *plate, *frames, *shot, *matte, *paper, *light;
     const char *sets[64];
     int nsets, variant, threads, margin, inset;
+    double moving; /* > 0: the warp error only where the motion exceeds this many pixels */
 } measure_opts;
 
 /* Is (x, y) well inside an object: the matte at least 0.999 at every pixel within `inset`? The
@@ -217,7 +220,19 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
                 break;
             }
             nprfx_warp_error we;
-            if ((r = nprfx_warp_compare(ctx, &cur, &prev, 0, &motion, NULL, &we))) break;
+            nprfx_image mask = {0};
+            if (o->moving > 0) { /* where things move: static pixels are equal in every variant */
+                if ((r = nprfx_image_alloc(ctx, motion.bounds, 1, &mask))) break;
+                for (int y = mask.bounds.y0; y < mask.bounds.y1; y++)
+                    for (int x = mask.bounds.x0; x < mask.bounds.x1; x++) {
+                        const float *m = nprfx_image_at(&motion, x, y);
+                        nprfx_image_at(&mask, x, y)[0] =
+                            m[0] * m[0] + m[1] * m[1] > o->moving * o->moving ? 1.0f : 0.0f;
+                    }
+            }
+            r = nprfx_warp_compare(ctx, &cur, &prev, 0, &motion, o->moving > 0 ? &mask : NULL, &we);
+            nprfx_image_free(&mask);
+            if (r) break;
             rms_sum += we.rms;
             pairs++;
             if (we.correlation == we.correlation) {
@@ -359,6 +374,8 @@ int nprfx_cmd_measure(int argc, char **argv)
             o.matte = argv[++i];
         } else if (!strcmp(a, "--margin") && has) {
             o.margin = atoi(argv[++i]);
+        } else if (!strcmp(a, "--moving") && has) {
+            o.moving = atof(argv[++i]);
         } else if (!strcmp(a, "--inset") && has) {
             o.inset = atoi(argv[++i]);
         } else if (!strcmp(a, "--paper") && has) {
