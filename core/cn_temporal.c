@@ -15,6 +15,8 @@
 #include "nprfx/exec.h"
 #include "nprfx/node.h"
 
+#include "internal_state.h"
+
 enum {
     IN_DEPTH = NPRFX_CN_IN_DEPTH,
     IN_MOTION_PREV = NPRFX_CN_IN_MOTION_PREV,
@@ -53,7 +55,7 @@ typedef struct cn_pass {
 } cn_pass;
 
 typedef struct cn_cache {
-    pthread_mutex_t lock;
+    pthread_mutex_t lock; /* first: internal_state.h */
     uint64_t key;
     int have_key;
     cn_pass pass[2]; /* forward, backward */
@@ -89,29 +91,7 @@ void nprfx_coherent_noise_state_free(void *state)
     cn_pass_free(&c->pass[0]);
     cn_pass_free(&c->pass[1]);
     nprfx_image_free(&c->result);
-    pthread_mutex_destroy(&c->lock);
-    free(c);
-}
-
-/* The instance's cache, created on first use. Two tiles of the first render may race here: the
- * loser of the compare-and-swap frees its copy. */
-static cn_cache *cn_cache_get(void **slot)
-{
-    cn_cache *c = __atomic_load_n((cn_cache **)slot, __ATOMIC_ACQUIRE);
-    if (c) return c;
-    cn_cache *mine = calloc(1, sizeof *mine);
-    if (!mine) return NULL;
-    if (pthread_mutex_init(&mine->lock, NULL) != 0) {
-        free(mine);
-        return NULL;
-    }
-    void *expected = NULL;
-    if (__atomic_compare_exchange_n(slot, &expected, (void *)mine, 0, __ATOMIC_ACQ_REL,
-                                    __ATOMIC_ACQUIRE))
-        return mine;
-    pthread_mutex_destroy(&mine->lock);
-    free(mine);
-    return expected;
+    internal_state_free(c);
 }
 
 /* FNV-1a over bytes. */
@@ -523,7 +503,7 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
     run.budget = (size_t)((mb > 0 ? mb : 0) * 1048576.0);
     if (run.symmetric) run.budget /= 2;
 
-    cn_cache *cache = cn_cache_get(args->state);
+    cn_cache *cache = internal_state_get(args->state, sizeof *cache);
     if (!cache) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "coherent-noise: out of memory");
 
     /* What the pass states depend on (not the output mapping, not the cache size). */

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "nprfx/exec.h"
+#include "internal_state.h"
 #include "nprfx/tone.h"
 
 /* A shot's measured samples are capped so that a long shot stays in bounded memory (16 MB). */
@@ -200,7 +201,7 @@ nprfx_result nprfx_tone_samples(nprfx_context *ctx, const nprfx_image *tone,
  * its own frame with the stored one, so an upstream change is noticed and the range measured
  * again: the cache saves work and never changes a result. */
 typedef struct tone_cache {
-    pthread_mutex_t lock;
+    pthread_mutex_t lock; /* first: internal_state.h */
     int valid;
     int range, reference, first, last;
     double low, high;
@@ -209,32 +210,12 @@ typedef struct tone_cache {
     uint64_t *hash; /* one per frame of the shot (RANGE_FRAME: one) */
 } tone_cache;
 
-static tone_cache *cache_get(void **slot)
-{
-    tone_cache *c = __atomic_load_n((tone_cache **)slot, __ATOMIC_ACQUIRE);
-    if (c) return c;
-    tone_cache *mine = calloc(1, sizeof *mine);
-    if (!mine) return NULL;
-    if (pthread_mutex_init(&mine->lock, NULL) != 0) {
-        free(mine);
-        return NULL;
-    }
-    void *expected = NULL;
-    if (__atomic_compare_exchange_n(slot, &expected, (void *)mine, 0, __ATOMIC_ACQ_REL,
-                                    __ATOMIC_ACQUIRE))
-        return mine;
-    pthread_mutex_destroy(&mine->lock);
-    free(mine);
-    return expected;
-}
-
 void nprfx_tone_state_free(void *state)
 {
     tone_cache *c = state;
     if (!c) return;
-    pthread_mutex_destroy(&c->lock);
     free(c->hash);
-    free(c);
+    internal_state_free(c);
 }
 
 int nprfx_tone_state_range(const void *state, double *lo, double *hi)
@@ -438,7 +419,7 @@ nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
         if (first > last || (int)time < first || (int)time > last) first = last = (int)time;
         tone_cache local;
         memset(&local, 0, sizeof local);
-        tone_cache *c = state ? cache_get(state) : &local;
+        tone_cache *c = state ? internal_state_get(state, sizeof *c) : &local;
         if (!c) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "tone: no memory for its cache");
         tone_run run = {ctx, p, tone, albedo, coverage, time, fetch, fetch_user, input};
         if (c != &local) pthread_mutex_lock(&c->lock);

@@ -64,6 +64,23 @@ static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *
     return nprfx_node_render(&a);
 }
 
+/* Render all of out in tiles of tw x th (the last row and column cut to its bounds), the way a
+ * host that tiles does: tests compare it with the whole frame for bit identity. */
+static inline nprfx_result th_render_tiled(nprfx_context *ctx, const nprfx_node_desc *node,
+                                           const nprfx_image *inputs, const nprfx_value *params,
+                                           nprfx_image *out, int tw, int th)
+{
+    nprfx_rect f = out->bounds;
+    for (int y = f.y0; y < f.y1; y += th)
+        for (int x = f.x0; x < f.x1; x += tw) {
+            nprfx_rect w =
+                nprfx_rect_make(x, y, x + tw < f.x1 ? x + tw : f.x1, y + th < f.y1 ? y + th : f.y1);
+            nprfx_result r = th_render(ctx, node, inputs, params, out, w);
+            if (r) return r;
+        }
+    return NPRFX_OK;
+}
+
 static inline int th_param(const nprfx_node_desc *node, const char *name)
 {
     int i = nprfx_node_param_index(node, name);

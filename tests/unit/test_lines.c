@@ -316,17 +316,6 @@ static void test_exact(nprfx_context *ctx)
 
 /* ---- bit-identity over threads and tiles on the orbit plate, every input connected ---- */
 
-static nprfx_result render_tiled(nprfx_context *ctx, nprfx_image *out, int tw, int th)
-{
-    for (int y = 0; y < out->bounds.y1; y += th)
-        for (int x = 0; x < out->bounds.x1; x += tw) {
-            nprfx_result r =
-                th_render(ctx, node, in, pv, out, nprfx_rect_make(x, y, x + tw, y + th));
-            if (r) return r;
-        }
-    return NPRFX_OK;
-}
-
 static void test_invariance(nprfx_context *serial)
 {
     nprfx_pool *pool = NULL;
@@ -367,10 +356,10 @@ static void test_invariance(nprfx_context *serial)
         CHECK_OK(th_render(par, node, in, pv, &a, a.bounds));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
-        CHECK_OK(render_tiled(par, &a, 16, 16));
+        CHECK_OK(th_render_tiled(par, node, in, pv, &a, 16, 16));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
-        CHECK_OK(render_tiled(serial, &a, 13, 7));
+        CHECK_OK(th_render_tiled(serial, node, in, pv, &a, 13, 7));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         /* the core function with the typed params: the same pixels */
         nprfx_lines_params lp = {.width = 2.5,

@@ -450,19 +450,6 @@ static void test_errors(nprfx_context *ctx)
     nprfx_image_free(&o3);
 }
 
-static nprfx_result render_tiled(nprfx_context *ctx, nprfx_image *out, int tw, int th)
-{
-    nprfx_rect f = out->bounds;
-    for (int y = f.y0; y < f.y1; y += th)
-        for (int x = f.x0; x < f.x1; x += tw) {
-            nprfx_rect w =
-                nprfx_rect_make(x, y, x + tw < f.x1 ? x + tw : f.x1, y + th < f.y1 ? y + th : f.y1);
-            nprfx_result r = th_render(ctx, node, in, pv, out, w);
-            if (r) return r;
-        }
-    return NPRFX_OK;
-}
-
 /* The same pixels with 1 or 4 threads, whole or in tiles, for both blurs of the paper (sampled
  * kernel below sigma 3, recursive above) and a wide edge blur. */
 static void test_determinism(nprfx_context *serial)
@@ -487,13 +474,13 @@ static void test_determinism(nprfx_context *serial)
         CHECK_OK(th_render(par, node, in, pv, &a, a.bounds));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
-        CHECK_OK(render_tiled(par, &a, 16, 16));
+        CHECK_OK(th_render_tiled(par, node, in, pv, &a, 16, 16));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
-        CHECK_OK(render_tiled(serial, &a, 13, 7));
+        CHECK_OK(th_render_tiled(serial, node, in, pv, &a, 13, 7));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         memset(a.data, 0, bytes);
-        CHECK_OK(render_tiled(par, &a, 1, 45));
+        CHECK_OK(th_render_tiled(par, node, in, pv, &a, 1, 45));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         nprfx_image_free(&ref);
         nprfx_image_free(&a);
