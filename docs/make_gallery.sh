@@ -7,7 +7,7 @@
 # usage: docs/make_gallery.sh build/nprfx [HD_DIR [STYLE ...]]   (STYLE: only these graphs)
 # HD_DIR (default build/hd) holds the 1280x720 plates; when they are missing they are rendered
 # first with Blender (samples/blender/make_plates.py --res 1280x720, frames 1-12 of crossing and
-# dolly: about 25 minutes on 2 cores; apt-get install blender). Only frames 1-12 are read, so
+# dolly: about 10 minutes on 2 quiet cores; apt-get install blender). Only frames 1-12 are read, so
 # plates rendered for all 24 frames serve as well. The styles themselves take a few minutes.
 set -euo pipefail
 NPRFX=$(realpath "${1:?usage: docs/make_gallery.sh PATH/TO/nprfx [HD_DIR]}")
