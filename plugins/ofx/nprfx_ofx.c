@@ -88,8 +88,18 @@ int nprfx_ofx_clip_connected(OfxImageClipHandle clip)
 
 void nprfx_ofx_post_error(OfxImageEffectHandle fx, const char *message)
 {
-    if (nprfx_ofx_g.msg && nprfx_ofx_g.msg->message)
-        nprfx_ofx_g.msg->message(fx, kOfxMessageError, "", "%s", message);
+    if (!nprfx_ofx_g.msg || !nprfx_ofx_g.msg->message || !message) return;
+    /* The finished text is the format, with '%' doubled and no arguments: some hosts (Natron
+     * 2.5) hand their va_list to a second variadic formatter, so a "%s" argument comes out
+     * empty there, while a format without conversions prints the same everywhere. */
+    char text[2048];
+    size_t n = 0;
+    for (const char *c = message; *c && n + 2 < sizeof text; c++) {
+        if (*c == '%') text[n++] = '%';
+        text[n++] = *c;
+    }
+    text[n] = 0;
+    nprfx_ofx_g.msg->message(fx, kOfxMessageError, "", text);
 }
 
 /* ---- the plug-in table ----------------------------------------------------------------------- */
