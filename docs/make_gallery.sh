@@ -28,7 +28,8 @@ out="$here/images/styles"
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for g in $(grep -l '"look": *{' "$src"/samples/graphs/*.json); do
+. "$src/tests/lib/styles.sh" # style_graphs: what counts as a style graph, in one place
+for g in $(style_graphs "$src"); do
   name=$(basename "$g" .json)
   [ "$only" = "  " ] || [[ "$only" == *" $name "* ]] || continue
   for shot in crossing dolly; do

@@ -6,11 +6,13 @@
 set -euo pipefail
 NPRFX=$(realpath "${1:?usage: docs/make_pictures.sh PATH/TO/nprfx}")
 here=$(cd "$(dirname "$0")" && pwd)
+. "$here/../tests/lib/styles.sh" # style_graphs: the styles, pictured by make_gallery.sh
+styles=$(style_graphs "$here/..")
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for g in "$here"/../samples/graphs/*.json; do
   name=$(basename "$g" .json)
-  grep -q '"look": *{' "$g" && continue
+  case " $(echo $styles) " in *" $g "*) continue ;; esac
   "$NPRFX" run "$g" --frames 12 --output-dir "$tmp/$name" --quiet
   find "$tmp/$name" -name '*.0012.png' | while read -r png; do
     cp "$png" "$here/images/$name-$(basename "$png" .0012.png).png"

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nprfx/exec.h"
 #include "nprfx/node.h"
 #include "nprfx/synth.h"
 
@@ -79,6 +80,57 @@ static inline nprfx_result th_render_tiled(nprfx_context *ctx, const nprfx_node_
             if (r) return r;
         }
     return NPRFX_OK;
+}
+
+/* A context whose executor is a pool of `threads` threads (*pool: destroy after the context).
+ * Exits 2 when either cannot be made (a test bug or a broken machine, not a result). */
+static inline nprfx_context *th_parallel_context(int threads, nprfx_pool **pool)
+{
+    nprfx_context *ctx = NULL;
+    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
+    if (nprfx_pool_create(threads, pool) != NPRFX_OK) {
+        fprintf(stderr, "test: no pool of %d threads\n", threads);
+        exit(2);
+    }
+    init.executor = nprfx_pool_executor(*pool);
+    if (nprfx_context_create(&init, &ctx) != NPRFX_OK) {
+        fprintf(stderr, "test: no context\n");
+        exit(2);
+    }
+    return ctx;
+}
+
+/* Bit identity of a node's w x h, `channels`-channel output: rendered whole with the serial
+ * context as the reference, then whole with the parallel one and in tiles of 16x16 (parallel),
+ * 13x7 (serial), 9x5 (parallel) and 1 x h columns (parallel). Returns how many of those
+ * differ from the reference (or failed), 0 when all agree; *ref, when not NULL, receives the
+ * reference (free it). */
+static inline int th_same_pixels(nprfx_context *serial, nprfx_context *par,
+                                 const nprfx_node_desc *node, const nprfx_image *inputs,
+                                 const nprfx_value *params, int w, int h, int channels,
+                                 nprfx_image *ref_out)
+{
+    nprfx_image ref = th_image(w, h, channels, NULL), a = th_image(w, h, channels, NULL);
+    size_t bytes = sizeof(float) * (size_t)w * (size_t)h * (size_t)channels;
+    int bad = 0;
+    if (th_render(serial, node, inputs, params, &ref, ref.bounds) != NPRFX_OK) bad++;
+    const struct {
+        nprfx_context *ctx;
+        int tw, th;
+    } ways[] = {{par, w, h}, {par, 16, 16}, {serial, 13, 7}, {par, 9, 5}, {par, 1, h}};
+    for (size_t k = 0; k < sizeof ways / sizeof ways[0]; k++) {
+        memset(a.data, 0, bytes);
+        if (th_render_tiled(ways[k].ctx, node, inputs, params, &a, ways[k].tw, ways[k].th) !=
+                NPRFX_OK ||
+            memcmp(ref.data, a.data, bytes) != 0)
+            bad++;
+    }
+    nprfx_image_free(&a);
+    if (ref_out)
+        *ref_out = ref;
+    else
+        nprfx_image_free(&ref);
+    return bad;
 }
 
 static inline int th_param(const nprfx_node_desc *node, const char *name)

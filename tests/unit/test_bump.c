@@ -183,12 +183,7 @@ static void test_light_direction(nprfx_context *ctx)
 static void test_invariance(nprfx_context *serial)
 {
     nprfx_pool *pool = NULL;
-    CHECK_OK(nprfx_pool_create(3, &pool));
-    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
-    init.executor = nprfx_pool_executor(pool);
-    nprfx_context *par = NULL;
-    CHECK_OK(nprfx_context_create(&init, &par));
-    if (!pool || !par) return;
+    nprfx_context *par = th_parallel_context(3, &pool);
     reset();
     set("specular", 0.3);
     set("strength", 9);

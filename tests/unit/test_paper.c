@@ -128,12 +128,7 @@ static void test_tileable(nprfx_context *ctx)
 static void test_invariance(nprfx_context *serial)
 {
     nprfx_pool *pool = NULL;
-    CHECK_OK(nprfx_pool_create(3, &pool));
-    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
-    init.executor = nprfx_pool_executor(pool);
-    nprfx_context *par = NULL;
-    CHECK_OK(nprfx_context_create(&init, &par));
-    if (!pool || !par) return;
+    nprfx_context *par = th_parallel_context(3, &pool);
     nprfx_rect r = nprfx_rect_make(0, 0, 83, 61);
     for (int k = 0; k < 3; k++)
         for (int o = 0; o < 2; o++) {

@@ -335,11 +335,7 @@ static void test_matte(nprfx_context *ctx)
 static void test_threads(void)
 {
     nprfx_pool *pool = NULL;
-    CHECK_OK(nprfx_pool_create(3, &pool));
-    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
-    ci.executor = nprfx_pool_executor(pool);
-    nprfx_context *mt = NULL, *st = NULL;
-    CHECK_OK(nprfx_context_create(&ci, &mt));
+    nprfx_context *mt = th_parallel_context(3, &pool), *st = NULL;
     nprfx_context_init cs = NPRFX_CONTEXT_INIT_DEFAULT;
     CHECK_OK(nprfx_context_create(&cs, &st));
     shot s;
