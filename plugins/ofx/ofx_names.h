@@ -96,15 +96,24 @@ static inline void nprfx_ofx_extra_param(const nprfx_node_desc *d, const char *w
     if (len < 0 || (size_t)len >= n) buf[n - 1] = 0; /* names this long do not occur */
 }
 
-/* The channel selector of input k: "<clip name, first letter lower>Channels"
- * ("Source" -> "sourceChannels", "ZVelocity" -> "zVelocityChannels"). */
+/* The channel selector of input k: the input's own name in lowerCamel case, then "Channels"
+ * ("depth" -> "depthChannels", "motion_prev" -> "motionPrevChannels", "uv" -> "uvChannels",
+ * "object_id" -> "objectIdChannels"). The input's name, not its clip's: the main clip is
+ * always "Source", and a knob called sourceChannels under a clip labelled Tone reads oddly. */
 static inline void nprfx_ofx_selector_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
 {
-    char clip[NPRFX_OFX_NAME_MAX], want[NPRFX_OFX_NAME_MAX];
-    nprfx_ofx_clip_name(d, k, clip, sizeof clip - 8);
-    clip[0] = (char)tolower((unsigned char)clip[0]);
-    if (snprintf(want, sizeof want, "%sChannels", clip) >= (int)sizeof want)
-        want[sizeof want - 1] = 0;
+    char want[NPRFX_OFX_NAME_MAX];
+    size_t j = 0;
+    int up = 0;
+    for (const char *s = d->inputs[k].name; *s && j + 1 < sizeof want - 8; s++) {
+        if (!isalnum((unsigned char)*s)) {
+            up = j > 0;
+            continue;
+        }
+        want[j++] = up ? (char)toupper((unsigned char)*s) : (char)tolower((unsigned char)*s);
+        up = 0;
+    }
+    snprintf(want + j, sizeof want - j, "Channels");
     nprfx_ofx_extra_param(d, want, buf, n);
 }
 
