@@ -420,6 +420,66 @@ static void cn_copy_window(const nprfx_render_args *args, const nprfx_image *src
             contrast);
 }
 
+/* The recursion's span for frame t: the forward pass runs from *start to t, the backward one
+ * (symmetric mode) from *last down to t. One definition for the render and for the frames a
+ * host must prepare (nprfx_coherent_noise_frames). */
+static void cn_span(const nprfx_coherent_noise_params *np, int64_t t, int first, int last_frame,
+                    int64_t *start, int64_t *last)
+{
+    int shot_known = last_frame >= first;
+    int64_t s = np->start;
+    if (shot_known && s < first) s = first;
+    if (np->window > 0 && t - np->window > s) s = t - np->window;
+    if (t < s) s = t;
+    int64_t l = shot_known ? last_frame : t;
+    if (np->mode == NPRFX_CN_MODE_SYMMETRIC) {
+        if (np->window > 0 && t + np->window < l) l = t + np->window;
+        if (t > l) l = t;
+    }
+    *start = s;
+    *last = l;
+}
+
+int nprfx_coherent_noise_frames(const nprfx_coherent_noise_params *np, const nprfx_frames_query *q,
+                                int input, nprfx_frame_range *ranges)
+{
+    int64_t start, last, t = q->time;
+    cn_span(np, t, q->first_frame, q->last_frame, &start, &last);
+    int symmetric = np->mode == NPRFX_CN_MODE_SYMMETRIC;
+    int input_noise = np->noise == NPRFX_CN_NOISE_INPUT;
+    /* Forward: the origin reads depth, motion_prev (its fingerprint) and source at start; each
+     * step h in start+1..t reads depth at h and h-1, motion_prev, zvel and source at h. Backward
+     * the same mirrored from last, with motion_next. */
+    int64_t lo = t, hi = t;
+    switch (input) {
+    case IN_DEPTH:
+        lo = start;
+        hi = symmetric ? last : t;
+        break;
+    case IN_MOTION_PREV:
+        lo = start;
+        break;
+    case IN_MOTION_NEXT:
+        if (symmetric) hi = last;
+        break;
+    case IN_ZVEL:
+        if (start < t) lo = start + 1;
+        if (symmetric && last - 1 > t) hi = last - 1;
+        break;
+    case IN_SOURCE:
+        if (input_noise) {
+            lo = start;
+            if (symmetric) hi = last;
+        }
+        break;
+    default:
+        return 0;
+    }
+    ranges[0].first = (int)lo;
+    ranges[0].last = (int)hi;
+    return 1;
+}
+
 nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
                                          const nprfx_coherent_noise_params *np)
 {
@@ -485,20 +545,10 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
 
     /* The recursion's span for this frame. */
     int shot_known = args->last_frame >= args->first_frame;
-    int64_t start = np->start;
-    if (shot_known && start < args->first_frame) start = args->first_frame;
-    if (run.window > 0 && run.frame - run.window > start) start = run.frame - run.window;
-    if (run.frame < start) start = run.frame;
-    run.start = start;
-    int64_t last = shot_known ? args->last_frame : run.frame;
-    if (run.symmetric) {
-        if (!shot_known)
-            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                               "coherent-noise: mode 'symmetric' needs the shot's frame range");
-        if (run.window > 0 && run.frame + run.window < last) last = run.frame + run.window;
-        if (run.frame > last) last = run.frame;
-    }
-    run.last = last;
+    if (run.symmetric && !shot_known)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "coherent-noise: mode 'symmetric' needs the shot's frame range");
+    cn_span(np, run.frame, args->first_frame, args->last_frame, &run.start, &run.last);
     double mb = np->cache_mb;
     run.budget = (size_t)((mb > 0 ? mb : 0) * 1048576.0);
     if (run.symmetric) run.budget /= 2;

@@ -355,33 +355,51 @@ static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args 
     return NPRFX_OK;
 }
 
-typedef nprfx_result (*bound_call)(const nprfx_render_args *a, const void *typed, void *user);
-
-/* Check args, bind params into a typed struct (on the stack when it fits) and call `call`. */
-static nprfx_result with_bound_params(const nprfx_render_args *args, int need_output,
-                                      bound_call call, void *user)
-{
-    nprfx_render_args a;
-    nprfx_result r = check_args(args, &a, need_output);
-    if (r) return r;
-    const nprfx_node_desc *d = a.node;
+/* A typed params struct: on the stack when it fits, else allocated. */
+typedef struct typed_buf {
     union {
         unsigned char bytes[BIND_INLINE_BYTES];
         double align_d;
         void *align_p;
         long long align_l;
     } inline_buf;
-    void *typed = NULL;
-    if (d->params_size > sizeof inline_buf) {
-        if (!(typed = calloc(1, d->params_size)))
-            return nprfx_error(a.ctx, NPRFX_ERR_OUT_OF_MEMORY, "%s: out of memory", d->id);
+    void *typed; /* NULL when the node declares no params_size */
+} typed_buf;
+
+/* Check the values and bind them into b->typed; release with typed_release. */
+static nprfx_result typed_bind(nprfx_context *ctx, const nprfx_node_desc *d,
+                               const nprfx_value *values, typed_buf *b)
+{
+    b->typed = NULL;
+    if (d->params_size > sizeof b->inline_buf) {
+        if (!(b->typed = calloc(1, d->params_size)))
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "%s: out of memory", d->id);
     } else if (d->params_size > 0) {
-        memset(&inline_buf, 0, d->params_size);
-        typed = &inline_buf;
+        memset(&b->inline_buf, 0, d->params_size);
+        b->typed = &b->inline_buf;
     }
-    r = bind_params(a.ctx, d, a.params, typed);
-    if (!r) r = call(&a, typed, user);
-    if (typed != (void *)&inline_buf) free(typed);
+    return bind_params(ctx, d, values, b->typed);
+}
+
+static void typed_release(typed_buf *b)
+{
+    if (b->typed != (void *)&b->inline_buf) free(b->typed);
+    b->typed = NULL;
+}
+
+typedef nprfx_result (*bound_call)(const nprfx_render_args *a, const void *typed, void *user);
+
+/* Check args, bind params into a typed struct and call `call`. */
+static nprfx_result with_bound_params(const nprfx_render_args *args, int need_output,
+                                      bound_call call, void *user)
+{
+    nprfx_render_args a;
+    nprfx_result r = check_args(args, &a, need_output);
+    if (r) return r;
+    typed_buf b;
+    r = typed_bind(a.ctx, a.node, a.params, &b);
+    if (!r) r = call(&a, b.typed, user);
+    typed_release(&b);
     return r;
 }
 
@@ -420,6 +438,87 @@ nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path, 
                            args->node->id);
     export_call e = {path, text, len};
     return with_bound_params(args, 0, call_export, &e);
+}
+
+/* ---- frames needed ------------------------------------------------------------------------ */
+
+static int range_cmp(const void *a, const void *b)
+{
+    const nprfx_frame_range *x = a, *y = b;
+    return (x->first > y->first) - (x->first < y->first);
+}
+
+/* The default rule: a TEMPORAL input of a TEMPORAL node within fetch_before/after (within the
+ * shot when it is known), any other input the frame itself. */
+static int default_frames(const nprfx_node_desc *d, const nprfx_frames_query *q, int input,
+                          nprfx_frame_range *out)
+{
+    const nprfx_input_desc *in = &d->inputs[input];
+    out->first = out->last = q->time;
+    if (!(d->flags & NPRFX_NODE_TEMPORAL) || !(in->flags & NPRFX_INPUT_TEMPORAL)) return 1;
+    int known = q->last_frame >= q->first_frame;
+    long long lo = in->fetch_before == NPRFX_FETCH_UNBOUNDED
+                       ? (known ? q->first_frame : q->time)
+                       : (long long)q->time - in->fetch_before;
+    long long hi = in->fetch_after == NPRFX_FETCH_UNBOUNDED ? (known ? q->last_frame : q->time)
+                                                            : (long long)q->time + in->fetch_after;
+    if (known && lo < q->first_frame) lo = q->first_frame;
+    if (known && hi > q->last_frame) hi = q->last_frame;
+    out->first = lo < q->time ? (int)lo : q->time;
+    out->last = hi > q->time ? (int)hi : q->time;
+    return 1;
+}
+
+nprfx_result nprfx_node_frames_needed(nprfx_context *ctx, const nprfx_node_desc *node,
+                                      const nprfx_value *params, const nprfx_frames_query *q,
+                                      int input, nprfx_frame_range *ranges, int *count)
+{
+    if (!count) return NPRFX_ERR_INVALID_ARGUMENT;
+    *count = 0;
+    if (!node || !q || !ranges || !q->input_channels || (node->num_params > 0 && !params) ||
+        input < 0 || input >= node->num_inputs)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "nprfx_node_frames_needed: no node, query, ranges or input %d", input);
+    if (q->input_channels[input] <= 0) return NPRFX_OK;
+    /* one slot more than a node may fill, for the frame itself */
+    nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES + 1];
+    int n;
+    int has_fn = node->size >= offsetof(nprfx_node_desc, frames_needed) + sizeof(void *) &&
+                 node->frames_needed;
+    if (has_fn) {
+        typed_buf b;
+        nprfx_result res = typed_bind(ctx, node, params, &b);
+        n = res ? 0 : node->frames_needed(b.typed, q, input, r);
+        typed_release(&b);
+        if (res) return res;
+        if (n < 0 || n > NPRFX_MAX_FRAME_RANGES)
+            return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "%s: frames_needed gave %d ranges",
+                               node->id, n);
+    } else {
+        n = default_frames(node, q, input, r);
+    }
+    /* The front ends hand every connected input over at the frame itself. */
+    r[n].first = r[n].last = q->time;
+    n++;
+    for (int i = 0; i < n; i++)
+        if (r[i].last < r[i].first) {
+            int t = r[i].first;
+            r[i].first = r[i].last;
+            r[i].last = t;
+        }
+    qsort(r, (size_t)n, sizeof r[0], range_cmp);
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        if (m > 0 && (long long)r[i].first <= (long long)ranges[m - 1].last + 1) {
+            if (r[i].last > ranges[m - 1].last) ranges[m - 1].last = r[i].last;
+        } else if (m < NPRFX_MAX_FRAME_RANGES) {
+            ranges[m++] = r[i];
+        } else { /* more disjoint ranges than slots: widen the last (never miss a frame) */
+            if (r[i].last > ranges[m - 1].last) ranges[m - 1].last = r[i].last;
+        }
+    }
+    *count = m;
+    return NPRFX_OK;
 }
 
 /* ---- descriptor lint ------------------------------------------------------------------------ */

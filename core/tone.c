@@ -389,6 +389,27 @@ static void tone_rows(void *user, int begin, int end, int worker)
         }
 }
 
+/* The frames a 'shot' range measures: the shot, or the frame alone when the shot is unknown or
+ * does not hold it. */
+static void tone_shot(int time, int first_frame, int last_frame, int *first, int *last)
+{
+    *first = first_frame;
+    *last = last_frame;
+    if (*first > *last || time < *first || time > *last) *first = *last = time;
+}
+
+int nprfx_tone_frames(const nprfx_tone_params *p, const nprfx_frames_query *q,
+                      nprfx_frame_range *ranges)
+{
+    /* Every connected input (tone, albedo, coverage) is sampled at the measured frames. */
+    ranges[0].first = ranges[0].last = q->time;
+    if (p->range == NPRFX_TONE_RANGE_SHOT)
+        tone_shot(q->time, q->first_frame, q->last_frame, &ranges[0].first, &ranges[0].last);
+    else if (p->range == NPRFX_TONE_RANGE_FRAME)
+        ranges[0].first = ranges[0].last = p->reference_frame;
+    return 1;
+}
+
 nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
                                const nprfx_image *tone, const nprfx_image *albedo,
                                const nprfx_image *coverage, double time, int first_frame,
@@ -415,8 +436,8 @@ nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
 
     double lo = p->black, hi = p->white;
     if (p->range != NPRFX_TONE_RANGE_MANUAL) {
-        int first = first_frame, last = last_frame;
-        if (first > last || (int)time < first || (int)time > last) first = last = (int)time;
+        int first, last;
+        tone_shot((int)time, first_frame, last_frame, &first, &last);
         tone_cache local;
         memset(&local, 0, sizeof local);
         tone_cache *c = state ? internal_state_get(state, sizeof *c) : &local;

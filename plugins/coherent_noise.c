@@ -382,6 +382,13 @@ static nprfx_result cn_render(const nprfx_render_args *args, const void *params)
     return nprfx_coherent_noise_render(args, params);
 }
 
+/* Exactly the recursion's span, so a host prepares no frame the node does not read. */
+static int cn_frames_needed(const void *params, const nprfx_frames_query *q, int input,
+                            nprfx_frame_range *ranges)
+{
+    return nprfx_coherent_noise_frames(params, q, input, ranges);
+}
+
 const nprfx_node_desc nprfx_node_coherent_noise = {
     sizeof(nprfx_node_desc),
     "coherent-noise",
@@ -394,9 +401,10 @@ const nprfx_node_desc nprfx_node_coherent_noise = {
     P_COUNT,
     1,
     cn_output,
-    NPRFX_NODE_TEMPORAL | NPRFX_NODE_STATEFUL,
+    NPRFX_NODE_TEMPORAL | NPRFX_NODE_STATEFUL | NPRFX_NODE_NEEDS_OTHER_FRAMES,
     cn_render,
     nprfx_coherent_noise_state_free,
     .params_size = sizeof(cnp),
     .version_major = 1,
+    .frames_needed = cn_frames_needed,
 };

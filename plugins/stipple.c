@@ -205,7 +205,8 @@ static const nprfx_param_desc params[P_COUNT] = {
      NPRFX_FIELD(sp, coverage),
      .label = "Coverage Channel",
      .help = "Add a fifth output channel, 'coverage': the ink coverage d in [0, 1] each pixel "
-             "was drawn with (out = paper + d (ink - paper)).",
+             "was drawn with (out = paper + d (ink - paper)). In an OpenFX host, whose images "
+             "hold four channels, the coverage comes in alpha instead.",
      .type = NPRFX_PARAM_BOOL,
      .def = {0},
      .soft_min = 0,
@@ -218,7 +219,10 @@ static const nprfx_param_desc params[P_COUNT] = {
      .help = "Also write the dots of each frame as vectors to this frame-sequence path; the "
              "extension picks the format. .csv: the header x,y,radius,tone,sample,object, one "
              "dot a row, in pixels with y down and the frame's top-left corner at 0,0. .svg: "
-             "the same discs, viewBox = the frame size, paper as background. Empty: no export.",
+             "the same discs, viewBox = the frame size, paper as background. Empty: no export. "
+             "The runner writes it relative to its output folder; an OpenFX host writes it at "
+             "full-resolution renders, relative to the host's working folder (give an absolute "
+             "path there).",
      .type = NPRFX_PARAM_STRING,
      .def_string = "",
      .flags = NPRFX_PARAM_PATH | NPRFX_PARAM_EXPORT},

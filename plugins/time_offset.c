@@ -41,6 +41,17 @@ static nprfx_result time_offset_render(const nprfx_render_args *a, const void *p
                                     a->output);
 }
 
+/* The one other frame it shows (nprfx_node_frames_needed adds the frame itself). */
+static int time_offset_frames_needed(const void *params, const nprfx_frames_query *q, int input,
+                                     nprfx_frame_range *ranges)
+{
+    (void)input;
+    const top *p = params;
+    int f = (int)nprfx_time_offset_frame(q->time, p->offset, q->first_frame, q->last_frame);
+    ranges[0].first = ranges[0].last = f;
+    return 1;
+}
+
 const nprfx_node_desc nprfx_node_time_offset = {
     .size = sizeof(nprfx_node_desc),
     .id = "time-offset",
@@ -52,8 +63,9 @@ const nprfx_node_desc nprfx_node_time_offset = {
     .num_inputs = IN_COUNT,
     .params = params,
     .num_params = P_COUNT,
-    .flags = NPRFX_NODE_TEMPORAL,
+    .flags = NPRFX_NODE_TEMPORAL | NPRFX_NODE_NEEDS_OTHER_FRAMES,
     .render = time_offset_render,
     .params_size = sizeof(top),
     .version_major = 1,
+    .frames_needed = time_offset_frames_needed,
 };

@@ -210,6 +210,13 @@ static nprfx_result tone_render(const nprfx_render_args *a, const void *params)
                              a->output);
 }
 
+static int tone_frames_needed(const void *params, const nprfx_frames_query *q, int input,
+                              nprfx_frame_range *ranges)
+{
+    (void)input; /* the inputs are sampled together */
+    return nprfx_tone_frames(params, q, ranges);
+}
+
 const nprfx_node_desc nprfx_node_tone = {
     .size = sizeof(nprfx_node_desc),
     .id = "tone",
@@ -235,4 +242,5 @@ const nprfx_node_desc nprfx_node_tone = {
     .state_free = nprfx_tone_state_free,
     .params_size = sizeof(tp),
     .version_major = 1,
+    .frames_needed = tone_frames_needed,
 };

@@ -180,6 +180,12 @@ NPRFX_API nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args
                                                    const nprfx_coherent_noise_params *p);
 NPRFX_API void nprfx_coherent_noise_state_free(void *state);
 
+/* The frames input `input` (NPRFX_CN_IN_*) is read at to render frame q->time with an empty
+ * cache: one range, the recursion's span (the node's desc->frames_needed). */
+NPRFX_API int nprfx_coherent_noise_frames(const nprfx_coherent_noise_params *p,
+                                          const nprfx_frames_query *q, int input,
+                                          nprfx_frame_range *ranges);
+
 #ifdef __cplusplus
 }
 #endif

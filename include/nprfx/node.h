@@ -102,6 +102,21 @@ typedef nprfx_result (*nprfx_fetch_fn)(void *fetch_user, int input, double time,
 
 typedef struct nprfx_node_desc nprfx_node_desc;
 
+/* An inclusive range of frames. */
+typedef struct nprfx_frame_range {
+    int first, last;
+} nprfx_frame_range;
+
+/* The most ranges nprfx_node_frames_needed gives for one input. */
+#define NPRFX_MAX_FRAME_RANGES 4
+
+/* What rendering one frame reads: the question desc->frames_needed answers. */
+typedef struct nprfx_frames_query {
+    int time;                    /* the frame rendered */
+    int first_frame, last_frame; /* the shot; last < first when unknown */
+    const int *input_channels;   /* per input: its channel count, 0 when not connected */
+} nprfx_frames_query;
+
 typedef struct nprfx_render_args {
     size_t size; /* sizeof(nprfx_render_args) */
     nprfx_context *ctx;
@@ -141,6 +156,9 @@ typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args, const voi
 #define NPRFX_NODE_STATEFUL                                                                        \
     0x2u /* keeps a cache in *state between calls (results never depend                            \
             on it: it only saves work) */
+/* TEMPORAL, and no params make it read only the frame itself (a recursion over frames, a time
+ * shift): a host that cannot give other frames must not offer it, rather than show a wrong one. */
+#define NPRFX_NODE_NEEDS_OTHER_FRAMES 0x4u
 
 struct nprfx_node_desc {
     size_t size;       /* sizeof(nprfx_node_desc) */
@@ -176,6 +194,15 @@ struct nprfx_node_desc {
      * number goes up when the node's pixels change for the same params, the major one when a
      * param or input is removed or changes meaning (a host then keeps the old one apart). */
     int version_major, version_minor;
+    /* Optional, for TEMPORAL nodes: the frames input `input` is read at when frame q->time is
+     * rendered with these params (the typed struct render gets) and an empty cache, as up to
+     * NPRFX_MAX_FRAME_RANGES ranges; returns how many. A host prepares exactly these before the
+     * render (OpenFX getFramesNeeded), so they must cover every fetch and ask for nothing the
+     * node does not read. Called through nprfx_node_frames_needed. Without it: a TEMPORAL input
+     * every frame within fetch_before/fetch_after of the time (within the shot), the others the
+     * frame itself. Appended after the first release: read it only when `size` covers it. */
+    int (*frames_needed)(const void *params, const nprfx_frames_query *q, int input,
+                         nprfx_frame_range *ranges);
 };
 
 /* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
@@ -203,6 +230,15 @@ NPRFX_API nprfx_result nprfx_node_render(const nprfx_render_args *args);
  * NPRFX_ERR_UNSUPPORTED when the node has none. */
 NPRFX_API nprfx_result nprfx_node_export(const nprfx_render_args *args, const char *path,
                                          char **text, size_t *len);
+
+/* The frames input `input` is read at when frame q->time renders with these params: the
+ * node's own answer (desc->frames_needed) or the fetch_before/after rule, sorted and merged, the
+ * frame itself always included. *count is 0 for an input that is not connected. Params are
+ * checked as for render (errors name the param). */
+NPRFX_API nprfx_result nprfx_node_frames_needed(nprfx_context *ctx, const nprfx_node_desc *node,
+                                                const nprfx_value *params,
+                                                const nprfx_frames_query *q, int input,
+                                                nprfx_frame_range *ranges, int *count);
 
 /* Check a descriptor for mistakes a compiler cannot see: names unique and well formed, help and
  * labels present, defaults inside the hard range and the soft range inside it, choice lists that

@@ -72,6 +72,12 @@ NPRFX_API nprfx_result nprfx_tone_samples(nprfx_context *ctx, const nprfx_image 
                                           const nprfx_image *albedo, const nprfx_image *coverage,
                                           float **values, size_t *n, unsigned long long *hash);
 
+/* The frames every connected input is read at to render frame q->time with an empty cache:
+ * the shot (range 'shot'), the reference frame ('frame') or none besides the frame itself
+ * ('manual'). One range; the node's desc->frames_needed. */
+NPRFX_API int nprfx_tone_frames(const nprfx_tone_params *p, const nprfx_frames_query *q,
+                                nprfx_frame_range *ranges);
+
 /* Render `window` of the tone node at frame `time` of the shot [first_frame, last_frame]:
  * measures [lo, hi] as p->range says (fetching the inputs numbered input[0] (tone), input[1]
  * (albedo) and input[2] (coverage) at other frames through fetch; without fetch only the

@@ -86,22 +86,6 @@ int nprfx_ofx_clip_connected(OfxImageClipHandle clip)
     return v;
 }
 
-void nprfx_ofx_post_error(OfxImageEffectHandle fx, const char *message)
-{
-    if (!nprfx_ofx_g.msg || !nprfx_ofx_g.msg->message || !message) return;
-    /* The finished text is the format, with '%' doubled and no arguments: some hosts (Natron
-     * 2.5) hand their va_list to a second variadic formatter, so a "%s" argument comes out
-     * empty there, while a format without conversions prints the same everywhere. */
-    char text[2048];
-    size_t n = 0;
-    for (const char *c = message; *c && n + 2 < sizeof text; c++) {
-        if (*c == '%') text[n++] = '%';
-        text[n++] = *c;
-    }
-    text[n] = 0;
-    nprfx_ofx_g.msg->message(fx, kOfxMessageError, "", text);
-}
-
 /* ---- the plug-in table ----------------------------------------------------------------------- */
 
 /* The host calls load/unload with a NULL handle and describe with a fresh descriptor, so the
@@ -209,8 +193,17 @@ static OfxStatus load(void)
     nprfx_ofx_g.mt = h->fetchSuite(h->host, kOfxMultiThreadSuite, 1);
     nprfx_ofx_g.mem = h->fetchSuite(h->host, kOfxMemorySuite, 1);
     nprfx_ofx_g.msg = h->fetchSuite(h->host, kOfxMessageSuite, 1);
+    nprfx_ofx_g.msg2 = h->fetchSuite(h->host, kOfxMessageSuite, 2);
+    if (!nprfx_ofx_g.msg && nprfx_ofx_g.msg2) /* V2 begins with V1's one function */
+        nprfx_ofx_g.msg = (const OfxMessageSuiteV1 *)nprfx_ofx_g.msg2;
     if (!nprfx_ofx_g.prop || !nprfx_ofx_g.fx || !nprfx_ofx_g.param)
         return kOfxStatErrMissingHostFeature;
+    /* A host that does not say is taken at its word of the spec's default, which is access. */
+    int temporal = 1;
+    if (nprfx_ofx_g.prop->propGetInt(h->host, kOfxImageEffectPropTemporalClipAccess, 0,
+                                     &temporal) != kOfxStatOK)
+        temporal = 1;
+    nprfx_ofx_g.temporal = temporal != 0;
     find_data_dir();
     return kOfxStatOK;
 }
@@ -238,6 +231,18 @@ static int has_temporal_input(const nprfx_node_desc *d)
 
 static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
 {
+    /* A node that only works with other frames is not offered where they cannot be had: a
+     * missing plug-in with a logged reason beats one that silently shows the current frame. */
+    if ((d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) && !nprfx_ofx_g.temporal) {
+        char why[512];
+        snprintf(why, sizeof why,
+                 "nprfx: %s is not available in this host: it reads its inputs at other frames, "
+                 "and the host offers no temporal clip access "
+                 "(kOfxImageEffectPropTemporalClipAccess = 0)",
+                 d->id);
+        nprfx_ofx_post(fx, kOfxMessageLog, why);
+        return kOfxStatErrMissingHostFeature;
+    }
     OfxPropertySetHandle p;
     if (nprfx_ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
     set_str(p, kOfxPropLabel, 0, d->label);
@@ -262,8 +267,11 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextGeneral);
     if (filter_capable(d))
         set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextFilter);
-    /* Pixels are scene-linear float32 throughout nprfx: the host converts anything else. */
+    /* Pixels are scene-linear float32 throughout nprfx, and the clip preferences ask for float;
+     * hosts that only have 8 or 16 bits (MLT) still get a plug-in, converting at the edges. */
     set_str(p, kOfxImageEffectPropSupportedPixelDepths, 0, kOfxBitDepthFloat);
+    set_str(p, kOfxImageEffectPropSupportedPixelDepths, 1, kOfxBitDepthShort);
+    set_str(p, kOfxImageEffectPropSupportedPixelDepths, 2, kOfxBitDepthByte);
     set_int(p, kOfxImageEffectPluginPropSingleInstance, 0, 0);
     /* A stateful node's cache is shared by the renders of its instance. */
     set_str(p, kOfxImageEffectPluginRenderThreadSafety, 0,
@@ -273,7 +281,8 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     set_int(p, kOfxImageEffectPluginPropHostFrameThreading, 0, 0);
     set_int(p, kOfxImageEffectPropSupportsMultiResolution, 0, 1);
     set_int(p, kOfxImageEffectPropSupportsTiles, 0, 1);
-    set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, has_temporal_input(d));
+    set_int(p, kOfxImageEffectPropTemporalClipAccess, 0,
+            has_temporal_input(d) && nprfx_ofx_g.temporal);
     set_int(p, kOfxImageEffectPropSupportsMultipleClipDepths, 0, 0);
     set_int(p, kOfxImageEffectPropSupportsMultipleClipPARs, 0, 0);
     set_int(p, kOfxImageEffectPluginPropFieldRenderTwiceAlways, 0, 0);
@@ -458,7 +467,7 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
     if (!general && !(filter_capable(d) && !strcmp(context, kOfxImageEffectContextFilter)))
         return kOfxStatErrUnsupported;
     int main = nprfx_ofx_main_input(d);
-    int temporal = d->flags & NPRFX_NODE_TEMPORAL;
+    int temporal = (d->flags & NPRFX_NODE_TEMPORAL) && nprfx_ofx_g.temporal;
     int maskable = general && nprfx_ofx_maskable(d);
 
     OfxPropertySetHandle cp = define_clip(fx, NPRFX_OFX_OUTPUT_CLIP);
@@ -646,6 +655,15 @@ static void drop_state(ofx_instance *inst)
     pthread_mutex_lock(&inst->lock);
     if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
     inst->state = NULL;
+    inst->export_done = 0;
+    pthread_mutex_unlock(&inst->lock);
+}
+
+/* A new sequence render exports its frames again (files may have been removed meanwhile). */
+static void forget_export(ofx_instance *inst)
+{
+    pthread_mutex_lock(&inst->lock);
+    inst->export_done = 0;
     pthread_mutex_unlock(&inst->lock);
 }
 
@@ -667,25 +685,6 @@ static OfxStatus instance_changed(ofx_instance *inst, OfxPropertySetHandle in_ar
 }
 
 /* ---- selections, frames, ranges -------------------------------------------------------------- */
-
-void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current,
-                               int *first, int *count)
-{
-    const nprfx_input_desc *in = &inst->desc->inputs[k];
-    int opts[NPRFX_OFX_CHAN_OPTIONS];
-    int n = nprfx_ofx_selector_options(in, opts);
-    int choice = nprfx_ofx_selector_default(in);
-    if (inst->selectors[k]) {
-        int v = choice;
-        OfxStatus st = current
-                           ? nprfx_ofx_g.param->paramGetValue(inst->selectors[k], &v)
-                           : nprfx_ofx_g.param->paramGetValueAtTime(inst->selectors[k], time, &v);
-        if (st == kOfxStatOK && v >= 0 && v < n) choice = v;
-    }
-    if (choice >= n) choice = 0;
-    *first = nprfx_ofx_chan_options[opts[choice]].first;
-    *count = nprfx_ofx_chan_options[opts[choice]].count;
-}
 
 OfxStatus nprfx_ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod)
 {
@@ -767,8 +766,10 @@ static OfxStatus regions_of_interest(ofx_instance *inst, OfxPropertySetHandle in
     return kOfxStatOK;
 }
 
-/* Temporal inputs: the frames the node may fetch (fetch_before/after, NPRFX_FETCH_UNBOUNDED
- * meaning the whole shot); everything else: the frame itself. */
+/* Exactly the frames the node reads (nprfx_node_frames_needed: its own answer, or the
+ * fetch_before/after rule), as one or more ranges per connected clip; nothing on clips that are
+ * not connected, and without temporal access the frame itself only (the host would not give
+ * others). */
 static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
                                OfxPropertySetHandle out_args)
 {
@@ -776,27 +777,54 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
     double t = 0, first, last;
     (void)nprfx_ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
     nprfx_ofx_shot_range(inst, &first, &last);
+    size_t np = (size_t)d->num_params + 1, ni = (size_t)d->num_inputs + 1;
+    nprfx_value *values = calloc(np, sizeof *values);
+    char **strings = calloc(np, sizeof *strings);
+    int *channels = calloc(ni, sizeof *channels);
+    nprfx_context *ctx = NULL;
+    OfxStatus status = kOfxStatOK;
+    if (!values || !strings || !channels || nprfx_context_create(NULL, &ctx) != NPRFX_OK) {
+        status = kOfxStatErrMemory;
+        goto done;
+    }
+    nprfx_ofx_input_channels(inst, t, 0, channels);
+    int time = (int)floor(t + 0.5);
+    nprfx_frames_query q = {time, (int)floor(first + 0.5), (int)floor(last + 0.5), channels};
+    /* A param the host holds out of range fails the render with its message; here the defaults
+     * stand in, so the frame itself is still declared. */
+    if (nprfx_ofx_eval_params(inst, ctx, t, 0, values, strings) != NPRFX_OK)
+        nprfx_node_defaults(d, values);
     char clip[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
-        if (!inst->clips[k]) continue;
-        const nprfx_input_desc *in = &d->inputs[k];
-        double r[2] = {t, t};
-        if ((d->flags & NPRFX_NODE_TEMPORAL) && (in->flags & NPRFX_INPUT_TEMPORAL)) {
-            r[0] = in->fetch_before == NPRFX_FETCH_UNBOUNDED ? first : t - in->fetch_before;
-            r[1] = in->fetch_after == NPRFX_FETCH_UNBOUNDED ? last : t + in->fetch_after;
-            if (r[0] < first) r[0] = first;
-            if (r[1] > last) r[1] = last;
-            if (r[0] > t) r[0] = t;
-            if (r[1] < t) r[1] = t;
+        if (!inst->clips[k] || !channels[k]) continue;
+        nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
+        int n = 0;
+        if (!nprfx_ofx_g.temporal) {
+            r[0].first = r[0].last = time;
+            n = 1;
+        } else if (nprfx_node_frames_needed(ctx, d, values, &q, k, r, &n) != NPRFX_OK) {
+            continue; /* the host's default: the frame itself */
+        }
+        double v[2 * NPRFX_MAX_FRAME_RANGES];
+        for (int i = 0; i < n; i++) {
+            v[2 * i] = r[i].first;
+            v[2 * i + 1] = r[i].last;
         }
         nprfx_ofx_clip_name(d, k, clip, sizeof clip);
-        set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, r, 2);
+        if (n > 0) set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, v, 2 * n);
     }
-    if (inst->mask) {
+    if (inst->mask && nprfx_ofx_clip_connected(inst->mask)) {
         double r[2] = {t, t};
         set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, NPRFX_OFX_MASK_CLIP, r, 2);
     }
-    return kOfxStatOK;
+done:
+    for (int i = 0; strings && i < d->num_params; i++)
+        free(strings[i]);
+    free(values);
+    free(strings);
+    free(channels);
+    nprfx_context_destroy(ctx);
+    return status;
 }
 
 static void set_clip_string(OfxPropertySetHandle out_args, const char *prefix, const char *clip,
@@ -821,35 +849,21 @@ static OfxStatus clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_a
         free(in_ch);
         return kOfxStatErrMemory;
     }
-    nprfx_node_defaults(d, values);
-    for (int i = 0; i < d->num_params; i++) {
-        const nprfx_param_desc *p = &d->params[i];
-        OfxParamHandle h = inst->params[i];
-        int iv = 0;
-        double dv[4] = {0, 0, 0, 0};
-        if (p->type == NPRFX_PARAM_DOUBLE &&
-            nprfx_ofx_g.param->paramGetValue(h, &dv[0]) == kOfxStatOK)
-            values[i].v[0] = dv[0];
-        else if ((p->type == NPRFX_PARAM_INT || p->type == NPRFX_PARAM_BOOL ||
-                  p->type == NPRFX_PARAM_CHOICE) &&
-                 nprfx_ofx_g.param->paramGetValue(h, &iv) == kOfxStatOK)
-            values[i].v[0] = iv;
-        else if (p->type == NPRFX_PARAM_COLOR &&
-                 nprfx_ofx_g.param->paramGetValue(h, &dv[0], &dv[1], &dv[2], &dv[3]) == kOfxStatOK)
-            memcpy(values[i].v, dv, sizeof dv);
-    }
-    int main = nprfx_ofx_main_input(d);
-    for (int k = 0; k < d->num_inputs; k++) {
-        int first, count;
-        if (!nprfx_ofx_clip_connected(inst->clips[k])) continue;
-        nprfx_ofx_input_selection(inst, k, 0, 1, &first, &count);
-        in_ch[k] = count;
-    }
-    nprfx_output_info oi;
+    char **strings = calloc((size_t)d->num_params + 1, sizeof *strings);
     nprfx_context *ctx = NULL;
     (void)nprfx_context_create(NULL, &ctx);
+    /* Values the host holds out of range fail the render, with the message; until then the
+     * defaults decide the channel count. */
+    if (!strings || nprfx_ofx_eval_params(inst, ctx, 0, 1, values, strings) != NPRFX_OK)
+        nprfx_node_defaults(d, values);
+    nprfx_ofx_input_channels(inst, 0, 1, in_ch);
+    int main = nprfx_ofx_main_input(d);
+    nprfx_output_info oi;
     int nout = nprfx_node_output_info(ctx, d, values, in_ch, &oi) == NPRFX_OK ? oi.channels : 4;
     nprfx_context_destroy(ctx);
+    for (int i = 0; strings && i < d->num_params; i++)
+        free(strings[i]);
+    free(strings);
     free(values);
     free(in_ch);
 
@@ -921,8 +935,11 @@ static OfxStatus main_entry(int index, const char *action, const void *handle,
         drop_state(inst);
         return kOfxStatOK;
     }
-    if (!strcmp(action, kOfxImageEffectActionBeginSequenceRender) ||
-        !strcmp(action, kOfxImageEffectActionEndSequenceRender) ||
+    if (!strcmp(action, kOfxImageEffectActionBeginSequenceRender)) {
+        forget_export(inst);
+        return kOfxStatOK;
+    }
+    if (!strcmp(action, kOfxImageEffectActionEndSequenceRender) ||
         !strcmp(action, kOfxActionBeginInstanceChanged) ||
         !strcmp(action, kOfxActionEndInstanceChanged))
         return kOfxStatOK;

@@ -423,6 +423,16 @@ typedef struct OfxMessageSuiteV1 {
                          const char *format, ...);
 } OfxMessageSuiteV1;
 
+/* Version 2 adds a message that stays on the effect (a host shows it on the node) until
+ * cleared: the same `message` first, then the two persistent calls. */
+typedef struct OfxMessageSuiteV2 {
+    OfxStatus (*message)(void *handle, const char *messageType, const char *messageId,
+                         const char *format, ...);
+    OfxStatus (*setPersistentMessage)(void *handle, const char *messageType, const char *messageId,
+                                      const char *format, ...);
+    OfxStatus (*clearPersistentMessage)(void *handle);
+} OfxMessageSuiteV2;
+
 /* ---- the two symbols a plug-in binary exports ------------------------------------------------ */
 
 typedef int (*OfxGetNumberOfPluginsFn)(void);

@@ -21,6 +21,10 @@ typedef struct ofx_suites {
     const OfxMultiThreadSuiteV1 *mt;
     const OfxMemorySuiteV1 *mem;
     const OfxMessageSuiteV1 *msg;
+    const OfxMessageSuiteV2 *msg2; /* NULL when the host has only version 1 */
+    /* The host's kOfxImageEffectPropTemporalClipAccess: 0 means images at other times cannot be
+     * had (MLT gives the current frame instead), so nodes get no fetch and say so. */
+    int temporal;
     /* The bundle's Contents/Resources (data files such as the stipple dot sequence), found from
      * the module's own path on load; empty when unknown. */
     char data_dir[4096];
@@ -38,6 +42,11 @@ typedef struct ofx_instance {
     OfxParamHandle mix, mask_invert; /* NULL unless the node is maskable */
     pthread_mutex_t lock; /* held around renders of stateful nodes and around freeing state */
     void *state;          /* the node's per-instance slot (nprfx_render_args.state) */
+    int persistent;       /* a persistent error message is shown on the effect */
+    /* The last export written (what it was made from), so tiles of one frame export once;
+     * forgotten at each sequence render and on every change. Guarded by lock. */
+    unsigned long long export_key;
+    int export_done;
 } ofx_instance;
 
 void *nprfx_ofx_alloc(size_t bytes);
@@ -58,8 +67,25 @@ OfxStatus nprfx_ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *
 /* The shot's first and last frame: the output clip's frame range. */
 void nprfx_ofx_shot_range(const ofx_instance *inst, double *first, double *last);
 
-/* Post an error to the host's message suite when it has one. */
-void nprfx_ofx_post_error(OfxImageEffectHandle fx, const char *message);
+/* Post a message of `type` (kOfxMessage...) through the message suite, as finished text. */
+void nprfx_ofx_post(void *handle, const char *type, const char *message);
+/* Post an error to the host: a persistent message on the effect where the host has message
+ * suite V2, else a message; nothing without a message suite. */
+void nprfx_ofx_post_error(ofx_instance *inst, const char *message);
+/* A successful render takes down the persistent error of an earlier one. */
+void nprfx_ofx_clear_error(ofx_instance *inst);
+
+/* Param values at `time` (or the current ones), checked as the runner checks them; STRING
+ * values are copied into strings[i] (free each with free()). Errors name the param. */
+nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
+                                   int current, nprfx_value *values, char **strings);
+
+/* The channel count each input gives at `time` (0 where its clip is not connected). */
+void nprfx_ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels);
+
+/* Write the node's text export of the frame a render made (render args with window = frame),
+ * when its export param is set; once per frame and params (tiles do not repeat it). */
+nprfx_result nprfx_ofx_export(ofx_instance *inst, const nprfx_render_args *a);
 
 OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args);
 

@@ -90,16 +90,51 @@ typedef struct ofx_img {
     char *data;             /* pixel (bounds.x1, bounds.y1) */
     int row_bytes;
     OfxRectI b;
-    int ncomp; /* 1 Alpha, 3 RGB, 4 RGBA */
+    int ncomp;   /* 1 Alpha, 3 RGB, 4 RGBA */
+    int bytes;   /* per component of data: 4 float, 2 unsigned short, 1 unsigned char */
+    float *conv; /* an 8/16-bit input converted to float (data points here then) */
 } ofx_img;
 
 static void img_release(ofx_img *im)
 {
     if (im->h) G.fx->clipReleaseImage(im->h);
+    nprfx_ofx_free(im->conv);
     memset(im, 0, sizeof *im);
 }
 
-static OfxStatus img_fetch(OfxImageClipHandle clip, OfxTime t, ofx_img *im)
+static int depth_bytes(const char *depth)
+{
+    return !strcmp(depth, kOfxBitDepthFloat)   ? 4
+           : !strcmp(depth, kOfxBitDepthShort) ? 2
+           : !strcmp(depth, kOfxBitDepthByte)  ? 1
+                                               : 0;
+}
+
+/* An 8/16-bit image as float in [0, 1]: the nodes read float only, and a host that gives
+ * integers (MLT) gives display-referred video, for which that is the natural scale. */
+static OfxStatus img_to_float(ofx_img *im)
+{
+    int w = im->b.x2 - im->b.x1, h = im->b.y2 - im->b.y1, n = w * im->ncomp;
+    if (w <= 0 || h <= 0) return kOfxStatOK;
+    float *f = nprfx_ofx_alloc((size_t)n * (size_t)h * sizeof *f);
+    if (!f) return kOfxStatErrMemory;
+    for (int y = 0; y < h; y++) {
+        const char *row = im->data + (ptrdiff_t)y * im->row_bytes;
+        float *d = f + (size_t)y * (size_t)n;
+        for (int i = 0; i < n; i++)
+            d[i] = im->bytes == 2 ? ((const unsigned short *)row)[i] / 65535.0f
+                                  : ((const unsigned char *)row)[i] / 255.0f;
+    }
+    im->conv = f;
+    im->data = (char *)f;
+    im->row_bytes = n * (int)sizeof *f;
+    im->bytes = 4;
+    return kOfxStatOK;
+}
+
+/* An image of clip at t. Inputs (convert = 1) always come out as float; the output keeps the
+ * host's depth and is written with img_store. */
+static OfxStatus img_fetch(OfxImageClipHandle clip, OfxTime t, int convert, ofx_img *im)
 {
     memset(im, 0, sizeof *im);
     OfxPropertySetHandle h = NULL;
@@ -124,12 +159,34 @@ static OfxStatus img_fetch(OfxImageClipHandle clip, OfxTime t, ofx_img *im)
                 : !strcmp(comps, kOfxImageComponentAlpha) ? 1
                 : !strcmp(comps, kOfxImageComponentRGB)   ? 3
                                                           : 0;
-    if (strcmp(depth, kOfxBitDepthFloat) || !im->ncomp || im->row_bytes % (int)sizeof(float) ||
+    im->bytes = depth_bytes(depth);
+    if (!im->bytes || !im->ncomp || im->row_bytes % im->bytes ||
         (!im->data && im->b.x2 > im->b.x1 && im->b.y2 > im->b.y1)) {
         img_release(im);
         return kOfxStatErrImageFormat;
     }
+    if (convert && im->bytes != 4 && (st = img_to_float(im)) != kOfxStatOK) {
+        img_release(im);
+        return st;
+    }
     return kOfxStatOK;
+}
+
+/* Write v into component c of pixel (x, y_up) of a host image of any depth (integers clamp to
+ * [0, 1] and round; NaN becomes 0). */
+static void img_store(const ofx_img *im, int x, int y, int c, float v)
+{
+    char *row = im->data + (ptrdiff_t)(y - im->b.y1) * im->row_bytes;
+    ptrdiff_t i = (ptrdiff_t)(x - im->b.x1) * im->ncomp + c;
+    if (im->bytes == 4) {
+        ((float *)row)[i] = v;
+        return;
+    }
+    float u = v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f; /* NaN fails v > 0 */
+    if (im->bytes == 2)
+        ((unsigned short *)row)[i] = (unsigned short)(u * 65535.0f + 0.5f);
+    else
+        ((unsigned char *)row)[i] = (unsigned char)(u * 255.0f + 0.5f);
 }
 
 /* Pixel (x, y_up) of a host image, component c of its own layout. */
@@ -261,7 +318,7 @@ static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *ou
     pthread_mutex_lock(&rc->lock);
     fetched *s = &rc->ring[rc->nfetch++ % RING];
     fetched_release(s);
-    OfxStatus st = img_fetch(rc->inst->clips[input], time, &s->img);
+    OfxStatus st = img_fetch(rc->inst->clips[input], time, 1, &s->img);
     nprfx_result r = NPRFX_OK;
     if (st != kOfxStatOK)
         r = nprfx_error(rc->ctx,
@@ -273,56 +330,6 @@ static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *ou
         r = nprfx_error(rc->ctx, r, "%s: out of memory", d->id);
     pthread_mutex_unlock(&rc->lock);
     return r;
-}
-
-/* ---- params ---------------------------------------------------------------------------------- */
-
-/* Values at `time`; STRING values are copied into strings[i] (freed by the caller). */
-static nprfx_result eval_params(render_call *rc, nprfx_value *values, char **strings)
-{
-    const nprfx_node_desc *d = rc->inst->desc;
-    const OfxParameterSuiteV1 *pm = G.param;
-    for (int i = 0; i < d->num_params; i++) {
-        const nprfx_param_desc *p = &d->params[i];
-        OfxParamHandle h = rc->inst->params[i];
-        OfxStatus st = kOfxStatOK;
-        int iv = 0;
-        char *s = NULL;
-        memset(&values[i], 0, sizeof values[i]);
-        values[i].s = "";
-        switch (p->type) {
-        case NPRFX_PARAM_DOUBLE:
-            st = pm->paramGetValueAtTime(h, rc->time, &values[i].v[0]);
-            break;
-        case NPRFX_PARAM_INT:
-        case NPRFX_PARAM_BOOL:
-        case NPRFX_PARAM_CHOICE:
-            st = pm->paramGetValueAtTime(h, rc->time, &iv);
-            values[i].v[0] = iv;
-            break;
-        case NPRFX_PARAM_COLOR:
-            st = pm->paramGetValueAtTime(h, rc->time, &values[i].v[0], &values[i].v[1],
-                                         &values[i].v[2], &values[i].v[3]);
-            break;
-        case NPRFX_PARAM_STRING:
-            st = pm->paramGetValueAtTime(h, rc->time, &s);
-            if (st == kOfxStatOK) {
-                size_t n = strlen(s ? s : "") + 1;
-                if (!(strings[i] = malloc(n)))
-                    return nprfx_error(rc->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-                memcpy(strings[i], s ? s : "", n);
-                values[i].s = strings[i];
-            }
-            break;
-        }
-        if (st != kOfxStatOK)
-            return nprfx_error(rc->ctx, NPRFX_ERR_INTERNAL,
-                               "%s.%s: the host gave no value (OFX status %d)", d->id, p->name, st);
-        /* Hosts do not all clamp typed-in or expression values: refuse as the CLI does. */
-        nprfx_result r = nprfx_param_check(rc->ctx, d, p, &values[i]);
-        if (r) return r;
-    }
-    return NPRFX_OK;
 }
 
 /* ---- output ---------------------------------------------------------------------------------- */
@@ -340,8 +347,11 @@ static void result_rgba(const float *px, int n, float rgba[4])
     case 3:
         rgba[0] = px[0], rgba[1] = px[1], rgba[2] = px[2], rgba[3] = 1.0f;
         break;
-    default:
+    case 4:
         memcpy(rgba, px, 4 * sizeof(float));
+        break;
+    default: /* more than a host image holds: the colour, and the last channel as alpha */
+        rgba[0] = px[0], rgba[1] = px[1], rgba[2] = px[2], rgba[3] = px[n - 1];
         break;
     }
 }
@@ -386,10 +396,10 @@ static void finish_rows(void *user, int begin, int end, int worker)
             result_rgba(px, j->nout, rgba);
             int yu = j->f - y;
             if (ncomp == 1)
-                *img_at(j->out, x, yu, 0) = j->nout >= 4 ? px[3] : px[0];
+                img_store(j->out, x, yu, 0, j->nout >= 4 ? rgba[3] : px[0]);
             else
                 for (int c = 0; c < ncomp; c++)
-                    *img_at(j->out, x, yu, c) = rgba[c];
+                    img_store(j->out, x, yu, c, rgba[c]);
         }
 }
 
@@ -476,13 +486,13 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     OfxRectI wr = {win[0], win[1], win[2], win[3]};
     nprfx_rect host_window = flip_rect(wr, rc.f);
 
-    if ((r = eval_params(&rc, values, strings))) goto done;
+    if ((r = nprfx_ofx_eval_params(inst, rc.ctx, time, 0, values, strings))) goto done;
     nprfx_node_apply_render_scale(d, values, scale[0]);
 
     for (int k = 0; k < d->num_inputs; k++) {
         if (!nprfx_ofx_clip_connected(inst->clips[k])) continue;
         nprfx_ofx_input_selection(inst, k, time, 0, &rc.first[k], &rc.count[k]);
-        OfxStatus st = img_fetch(inst->clips[k], time, &rc.cur[k].img);
+        OfxStatus st = img_fetch(inst->clips[k], time, 1, &rc.cur[k].img);
         if (st == kOfxStatFailed) continue; /* no image at this time: as if not connected */
         if (st != kOfxStatOK) {
             r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
@@ -502,12 +512,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_output_info oi;
     if ((r = nprfx_node_output_info(rc.ctx, d, values, in_ch, &oi))) goto done;
     int nout = oi.channels;
-    if (nout > 4) {
-        r = nprfx_error(rc.ctx, NPRFX_ERR_UNSUPPORTED,
-                        "%s: %d output channels do not fit an RGBA image", d->id, nout);
-        goto done;
-    }
-    OfxStatus st = img_fetch(inst->output, time, &out);
+    OfxStatus st = img_fetch(inst->output, time, 0, &out);
     if (st != kOfxStatOK) {
         r = nprfx_error(rc.ctx, NPRFX_ERR_INTERNAL, "%s: the host gave no output image (%d)", d->id,
                         st);
@@ -518,7 +523,8 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_rect window = nprfx_rect_intersect(host_window, frame);
     /* The result: in place where the host image holds the first nout components in order,
      * else in a scratch image covering the window. */
-    if ((out.ncomp == 4 || (out.ncomp == 3 && nout <= 3)) && !nprfx_rect_empty(window)) {
+    if (out.bytes == 4 && (out.ncomp == 4 || out.ncomp == 3) && nout <= out.ncomp &&
+        !nprfx_rect_empty(window)) {
         if ((r = img_view(&out, rc.f, 0, nout, &res, &res_scratch))) goto done;
     } else if (!nprfx_rect_empty(window)) {
         if ((r = nprfx_image_alloc(rc.ctx, window, nout, &res))) goto done;
@@ -542,7 +548,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
             G.param->paramGetValueAtTime(inst->mask_invert, time, &inv) == kOfxStatOK)
             fj.mask_invert = inv != 0;
         if (nprfx_ofx_clip_connected(inst->mask) &&
-            img_fetch(inst->mask, time, &mask) == kOfxStatOK) {
+            img_fetch(inst->mask, time, 1, &mask) == kOfxStatOK) {
             if ((r = img_view(&mask, rc.f, mask.ncomp == 4 ? 3 : 0, 1, &mask_view, &mask_scratch)))
                 goto done;
             fj.mask = &mask_view;
@@ -567,7 +573,9 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         a.inputs = rc.inputs;
         a.params = values;
         a.output = &res;
-        a.fetch = fetch_cb;
+        /* Without temporal access the host would answer with the current frame: no fetch, and
+         * a node that needs another frame says so. */
+        a.fetch = G.temporal ? fetch_cb : NULL;
         a.fetch_user = &rc;
         a.state = &inst->state;
         if (d->flags & NPRFX_NODE_STATEFUL) {
@@ -579,21 +587,29 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         locked = 0;
         if (r) goto done;
         nprfx_parallel_for(&host_executor, nprfx_rect_height(window), 16, finish_rows, &fj);
+        /* The export param writes the frame's vectors from hosts as from the runner; proxy
+         * renders do not (their coordinates would be scaled). */
+        if (d->export_text && scale[0] == 1.0 && scale[1] == 1.0) {
+            a.window = frame;
+            a.output = NULL;
+            if ((r = nprfx_ofx_export(inst, &a))) goto done;
+        }
     }
     /* Pixels the host asked for outside the frame: transparent black. */
     for (int y = host_window.y0; y < host_window.y1; y++)
         for (int x = host_window.x0; x < host_window.x1; x++)
             if (!nprfx_rect_contains(frame, x, y))
                 for (int c = 0; c < out.ncomp; c++)
-                    *img_at(&out, x, rc.f - y, c) = 0.0f;
+                    img_store(&out, x, rc.f - y, c, 0.0f);
     status = kOfxStatOK;
+    nprfx_ofx_clear_error(inst);
 
 done:
     if (r && status == kOfxStatOK) status = kOfxStatFailed;
     if (r) {
         char msg[1024];
         nprfx_context_last_error(rc.ctx, msg, sizeof msg);
-        nprfx_ofx_post_error(inst->fx, msg);
+        nprfx_ofx_post_error(inst, msg);
     }
     for (int i = 0; i < RING; i++)
         fetched_release(&rc.ring[i]);

@@ -1,0 +1,86 @@
+/* nprfx OpenFX adapter — reading an instance's settings back from the host: param values (at a
+ * time, or as they are now) and the channels each input clip gives through its selector. The
+ * actions that need them (render, getFramesNeeded, getClipPreferences) share these. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "ofx_internal.h"
+
+nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
+                                   int current, nprfx_value *values, char **strings)
+{
+    const nprfx_node_desc *d = inst->desc;
+    const OfxParameterSuiteV1 *pm = nprfx_ofx_g.param;
+    for (int i = 0; i < d->num_params; i++) {
+        const nprfx_param_desc *p = &d->params[i];
+        OfxParamHandle h = inst->params[i];
+        OfxStatus st = kOfxStatOK;
+        int iv = 0;
+        char *s = NULL;
+        double *v = values[i].v;
+        memset(&values[i], 0, sizeof values[i]);
+        values[i].s = "";
+        switch (p->type) {
+        case NPRFX_PARAM_DOUBLE:
+            st = current ? pm->paramGetValue(h, &v[0]) : pm->paramGetValueAtTime(h, time, &v[0]);
+            break;
+        case NPRFX_PARAM_INT:
+        case NPRFX_PARAM_BOOL:
+        case NPRFX_PARAM_CHOICE:
+            st = current ? pm->paramGetValue(h, &iv) : pm->paramGetValueAtTime(h, time, &iv);
+            v[0] = iv;
+            break;
+        case NPRFX_PARAM_COLOR:
+            st = current ? pm->paramGetValue(h, &v[0], &v[1], &v[2], &v[3])
+                         : pm->paramGetValueAtTime(h, time, &v[0], &v[1], &v[2], &v[3]);
+            break;
+        case NPRFX_PARAM_STRING:
+            st = current ? pm->paramGetValue(h, &s) : pm->paramGetValueAtTime(h, time, &s);
+            if (st == kOfxStatOK) {
+                size_t n = strlen(s ? s : "") + 1;
+                free(strings[i]);
+                if (!(strings[i] = malloc(n)))
+                    return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+                memcpy(strings[i], s ? s : "", n);
+                values[i].s = strings[i];
+            }
+            break;
+        }
+        if (st != kOfxStatOK)
+            return nprfx_error(ctx, NPRFX_ERR_INTERNAL,
+                               "%s.%s: the host gave no value (OFX status %d)", d->id, p->name, st);
+        /* Hosts do not all clamp typed-in or expression values: refuse as the runner does. */
+        nprfx_result r = nprfx_param_check(ctx, d, p, &values[i]);
+        if (r) return r;
+    }
+    return NPRFX_OK;
+}
+
+void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current,
+                               int *first, int *count)
+{
+    const nprfx_input_desc *in = &inst->desc->inputs[k];
+    int opts[NPRFX_OFX_CHAN_OPTIONS];
+    int n = nprfx_ofx_selector_options(in, opts);
+    int choice = nprfx_ofx_selector_default(in);
+    if (inst->selectors[k]) {
+        int v = choice;
+        OfxStatus st = current
+                           ? nprfx_ofx_g.param->paramGetValue(inst->selectors[k], &v)
+                           : nprfx_ofx_g.param->paramGetValueAtTime(inst->selectors[k], time, &v);
+        if (st == kOfxStatOK && v >= 0 && v < n) choice = v;
+    }
+    if (choice >= n) choice = 0;
+    *first = nprfx_ofx_chan_options[opts[choice]].first;
+    *count = nprfx_ofx_chan_options[opts[choice]].count;
+}
+
+void nprfx_ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
+{
+    for (int k = 0; k < inst->desc->num_inputs; k++) {
+        int first = 0, count = 0;
+        if (nprfx_ofx_clip_connected(inst->clips[k]))
+            nprfx_ofx_input_selection(inst, k, time, current, &first, &count);
+        channels[k] = count;
+    }
+}
