@@ -17,7 +17,7 @@ static int suffix_match(const char *name, const char *suffix)
 /* Canonical order of the last component inside a layer: colour, vectors, texture coordinates,
  * then alpha/coverage, then the rest alphabetically (EXR stores channels alphabetically, which
  * would give A,B,G,R, and Blender's UV layer A,U,V). */
-static int component_rank(const char *c)
+int nprfx_channels_component_rank(const char *c)
 {
     static const char *const order[] = {"R", "G", "B", "X", "Y", "Z", "W", "U", "V", "A", NULL};
     for (int i = 0; order[i]; i++)
@@ -75,7 +75,7 @@ static int layer_channels(const char *const *names, int n, const char *layer, in
     for (int a = 1; a < count; a++)
         for (int b = a; b > 0; b--) {
             const char *x = last_component(names[idx[b - 1]]), *y = last_component(names[idx[b]]);
-            int rx = component_rank(x), ry = component_rank(y);
+            int rx = nprfx_channels_component_rank(x), ry = nprfx_channels_component_rank(y);
             if (rx > ry || (rx == ry && strcmp(x, y) > 0)) {
                 int t = idx[b - 1];
                 idx[b - 1] = idx[b];

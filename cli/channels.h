@@ -19,4 +19,8 @@ int nprfx_channels_select(const char *const *names, int n, const char *selection
  * that resolves completely, or -1. */
 int nprfx_channels_from_hint(const char *const *names, int n, const char *hint, int *idx, int max);
 
+/* Rank of a channel's last component inside its layer: colour, vectors, texture coordinates,
+ * then alpha, then the rest (the order layer selections and hosts list them in). */
+int nprfx_channels_component_rank(const char *component);
+
 #endif

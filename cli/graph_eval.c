@@ -118,13 +118,16 @@ typedef struct vec_convention {
  * up: (X, Y) = position at frame i-1 minus position at i; (Z, W) = position at i minus position
  * at i+1. So motion_prev = (X, -Y) and motion_next = (-Z, W). Nuke's backward/forward vectors
  * point from this frame to the previous/next one, y up. */
+const char *const internal_graph_motion_names[4] = {"motion_prev.X", "motion_prev.Y",
+                                                    "motion_next.X", "motion_next.Y"};
+
 static const vec_convention vec_conventions[] = {
     {"blender", "Vector.X,Vector.Y,Vector.Z,Vector.W", {1, -1, -1, 1}},
     {"nuke", "backward.u,backward.v,forward.u,forward.v", {1, -1, 1, -1}},
 };
 
-static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *file,
-                                        nprfx_plate *plate)
+nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const char *file,
+                                           const char *const *names, int nc, int *idx, double *sign)
 {
     const vec_convention *vc = NULL;
     for (size_t i = 0; i < sizeof vec_conventions / sizeof vec_conventions[0]; i++)
@@ -133,13 +136,25 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
                            "node '%s': vectors '%s' is not one of: none, blender, nuke", n->name,
                            n->vectors);
-    int idx[4], amb;
+    int amb;
     char bad[256];
-    if (nprfx_channels_select((const char *const *)plate->names, plate->nchannels, vc->layer, idx,
-                              4, bad, sizeof bad, &amb) != 4)
+    if (nprfx_channels_select(names, nc, vc->layer, idx, 4, bad, sizeof bad, &amb) != 4)
         return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                            "node '%s': %s has no %s channel '%s' for vectors=%s", n->name, file,
                            amb ? "unique" : "", bad, n->vectors);
+    for (int k = 0; k < 4; k++)
+        sign[k] = vc->sign[k];
+    return NPRFX_OK;
+}
+
+static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *file,
+                                        nprfx_plate *plate)
+{
+    int idx[4];
+    double sign[4];
+    nprfx_result r = internal_graph_motion_sources(g, n, file, (const char *const *)plate->names,
+                                                   plate->nchannels, idx, sign);
+    if (r) return r;
     int nc = plate->nchannels, nn = nc + 4;
     size_t npix =
         (size_t)nprfx_rect_width(plate->bounds) * (size_t)nprfx_rect_height(plate->bounds);
@@ -151,16 +166,14 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
     }
     plate->names = names;
-    static const char *const mnames[4] = {"motion_prev.X", "motion_prev.Y", "motion_next.X",
-                                          "motion_next.Y"};
     for (int k = 0; k < 4; k++)
-        names[nc + k] = internal_graph_strdup(mnames[k]);
+        names[nc + k] = internal_graph_strdup(internal_graph_motion_names[k]);
     for (size_t p = 0; p < npix; p++) {
         const float *s = plate->pixels + p * (size_t)nc;
         float *d = px + p * (size_t)nn;
         memcpy(d, s, (size_t)nc * sizeof(float));
         for (int k = 0; k < 4; k++) {
-            float v = s[idx[k]] * (float)vc->sign[k];
+            float v = s[idx[k]] * (float)sign[k];
             d[nc + k] = isfinite(v) ? v : 0.0f;
         }
     }
@@ -231,17 +244,16 @@ static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image 
     return NPRFX_OK;
 }
 
-/* Pick the channels of entry e that input k of node n uses; the view shares e's pixels when
- * they are adjacent, else points into *scratch (malloc'd, caller frees). */
-nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
-                                         nprfx_image *view, float **scratch)
+/* Which channels of a source with `names` input k of node n takes (its reference's selection,
+ * else its AOV hint, else all), checked against the input's channel count. */
+nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k,
+                                           const char *const *names, int nc, int *idx, int *countp)
 {
     const gref *ref = &n->inputs[k];
     const nprfx_input_desc *in = n->kind == GK_NODE ? &n->desc->inputs[k] : NULL;
     const char *iname = in ? in->name : "image";
     const char *src = g->nodes[ref->src].name;
-    const char *const *names = (const char *const *)e->names;
-    int nc = e->im.channels, idx[256], count = -1;
+    int count = -1;
     char bad[256];
     int amb = 0;
     if (ref->sel) {
@@ -297,6 +309,19 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
     if (count < 1)
         return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                            "node '%s': input '%s' selects no channels", n->name, iname);
+    *countp = count;
+    return NPRFX_OK;
+}
+
+/* Pick the channels of entry e that input k of node n uses; the view shares e's pixels when
+ * they are adjacent, else points into *scratch (malloc'd, caller frees). */
+nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
+                                         nprfx_image *view, float **scratch)
+{
+    int nc = e->im.channels, idx[256], count = 0;
+    nprfx_result r =
+        internal_graph_input_channels(g, n, k, (const char *const *)e->names, nc, idx, &count);
+    if (r) return r;
     int contiguous = 1;
     for (int c = 1; c < count; c++)
         contiguous &= idx[c] == idx[0] + c;
@@ -307,7 +332,7 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
         return NPRFX_OK;
     }
     nprfx_image tmp;
-    nprfx_result r = nprfx_image_alloc(g->ctx, e->im.bounds, count, &tmp);
+    r = nprfx_image_alloc(g->ctx, e->im.bounds, count, &tmp);
     if (r) return r;
     for (int y = tmp.bounds.y0; y < tmp.bounds.y1; y++)
         for (int x = tmp.bounds.x0; x < tmp.bounds.x1; x++) {

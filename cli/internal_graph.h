@@ -71,6 +71,18 @@ char **internal_graph_names_dup(const char *const *names, int n);
 /* pattern at frame, relative to dir unless absolute, into buf. */
 void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const char *pattern,
                                  int frame, char *buf, size_t n);
+/* The channels (indices into names, nc of them) input k of node n takes from its source: the
+ * reference's selection, else the input's AOV hint, else all, checked against the input's
+ * channel count; *count receives how many (idx has room for 256). */
+nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k,
+                                           const char *const *names, int nc, int *idx, int *count);
+/* The names of the 4 channels a read node with "vectors" appends to its plates. */
+extern const char *const internal_graph_motion_names[4];
+/* Read node n's motion convention ("vectors"): the plate channels (indices into names) the 4
+ * appended channels are made of, and the factor each is multiplied by. */
+nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const char *file,
+                                           const char *const *names, int nc, int *idx,
+                                           double *sign);
 /* The view of the channels of entry e that input k of node n uses: e's pixels when they are
  * adjacent, else *scratch (malloc'd, the caller frees). */
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,

@@ -23,6 +23,8 @@ static const command commands[] = {
      "measure a look over its shot: warp error along the motion, background, tone curve"},
     {"bench", nprfx_cmd_bench, "time a node: Mpixel/s, ms per frame, peak memory"},
     {"docs", nprfx_cmd_docs, "write the node reference (Markdown) generated from the descriptors"},
+    {"host-project", nprfx_cmd_host_project,
+     "write a graph as a Natron project, Natron script and Nuke script (OpenFX nodes)"},
     {"ivs", nprfx_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
 };
 
@@ -33,7 +35,7 @@ static void usage(FILE *f)
             "usage: nprfx COMMAND [options]\n\ncommands:\n",
             NPRFX_VERSION_STRING);
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-7s %s\n", commands[i].name, commands[i].summary);
+        fprintf(f, "  %-12s %s\n", commands[i].name, commands[i].summary);
     fprintf(f, "\n'nprfx COMMAND --help' explains a command; 'nprfx help NODE' a node.\n"
                "Example: nprfx run samples/graphs/threshold.json --frames 1-4\n");
 }

@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# nprfx host-project: the sample host files in samples/hosts are what the command writes from
+# samples/graphs/main.json (no drift), the Natron project holds the graph's nodes, non-default
+# params, connections, format and frames, the Natron script sets the same params and does not
+# need __file__, and graphs hosts cannot express fail with the node's name.
+set -u
+NPRFX=$1; SRC=$2; W=$3
+rm -rf "$W"; mkdir -p "$W/samples/graphs" "$W/samples/hosts"; cd "$W"
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails+1)); }
+REGEN="nprfx host-project samples/graphs/main.json --natron samples/hosts/nprfx_crossing.ntp --natron-script samples/hosts/nprfx_crossing_natron.py --nuke samples/hosts/nprfx_crossing.nk"
+
+# (1) the same layout as the sources, so relative paths come out the same
+cp "$SRC/samples/graphs/main.json" samples/graphs/
+# the command reads the first plate's header only
+mkdir -p samples/plates/crossing
+cp "$SRC/samples/plates/crossing/crossing.0001.exr" samples/plates/crossing/
+"$NPRFX" host-project samples/graphs/main.json --natron samples/hosts/nprfx_crossing.ntp \
+    --natron-script samples/hosts/nprfx_crossing_natron.py --nuke samples/hosts/nprfx_crossing.nk ||
+    fail "host-project exited $?"
+for f in nprfx_crossing.ntp nprfx_crossing_natron.py nprfx_crossing.nk; do
+    cmp -s "samples/hosts/$f" "$SRC/samples/hosts/$f" ||
+        fail "samples/hosts/$f differs from what the graph gives; regenerate from the source folder: $REGEN"
+done
+NTP=${NTP:-samples/hosts/nprfx_crossing.ntp}
+PY=${PY:-samples/hosts/nprfx_crossing_natron.py}
+
+# (2) the project: "node knob value" of every org.nprfx node, inputs, format, frames
+awk '
+/<Name>frameRange</ { fr = 1 }
+/<RectI/ { rect = 1 }
+/<Plugin_script_name>/ { gsub(/.*<Plugin_script_name>|<\/Plugin_script_name>.*/, ""); node = $0 }
+/<Plugin_id>/ { nprfx = index($0, "org.nprfx.") > 0 }
+/<Name>/ { gsub(/.*<Name>|<\/Name>.*/, ""); knob = $0; nval = 0 }
+/<Value>/ && nprfx { gsub(/.*<Value>|<\/Value>.*/, ""); if (!nval++) print "param", node, knob, $0 + 0 }
+/<ChoiceLabel>/ && nprfx { gsub(/.*<ChoiceLabel>|<\/ChoiceLabel>.*/, ""); print "choice", node, knob, $0 }
+/<first>/ { gsub(/.*<first>|<\/first>.*/, ""); first = $0 }
+/<second>/ && nprfx { gsub(/.*<second>|<\/second>.*/, ""); print "input", node, first, $0 }
+fr && /<Value>/ { gsub(/.*<Value>|<\/Value>.*/, ""); range = range " " $0; if (++frn == 2) { print "frames" range; fr = 0 } }
+rect && /<Right>/ { gsub(/.*<Right>|<\/Right>.*/, ""); right = $0 }
+rect && /<Top>/ { gsub(/.*<Top>|<\/Top>.*/, ""); print "format", right "x" $0; rect = 0 }
+' "$NTP" | grep -v "Channels" | sort > ntp.txt
+sort > want.txt <<'WANT'
+choice noise noise bandpass
+choice noise output unit01
+choice strokes mode builtin
+format 320x180
+frames 1 24
+input light Albedo plate_DiffCol_RGB
+input light Coverage matte
+input light Tone plate_Combined_RGB
+input look Alpha strokes
+input look Base paper
+input look Layer plate_Combined_RGB
+input matte Depth plate_Depth_Z
+input matte Object ID plate_IndexOB_X
+input noise Depth plate_Depth_Z
+input noise Motion Prev plate_motion_prev_XY
+input paper Image plate_Combined_RGB
+input strokes Pattern noise
+input strokes Tone light
+param light out_high 0.6
+param light out_low 0.05
+param look gain_layer 0.85
+param noise contrast 0.2
+param noise sigma_hi 2.5
+param strokes invert 1
+param strokes sigma 10
+WANT
+# choices also give a "param" line (their index): keep the labels only
+grep -v -e '^param noise noise' -e '^param noise output' -e '^param strokes mode' ntp.txt > got.txt
+diff want.txt got.txt > ntp.diff || { fail "$NTP: nodes, params or inputs are not the graph's:"; cat ntp.diff; }
+# the defaults main.json leaves are not written
+for p in "noise sigma_lo" "noise alpha"; do
+    grep -q "^param $p " ntp.txt && fail "$NTP sets $p, which main.json leaves at its default"
+done
+
+# (3) the script: the same params by script name, and no __file__ outside the try
+grep -o '^    [a-z_]*\.getParam("[a-z_]*")\.setValue([^)]*)' "$PY" |
+    sed 's/^ *\([a-z_]*\)\.getParam("\([a-z_]*\)")\.setValue(\(.*\))/param \1 \2 \3/; s/True$/1/' |
+    awk '{ print $1, $2, $3, $4 + 0 }' | sort > py.txt
+grep '^param' want.txt > want_py.txt
+diff want_py.txt py.txt > py.diff || { fail "$PY: params differ from the graph's:"; cat py.diff; }
+grep -n '__file__' "$PY" | grep -v -e 'abspath(__file__)' -e 'without __file__' > file.txt &&
+    { fail "$PY uses __file__ outside the NameError guard:"; cat file.txt; }
+grep -q 'except NameError' "$PY" || fail "$PY has no NameError guard around __file__"
+
+# (4) graphs hosts cannot express
+printf '{"frames": "1-2", "nodes": {"s": {"node": "synth", "scene": "orbit", "size": "32x24"}, "b": {"node": "blend", "inputs": {"base": "s", "layer": "s"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}}}\n' > synth.json
+"$NPRFX" host-project synth.json --natron bad.ntp 2> err.txt && fail "a synth graph was accepted"
+grep -q "synth.json.*node 's'" err.txt || { fail "the synth error names no file and node:"; cat err.txt; }
+[ -e bad.ntp ] && fail "a failed host-project left bad.ntp"
+"$NPRFX" host-project samples/graphs/main.json 2> err.txt && fail "no output was accepted"
+grep -q -- "--natron" err.txt || fail "no hint about the outputs: $(cat err.txt)"
+"$NPRFX" host-project --help | grep -q "Natron" || fail "--help does not teach"
+
+[ $fails -eq 0 ] && echo "host_project: ok"
+exit $((fails > 0))
