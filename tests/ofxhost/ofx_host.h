@@ -7,7 +7,9 @@
  * (checking that each param's type, default and ranges match the node's descriptor), creates
  * one instance per graph node, sets params and channel selectors from the graph, serves clip
  * images from the runner's inputs (at other times through the runner's fetch), and copies the
- * rendered window back. It is a test program, never part of the shipped runner. */
+ * rendered window back. A profile (--profile) makes it behave as a real host does where hosts
+ * differ (contexts, pixel depths, temporal access, message formatting; profile.c). It is a test
+ * program, never part of the shipped runner. */
 #ifndef NPRFX_TESTS_OFX_HOST_H
 #define NPRFX_TESTS_OFX_HOST_H
 

@@ -2,8 +2,10 @@
  * behind the handles, the host and the per-graph-node instance, and the functions one file
  * defines for the others (prefixed internal_). ofx_host.h is the host's interface; props.c has
  * the property sets, image_effect.c the objects and the image effect suite, params.c the
- * parameter suite, host_suites.c the other suites, bundle.c the loading and describing of the
- * plug-ins, render.c the instances and the graph's render hook, main.c the command line.
+ * parameter suite, messages.c the message suites, host_suites.c the other suites, bundle.c the
+ * loading and describing of the plug-ins, render.c the instances and the graph's render hook,
+ * frames.c the frames-needed bookkeeping, pixels.c the pixel depths, profile.c the host
+ * profiles, main.c the command line.
  *
  * Objects. Every handle the plug-in sees points at an hprops (a property set) or at a struct
  * that starts with one, tagged with a kind, so a wrong handle is caught instead of read as
@@ -13,8 +15,10 @@
  * Strictness. The host is lenient where hosts differ (unknown properties may be set) and strict
  * where a mistake in the adapter would go unnoticed in a real host: getting a property of the
  * wrong type, describing params that do not match the node descriptor, fetching a frame the
- * plug-in did not declare in getFramesNeeded, a region of definition other than the frame, or
- * an image not released by the end of an action all fail. */
+ * plug-in did not declare in getFramesNeeded, declaring frames it does not fetch (first render)
+ * or frames on an unconnected clip, a region of definition other than the frame, an image not
+ * released by the end of an action, or a failed action whose error message is empty all fail,
+ * whatever the profile. */
 #ifndef NPRFX_TESTS_OFX_HOST_INTERNAL_H
 #define NPRFX_TESTS_OFX_HOST_INTERNAL_H
 
