@@ -17,6 +17,10 @@ typedef struct nprfx_render_hook {
     nprfx_result (*render)(void *user, const nprfx_render_args *args, void **instance);
     void (*release)(void *user, const nprfx_node_desc *node, void *instance);
     void *user;
+    /* Non-zero: the hook's renders write the nodes' exports (NPRFX_PARAM_EXPORT) themselves, as
+     * a plug-in in a host must, so the runner does not write them too: a file that appears is
+     * then the plug-in's. */
+    int exports;
 } nprfx_render_hook;
 
 /* How the graph's plates and seeds are altered, for measuring a look against its baselines

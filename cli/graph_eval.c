@@ -512,7 +512,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
                             : nprfx_node_render(&a);
         }
     g->render_seconds += internal_graph_now() - t0;
-    if (!r) r = export_node(g, n, &a, frame);
+    if (!r && !(g->has_hook && g->hook.exports)) r = export_node(g, n, &a, frame);
     if (r) { /* the message went out through n->ctx, naming the node */
         nprfx_image_free(im);
         goto done;

@@ -1,7 +1,10 @@
-/* nprfx OpenFX test host — opening and closing a bundle: the host's properties, dlopen of the
- * binary inside the bundle, and for every plug-in load, describe and describeInContext in the
- * contexts it supports, each context descriptor checked against the node descriptor of the same
- * identifier (params with their types, defaults and ranges, clips with their optional flags). */
+/* nprfx OpenFX test host — opening and closing a bundle: the host's properties (as its profile
+ * has them), dlopen of the binary inside the bundle, and for every plug-in load, describe and
+ * describeInContext in the contexts both it and the host support, each context descriptor
+ * checked against the node descriptor of the same identifier (params with their types, defaults
+ * and ranges, clips with their optional flags). A plug-in that refuses to load here
+ * (kOfxStatErrMissingHostFeature) or has no context the host supports stays unavailable with
+ * its reason; the others load. */
 #define _POSIX_C_SOURCE 200809L /* strdup */
 #include <dlfcn.h>
 #include <pthread.h>
@@ -33,14 +36,9 @@ static void host_properties(nprfx_ofx_host *h)
     internal_set_string(p, kOfxPropVersionLabel, 0, NPRFX_VERSION_STRING);
     internal_set_int(p, kOfxImageEffectHostPropIsBackground, 0, 1);
     internal_set_int(p, kOfxImageEffectPropSupportsOverlays, 0, 0);
-    internal_set_int(p, kOfxImageEffectPropSupportsMultiResolution, 0, 1);
     internal_set_int(p, kOfxImageEffectPropSupportsTiles, 0, 1);
-    internal_set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, 1);
-    internal_set_string(p, kOfxImageEffectPropSupportedComponents, 0, kOfxImageComponentRGBA);
-    internal_set_string(p, kOfxImageEffectPropSupportedComponents, 1, kOfxImageComponentAlpha);
-    internal_set_string(p, kOfxImageEffectPropSupportedContexts, 0, kOfxImageEffectContextGeneral);
-    internal_set_string(p, kOfxImageEffectPropSupportedContexts, 1, kOfxImageEffectContextFilter);
-    internal_set_string(p, kOfxImageEffectPropSupportedPixelDepths, 0, kOfxBitDepthFloat);
+    /* contexts, temporal access, multi-resolution, components and depths */
+    internal_profile_host_props(h->profile, p);
     internal_set_int(p, kOfxImageEffectPropSupportsMultipleClipDepths, 0, 0);
     internal_set_int(p, kOfxImageEffectPropSupportsMultipleClipPARs, 0, 0);
     internal_set_int(p, kOfxImageEffectPropSetableFrameRate, 0, 0);
@@ -55,6 +53,20 @@ static void host_properties(nprfx_ofx_host *h)
     internal_set_int(p, kOfxParamHostPropMaxPages, 0, 0);
     internal_set_int(p, kOfxParamHostPropPageRowColumnCount, 0, 0);
     internal_set_int(p, kOfxParamHostPropPageRowColumnCount, 1, 0);
+}
+
+/* The plug-in refused to load in this host (kOfxStatErrMissingHostFeature from an action): it
+ * stays unavailable, the others load. Its reason is what it posted while loading; the refusal
+ * itself is no error, but a blank reason is, when a node uses the plug-in (render.c). */
+static void refuse(nprfx_ofx_host *h, hplugin *pl, const char *action)
+{
+    (void)h;
+    pl->unavailable = 1;
+    if (!pl->reason[0])
+        snprintf(pl->reason, sizeof pl->reason,
+                 "it refused to load (%s: kOfxStatErrMissingHostFeature), and the plug-in's error "
+                 "message is empty",
+                 action);
 }
 
 /* describeInContext, then check the context descriptor against the node descriptor: every
@@ -74,6 +86,11 @@ static nprfx_result describe_context(nprfx_ofx_host *h, hplugin *pl, const char 
     internal_set_string((OfxPropertySetHandle)&in, kOfxImageEffectPropContext, 0, context);
     OfxStatus st = internal_call(pl, kOfxImageEffectActionDescribeInContext, e, &in, NULL);
     internal_props_free(&in);
+    if (st == kOfxStatErrMissingHostFeature) {
+        internal_effect_free(e);
+        refuse(h, pl, kOfxImageEffectActionDescribeInContext);
+        return NPRFX_OK;
+    }
     if (st != kOfxStatOK) {
         internal_effect_free(e);
         return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: describeInContext(%s) failed (%d)", id,
@@ -159,6 +176,10 @@ static nprfx_result load_plugin(nprfx_ofx_host *h, hplugin *pl)
                            id);
     pl->p->setHost(&h->ofx);
     OfxStatus st = internal_call(pl, kOfxActionLoad, NULL, NULL, NULL);
+    if (st == kOfxStatErrMissingHostFeature) {
+        refuse(h, pl, kOfxActionLoad);
+        return NPRFX_OK;
+    }
     if (st != kOfxStatOK && st != kOfxStatReplyDefault)
         return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: load failed (%d)", id, st);
     pl->loaded = 1;
@@ -166,21 +187,43 @@ static nprfx_result load_plugin(nprfx_ofx_host *h, hplugin *pl)
         return nprfx_error(h->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     internal_set_string((OfxPropertySetHandle)&pl->descriptor->props, kOfxPluginPropFilePath, 0,
                         h->bundle);
-    if ((st = internal_call(pl, kOfxActionDescribe, pl->descriptor, NULL, NULL)) != kOfxStatOK)
+    st = internal_call(pl, kOfxActionDescribe, pl->descriptor, NULL, NULL);
+    if (st == kOfxStatErrMissingHostFeature) {
+        refuse(h, pl, kOfxActionDescribe);
+        return NPRFX_OK;
+    }
+    if (st != kOfxStatOK)
         return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: describe failed (%d)", id, st);
     hprops *dp = &pl->descriptor->props;
     if (pl->desc && strcmp(internal_pstr(dp, kOfxPropLabel, 0, ""), pl->desc->label))
         return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: label differs from the node's", id);
     nprfx_result r;
+    const hprofile *pf = h->profile;
+    char offered[256] = "";
+    size_t len = 0;
     for (int i = 0; i < internal_pdim(dp, kOfxImageEffectPropSupportedContexts); i++) {
         const char *c = internal_pstr(dp, kOfxImageEffectPropSupportedContexts, i, "");
-        if (!strcmp(c, kOfxImageEffectContextGeneral)) {
+        int w = snprintf(offered + len, sizeof offered - len, "%s%s", len ? ", " : "", c);
+        if (w > 0 && (size_t)w < sizeof offered - len) len += (size_t)w;
+        /* Only the contexts this host has: a host never describes the others. */
+        if (!strcmp(c, kOfxImageEffectContextGeneral) && pf->general) {
             if ((r = describe_context(h, pl, c, &pl->general))) return r;
-        } else if (!strcmp(c, kOfxImageEffectContextFilter)) {
+        } else if (!strcmp(c, kOfxImageEffectContextFilter) && pf->filter) {
             if ((r = describe_context(h, pl, c, &pl->filter))) return r;
         }
+        if (pl->unavailable) return NPRFX_OK;
     }
-    if (!pl->general) return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: no General context", id);
+    /* The strict host requires General of every plug-in (nodes with several inputs need it); a
+     * host of one context has no use for a plug-in without that context. */
+    if (pf->general && pf->filter && !pl->general)
+        return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: no General context", id);
+    if (!pl->general && !pl->filter) {
+        pl->unavailable = 1;
+        snprintf(pl->reason, sizeof pl->reason,
+                 "it offers no context this host supports (the plug-in: %s; this host, %s: %s)",
+                 len ? offered : "none", pf->like,
+                 pf->general ? kOfxImageEffectContextGeneral : kOfxImageEffectContextFilter);
+    }
     return NPRFX_OK;
 }
 
@@ -218,14 +261,20 @@ static char *bundle_binary(const char *bundle)
     return path;
 }
 
-nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, nprfx_ofx_host **out)
+nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, const char *profile,
+                                 nprfx_ofx_host **out)
 {
     *out = NULL;
     if (internal_g_host)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "an OpenFX host is already open");
+    const hprofile *pf = internal_profile_find(profile ? profile : "strict");
+    if (!pf)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "no host profile '%s' (there are %s)",
+                           profile, internal_profile_names());
     nprfx_ofx_host *h = calloc(1, sizeof *h);
     if (!h) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     h->ctx = ctx;
+    h->profile = pf;
     h->exec = nprfx_context_executor(ctx);
     /* Recursive: a clip fetch evaluates the upstream graph, whose nodes are plug-ins that fetch
      * their own clips on the same thread (tone's coverage from a matte node, at other frames). */
@@ -241,6 +290,7 @@ nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, nprfx_o
     h->hook.render = internal_hook_render;
     h->hook.release = internal_hook_release;
     h->hook.user = h;
+    h->hook.exports = 1; /* the plug-ins write their exports, as in any host */
     internal_g_host = h;
     nprfx_result r = NPRFX_OK;
     if (!(h->bundle = strdup(bundle)) || !(h->binary = bundle_binary(bundle))) {
@@ -288,7 +338,10 @@ nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, nprfx_o
                                 h->binary, pl->p->pluginIdentifier);
                 goto fail;
             }
-        if ((r = load_plugin(h, pl))) goto fail;
+        h->loading = pl; /* messages with a NULL or descriptor handle are its reason */
+        r = load_plugin(h, pl);
+        h->loading = NULL;
+        if (r) goto fail;
     }
     *out = h;
     return NPRFX_OK;
@@ -300,6 +353,18 @@ fail:
 int nprfx_ofx_host_plugin_count(const nprfx_ofx_host *h)
 {
     return h ? h->nplugins : 0;
+}
+
+const char *nprfx_ofx_host_profile(const nprfx_ofx_host *h)
+{
+    return h ? h->profile->name : "";
+}
+
+const char *nprfx_ofx_host_unavailable(const nprfx_ofx_host *h, int i, const char **reason)
+{
+    if (!h || i < 0 || i >= h->nplugins || !h->plugins[i].unavailable) return NULL;
+    if (reason) *reason = h->plugins[i].reason;
+    return h->plugins[i].p->pluginIdentifier ? h->plugins[i].p->pluginIdentifier : "?";
 }
 
 const nprfx_render_hook *nprfx_ofx_host_hook(nprfx_ofx_host *h)

@@ -1,10 +1,9 @@
 /* nprfx OpenFX test host — the remaining suites and the host's fetchSuite: multithreading on the
- * runner's executor (so --threads N reaches the plug-ins), memory, and messages (errors are kept
- * for the runner's error message, others printed); fetchSuite hands out every suite, version 1,
- * to the host's own property set only. */
+ * runner's executor (so --threads N reaches the plug-ins) and memory; fetchSuite hands out every
+ * suite, version 1, and the message suite's version 2 where the profile has it (messages.c), to
+ * the host's own property set only. */
 #define _POSIX_C_SOURCE 200809L /* posix_memalign */
 #include <pthread.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -108,19 +107,7 @@ static const OfxMultiThreadSuiteV1 multithread_suite = {
     mt_multi_thread,  mt_num_cpus,   mt_thread_index, mt_is_spawned,    mt_mutex_create,
     mt_mutex_destroy, mt_mutex_lock, mt_mutex_unlock, mt_mutex_try_lock};
 
-/* ---- memory and message suites --------------------------------------------------------------- */
-
-static void host_message(nprfx_ofx_host *h, const char *type, const char *text)
-{
-    if (!h) return;
-    if (!strcmp(type, kOfxMessageError) || !strcmp(type, kOfxMessageFatal)) {
-        pthread_mutex_lock(&h->lock);
-        snprintf(h->message, sizeof h->message, "%s", text);
-        pthread_mutex_unlock(&h->lock);
-    } else if (strcmp(type, kOfxMessageLog)) {
-        fprintf(stderr, "ofx: %s\n", text);
-    }
-}
+/* ---- memory suite ---------------------------------------------------------------------------- */
 
 static OfxStatus mem_alloc(void *handle, size_t n, void **out)
 {
@@ -136,31 +123,17 @@ static OfxStatus mem_free(void *p)
 }
 static const OfxMemorySuiteV1 memory_suite = {mem_alloc, mem_free};
 
-static OfxStatus msg_message(void *handle, const char *type, const char *id, const char *fmt, ...)
-{
-    (void)handle;
-    (void)id;
-    char text[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt ? fmt : "", ap);
-    va_end(ap);
-    if (type && !strcmp(type, "OfxMessageQuestion")) return kOfxStatFailed; /* not interactive */
-    host_message(internal_g_host, type ? type : kOfxMessageMessage, text);
-    return kOfxStatOK;
-}
-static const OfxMessageSuiteV1 message_suite = {msg_message};
-
 const void *internal_fetch_suite(OfxPropertySetHandle host, const char *name, int version)
 {
     if (!internal_g_host || internal_props_of(host) != &internal_g_host->props || !name)
         return NULL;
+    if (!strcmp(name, kOfxMessageSuite))
+        return internal_message_suite(internal_g_host->profile, version);
     if (version != 1) return NULL;
     if (!strcmp(name, kOfxPropertySuite)) return &internal_property_suite;
     if (!strcmp(name, kOfxImageEffectSuite)) return &internal_image_effect_suite;
     if (!strcmp(name, kOfxParameterSuite)) return &internal_parameter_suite;
     if (!strcmp(name, kOfxMultiThreadSuite)) return &multithread_suite;
     if (!strcmp(name, kOfxMemorySuite)) return &memory_suite;
-    if (!strcmp(name, kOfxMessageSuite)) return &message_suite;
     return NULL;
 }

@@ -1,8 +1,10 @@
 /* nprfx OpenFX test host — the objects behind the handles (effects, which double as param sets,
  * clips, params and images, each tagged with its kind) and the image effect suite: clips defined
- * in describeInContext, and at render time the clip images served from the runner's inputs (at
- * other frames through its fetch, only within what getFramesNeeded declared) and the output
- * image over the render in flight, plus the image memory functions. */
+ * in describeInContext, and at render time the clip images served from the runner's inputs in
+ * the profile's depth (at other frames through its fetch, only within what getFramesNeeded
+ * declared and where the profile has temporal clip access; every frame served is recorded for
+ * the frames check of frames.c) and the output image over the render in flight, plus the image
+ * memory functions. */
 #define _POSIX_C_SOURCE 200809L /* strdup, posix_memalign */
 #include <pthread.h>
 #include <stdint.h>
@@ -202,7 +204,8 @@ static void image_props(himage *im, const node_inst *ni, const char *comps, void
     double s = ni->args->render_scale;
     int bv[4] = {b.x1, b.y1, b.x2, b.y2};
     internal_set_string(p, kOfxPropType, 0, kOfxTypeImage);
-    internal_set_string(p, kOfxImageEffectPropPixelDepth, 0, kOfxBitDepthFloat);
+    internal_set_string(p, kOfxImageEffectPropPixelDepth, 0,
+                        internal_depth_name(ni->h->profile->depth));
     internal_set_string(p, kOfxImageEffectPropComponents, 0, comps);
     internal_set_string(p, kOfxImageEffectPropPreMultiplication, 0, kOfxImageUnPreMultiplied);
     internal_set_double(p, kOfxImageEffectPropRenderScale, 0, s);
@@ -217,16 +220,18 @@ static void image_props(himage *im, const node_inst *ni, const char *comps, void
 }
 
 /* The host image of an nprfx view: RGBA with the channels in R, G, B, A order and the rest 0, or
- * Alpha for a 1-channel main input (see inst_create, render.c). Rows are laid out top-down in
- * memory, padded by one pixel, so rowBytes is negative and wider than the row: the adapter must
- * cope with both, as with hosts that do this. */
+ * Alpha for a 1-channel main input (see inst_create, render.c), in the profile's depth. Rows are
+ * laid out top-down in memory, padded by one pixel, so rowBytes is negative and wider than the
+ * row: the adapter must cope with both, as with hosts that do this. */
 static himage *pack_input(node_inst *ni, int k, const nprfx_image *v, double time)
 {
     int w = nprfx_rect_width(v->bounds), hgt = nprfx_rect_height(v->bounds);
     int f = input_flip(ni, k, v), nc = ni->in_comps[k];
+    hdepth depth = ni->h->profile->depth;
+    size_t es = internal_depth_size(depth);
     himage *im = calloc(1, sizeof *im);
-    size_t stride = ((size_t)w + 1) * (size_t)nc; /* floats per memory row */
-    if (!im || !(im->pixels = calloc(stride * (size_t)(hgt > 0 ? hgt : 1), sizeof(float)))) {
+    size_t stride = ((size_t)w + 1) * (size_t)nc; /* components per memory row */
+    if (!im || !(im->pixels = calloc(stride * (size_t)(hgt > 0 ? hgt : 1), es))) {
         free(im);
         return NULL;
     }
@@ -236,18 +241,18 @@ static himage *pack_input(node_inst *ni, int k, const nprfx_image *v, double tim
     for (int y = v->bounds.y0; y < v->bounds.y1; y++)
         for (int x = v->bounds.x0; x < v->bounds.x1; x++) {
             const float *s = nprfx_image_at(v, x, y);
-            float *d = im->pixels + (size_t)(y - v->bounds.y0) * stride +
-                       (size_t)(x - v->bounds.x0) * (size_t)nc;
+            size_t d =
+                (size_t)(y - v->bounds.y0) * stride + (size_t)(x - v->bounds.x0) * (size_t)nc;
             for (int c = 0; c < n; c++)
-                d[c] = s[c];
+                internal_depth_store(depth, im->pixels, d + (size_t)c, s[c]);
         }
     OfxRectI b = internal_ofx_rect(v->bounds, f);
     /* OFX data points at the bottom row (y1), the last one in memory */
-    float *data = im->pixels + (size_t)(hgt > 0 ? hgt - 1 : 0) * stride;
+    char *data = (char *)im->pixels + (size_t)(hgt > 0 ? hgt - 1 : 0) * stride * es;
     char id[64];
     snprintf(id, sizeof id, "input%d@%g", k, time);
     image_props(im, ni, nc == 1 ? kOfxImageComponentAlpha : kOfxImageComponentRGBA, data, b,
-                -(int)(stride * sizeof(float)), id);
+                -(int)(stride * es), id);
     return im;
 }
 
@@ -278,19 +283,29 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
     pthread_mutex_lock(&h->lock);
     OfxStatus st = kOfxStatOK;
     nprfx_image view = a->inputs[k];
+    hframes *fr = &ni->frames[k];
     if (time != a->time) {
-        if (time < ni->need_lo[k] || time > ni->need_hi[k]) {
-            snprintf(h->message, sizeof h->message,
-                     "clip %s fetched at frame %g, outside the frames %g-%g that getFramesNeeded "
+        if (!h->profile->temporal) {
+            snprintf(ni->host_error, sizeof ni->host_error,
+                     "clip %s fetched at frame %g while rendering frame %g: this host (%s) has no "
+                     "temporal clip access",
+                     c->name, time, a->time, h->profile->like);
+            st = kOfxStatFailed;
+        } else if (!internal_frames_allows(fr, time)) {
+            snprintf(ni->host_error, sizeof ni->host_error,
+                     "clip %s fetched at frame %g, outside the frames that getFramesNeeded "
                      "declared",
-                     c->name, time, ni->need_lo[k], ni->need_hi[k]);
+                     c->name, time);
             st = kOfxStatFailed;
         } else if (!a->fetch || a->fetch(a->fetch_user, k, time, &view) != NPRFX_OK) {
-            snprintf(h->message, sizeof h->message, "clip %s: no image at frame %g: %s", c->name,
-                     time, nprfx_cli_message(a->ctx));
+            snprintf(ni->host_error, sizeof ni->host_error, "clip %s: no image at frame %g: %s",
+                     c->name, time, nprfx_cli_message(a->ctx));
             st = kOfxStatFailed;
         }
     }
+    /* The render time counts as fetched too: a clip the plug-in reads only at other frames must
+     * not declare the current one (frames.c). */
+    if (st == kOfxStatOK && !internal_frames_fetched(fr, time)) st = kOfxStatErrMemory;
     himage *im = NULL;
     if (st == kOfxStatOK && !(im = pack_input(ni, k, &view, time))) st = kOfxStatErrMemory;
     pthread_mutex_unlock(&h->lock);

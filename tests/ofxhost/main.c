@@ -10,15 +10,21 @@
 #include "ofx_host.h"
 
 typedef struct ofx_run {
-    const char *bundle; /* --ofx */
+    const char *bundle;  /* --ofx */
+    const char *profile; /* --profile */
     nprfx_ofx_host *host;
 } ofx_run;
 
 static int ofx_option(void *user, const char *arg, const char *next)
 {
     ofx_run *o = user;
-    if (strcmp(arg, "--ofx") || !next) return 0;
-    o->bundle = next;
+    if (!next) return 0;
+    if (!strcmp(arg, "--ofx"))
+        o->bundle = next;
+    else if (!strcmp(arg, "--profile"))
+        o->profile = next;
+    else
+        return 0;
     return 2;
 }
 
@@ -29,12 +35,18 @@ static nprfx_result ofx_open(void *user, nprfx_context *ctx, int quiet,
     if (!o->bundle)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "--ofx BUNDLE is required (e.g. build/plugins/ofx/nprfx.ofx.bundle)");
-    nprfx_result r = nprfx_ofx_host_open(ctx, o->bundle, &o->host);
+    nprfx_result r = nprfx_ofx_host_open(ctx, o->bundle, o->profile, &o->host);
     if (r) return r;
     *hook = nprfx_ofx_host_hook(o->host);
-    if (!quiet)
-        fprintf(stderr, "ofx: %d plug-ins in %s\n", nprfx_ofx_host_plugin_count(o->host),
-                o->bundle);
+    if (quiet) return NPRFX_OK;
+    int n = nprfx_ofx_host_plugin_count(o->host);
+    fprintf(stderr, "ofx: %d plug-ins in %s (profile %s)\n", n, o->bundle,
+            nprfx_ofx_host_profile(o->host));
+    /* Once here rather than at each node that uses one: a graph may not use it at all. */
+    for (int i = 0; i < n; i++) {
+        const char *reason = "", *id = nprfx_ofx_host_unavailable(o->host, i, &reason);
+        if (id) fprintf(stderr, "ofx: %s is not available in this host: %s\n", id, reason);
+    }
     return NPRFX_OK;
 }
 
@@ -47,10 +59,12 @@ static void ofx_close(void *user)
 
 static void usage(FILE *f)
 {
-    fprintf(f, "nprfx-ofxtest — the nprfx runner with every node rendered through the plug-ins of "
-               "an OpenFX\nbundle, in a minimal test host\n\n"
-               "usage: nprfx-ofxtest run GRAPH.json --ofx BUNDLE [options of nprfx run]\n\n"
-               "'nprfx-ofxtest run --help' lists the options.\n");
+    fprintf(f,
+            "nprfx-ofxtest — the nprfx runner with every node rendered through the plug-ins of "
+            "an OpenFX\nbundle, in a minimal test host\n\n"
+            "usage: nprfx-ofxtest run GRAPH.json --ofx BUNDLE [--profile NAME] [options of nprfx "
+            "run]\n\n"
+            "'nprfx-ofxtest run --help' lists the options.\n");
 }
 
 int main(int argc, char **argv)
@@ -63,11 +77,13 @@ int main(int argc, char **argv)
         fprintf(stderr, "nprfx-ofxtest: unknown command '%s' (the only one is run)\n", argv[1]);
         return 2;
     }
-    ofx_run o = {NULL, NULL};
+    ofx_run o = {NULL, NULL, NULL};
     const nprfx_run_extension ext = {
         "nprfx-ofxtest",
         "  --ofx BUNDLE        render every node through the OpenFX plug-ins of BUNDLE\n"
-        "                      (nprfx.ofx.bundle) in a minimal test host; same pixels (required)\n",
+        "                      (nprfx.ofx.bundle) in a minimal test host; same pixels (required)\n"
+        "  --profile NAME      behave as this host does (tests/ofxhost/profile.c): strict (the\n"
+        "                      default), natron (Natron 2.5), mlt (MLT 7, 8-bit), mlt16 (16-bit)\n",
         ofx_option,
         ofx_open,
         ofx_close,

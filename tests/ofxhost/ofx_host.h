@@ -7,7 +7,9 @@
  * (checking that each param's type, default and ranges match the node's descriptor), creates
  * one instance per graph node, sets params and channel selectors from the graph, serves clip
  * images from the runner's inputs (at other times through the runner's fetch), and copies the
- * rendered window back. It is a test program, never part of the shipped runner. */
+ * rendered window back. A profile (--profile) makes it behave as a real host does where hosts
+ * differ (contexts, pixel depths, temporal access, message formatting; profile.c). It is a test
+ * program, never part of the shipped runner. */
 #ifndef NPRFX_TESTS_OFX_HOST_H
 #define NPRFX_TESTS_OFX_HOST_H
 
@@ -17,11 +19,18 @@
 typedef struct nprfx_ofx_host nprfx_ofx_host;
 
 /* Load BUNDLE (an "X.ofx.bundle" folder or the .ofx binary inside it), load and describe all its
- * plug-ins. Errors go to ctx; its executor backs the multithread suite. One host per process. */
-nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, nprfx_ofx_host **out);
+ * plug-ins as the host of `profile` would (profile.c: strict, natron, mlt, mlt16; NULL: strict).
+ * Errors go to ctx; its executor backs the multithread suite. One host per process. */
+nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, const char *profile,
+                                 nprfx_ofx_host **out);
 
 /* Number of plug-ins the bundle exports. */
 int nprfx_ofx_host_plugin_count(const nprfx_ofx_host *h);
+/* The profile's name. */
+const char *nprfx_ofx_host_profile(const nprfx_ofx_host *h);
+/* The identifier of plug-in i when it is unavailable in this host (refused to load, or has no
+ * context the host supports), with the reason; NULL when it is available. */
+const char *nprfx_ofx_host_unavailable(const nprfx_ofx_host *h, int i, const char **reason);
 
 /* The hook to pass in nprfx_graph_options.hook; valid until the host is closed. */
 const nprfx_render_hook *nprfx_ofx_host_hook(nprfx_ofx_host *h);

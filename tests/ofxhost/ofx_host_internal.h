@@ -2,8 +2,10 @@
  * behind the handles, the host and the per-graph-node instance, and the functions one file
  * defines for the others (prefixed internal_). ofx_host.h is the host's interface; props.c has
  * the property sets, image_effect.c the objects and the image effect suite, params.c the
- * parameter suite, host_suites.c the other suites, bundle.c the loading and describing of the
- * plug-ins, render.c the instances and the graph's render hook, main.c the command line.
+ * parameter suite, messages.c the message suites, host_suites.c the other suites, bundle.c the
+ * loading and describing of the plug-ins, render.c the instances and the graph's render hook,
+ * frames.c the frames-needed bookkeeping, pixels.c the pixel depths, profile.c the host
+ * profiles, main.c the command line.
  *
  * Objects. Every handle the plug-in sees points at an hprops (a property set) or at a struct
  * that starts with one, tagged with a kind, so a wrong handle is caught instead of read as
@@ -13,8 +15,10 @@
  * Strictness. The host is lenient where hosts differ (unknown properties may be set) and strict
  * where a mistake in the adapter would go unnoticed in a real host: getting a property of the
  * wrong type, describing params that do not match the node descriptor, fetching a frame the
- * plug-in did not declare in getFramesNeeded, a region of definition other than the frame, or
- * an image not released by the end of an action all fail. */
+ * plug-in did not declare in getFramesNeeded, declaring frames it does not fetch (first render)
+ * or frames on an unconnected clip, a region of definition other than the frame, an image not
+ * released by the end of an action, or a failed action whose error message is empty all fail,
+ * whatever the profile. */
 #ifndef NPRFX_TESTS_OFX_HOST_INTERNAL_H
 #define NPRFX_TESTS_OFX_HOST_INTERNAL_H
 
@@ -108,7 +112,7 @@ typedef struct heffect {
 
 typedef struct himage {
     hprops props;
-    float *pixels;        /* owned; NULL for the output image, which points into its node's */
+    void *pixels;         /* owned; NULL for the output image, which points into its node's */
     struct node_inst *ni; /* whose render handed it out */
 } himage;
 
@@ -141,31 +145,87 @@ extern const OfxParameterSuiteV1 internal_parameter_suite;
 
 /* ---- the host (bundle.c) --------------------------------------------------------------------- */
 
+/* ---- host profiles (profile.c) --------------------------------------------------------------- */
+
+typedef enum hdepth { HD_FLOAT, HD_BYTE, HD_SHORT } hdepth;
+
+/* What a real host does that the adapter must cope with (nprfx-ofxtest run --profile NAME). */
+typedef struct hprofile {
+    const char *name, *like; /* --profile NAME; the host it imitates, for messages */
+    int general, filter;     /* the contexts the host instantiates plug-ins in */
+    int temporal;            /* kOfxImageEffectPropTemporalClipAccess: fetches at other times */
+    int multires;            /* render scales other than 1 */
+    int alpha;               /* Alpha images; else every image is RGBA */
+    hdepth depth;            /* every image handed out has this depth, whatever the plug-in asked */
+    int message_v2;          /* offers kOfxMessageSuite version 2 */
+    int lossy_messages;      /* formats messages without their arguments (Natron 2.5) */
+} hprofile;
+
+/* The profile called name, or NULL; the names, for messages ("strict, natron, ..."). */
+const hprofile *internal_profile_find(const char *name);
+const char *internal_profile_names(void);
+/* The host's property set as the profile's host describes itself. */
+void internal_profile_host_props(const hprofile *pf, OfxPropertySetHandle p);
+
+/* ---- the host (bundle.c) --------------------------------------------------------------------- */
+
+#define HMSG 1024
+
 typedef struct hplugin {
     OfxPlugin *p;
     const nprfx_node_desc *desc; /* the node of this binary with the same identifier, or NULL */
     int loaded;
     heffect *descriptor, *general, *filter;
+    /* Not usable in this host: it refused to load (kOfxStatErrMissingHostFeature from an action
+     * of loading or describing), or offers no context the host supports; reason says why, as
+     * the plug-in posted it while loading, or as the host found it. */
+    int unavailable;
+    char reason[HMSG];
 } hplugin;
 
 struct nprfx_ofx_host {
     nprfx_context *ctx;
     const nprfx_executor *exec;
+    const hprofile *profile;
     char *bundle, *binary;
     void *dl;
     int nplugins;
     hplugin *plugins;
+    hplugin *loading; /* the plug-in being loaded and described: its messages are its reason */
     hprops props;
     OfxHost ofx;
     nprfx_render_hook hook;
-    pthread_mutex_t lock; /* clip image requests: the runner's fetch is not thread-safe */
-    char message[1024];   /* the plug-in's last error message */
+    pthread_mutex_t lock; /* clip image requests and messages: the runner's fetch is not
+                             thread-safe */
+    char message[HMSG];   /* the last message posted with no instance handle (NULL handle) */
+    unsigned message_seq; /* counts those, so a render knows whether one came during it */
     int instances;
 };
 
 /* Suite functions get no user pointer: they reach the host through this, and one host per
  * process keeps that unambiguous. */
 extern nprfx_ofx_host *internal_g_host; /* bundle.c */
+
+/* ---- frames needed and fetched (frames.c) ---------------------------------------------------- */
+
+/* One input clip's frames: the [lo, hi] pairs getFramesNeeded declared for the render in flight
+ * (several pairs may be given) and the integer frames fetched since the counts were reset. */
+typedef struct hframes {
+    double *decl;
+    int ndecl;
+    int *fetched;
+    int nfetched, cap;
+} hframes;
+
+void internal_frames_free(hframes *f);
+/* Replace the declared pairs (n values: lo, hi, lo, hi...); 0 pairs declare the frame itself. */
+int internal_frames_declare(hframes *f, const double *v, int n, double time);
+/* Whether time lies in a declared pair. */
+int internal_frames_allows(const hframes *f, double time);
+/* Record a fetch at time (rounded to a frame); 0: out of memory. */
+int internal_frames_fetched(hframes *f, double time);
+/* Declared set == fetched set; else writes "declared 1-3, fetched 1" into why. */
+int internal_frames_match(const hframes *f, char *why, size_t n);
 
 /* Per graph node: the instance and what the render in flight needs. */
 typedef struct node_inst {
@@ -175,14 +235,23 @@ typedef struct node_inst {
     const nprfx_node_desc *desc;
     const nprfx_render_args *args; /* set while the runner renders this node */
     int frame_flip;                /* y_up = frame_flip - y_down for frame-aligned images */
-    double *need_lo, *need_hi;     /* per input: the frames getFramesNeeded declared */
+    int filter;                    /* instantiated in the Filter context */
+    hframes *frames;               /* per input: frames declared and fetched (frames.c) */
     int began;                     /* beginSequenceRender sent */
     int *in_comps;                 /* per input clip: 4 RGBA, 1 Alpha */
     int out_comps;                 /* Output clip components: 4 RGBA, 1 Alpha */
-    float *out_pixels;             /* the output image of the render in flight */
+    void *out_pixels;              /* the output image of the render in flight, host depth */
     OfxRectI out_bounds;
     int out_row_bytes;
     int images; /* images handed out and not yet released */
+    /* Messages the plug-in posted with this instance's handle: the last one during the render
+     * in flight (posted: how many), and the persistent one until cleared; the host's own
+     * complaint about a request of this render (a frame it refused to serve). */
+    char posted[HMSG];
+    int nposted;
+    char persistent[HMSG];
+    char host_error[HMSG];
+    unsigned message_seq; /* the host's message_seq when the render began */
 } node_inst;
 
 /* Send an action to a plug-in. */
@@ -193,6 +262,23 @@ OfxStatus internal_call(hplugin *pl, const char *action, const void *handle, hpr
 
 /* The host's fetchSuite. */
 const void *internal_fetch_suite(OfxPropertySetHandle host, const char *name, int version);
+
+/* Host image memory and depth conversion (pixels.c): bytes per component of a depth, its OFX
+ * name, and components stored and loaded as floats (byte: v * 255 rounded and clamped, short:
+ * v * 65535 likewise, float: as is). */
+size_t internal_depth_size(hdepth d);
+const char *internal_depth_name(hdepth d);
+void internal_depth_store(hdepth d, void *dst, size_t i, float v);
+float internal_depth_load(hdepth d, const void *src, size_t i);
+
+/* The message suites (messages.c): version 1, and 2 where the profile offers it. */
+const void *internal_message_suite(const hprofile *pf, int version);
+/* The error of a failed action of ni (what: "render failed (OFX status 1)"): the plug-in's
+ * message, with the host's complaint when it has one; a loud error when the plug-in's message
+ * is empty or none came. */
+nprfx_result internal_failure(node_inst *ni, nprfx_context *ctx, const char *what);
+/* Forget the messages of the previous action (before a render). */
+void internal_messages_reset(node_inst *ni);
 
 /* The hook's functions (nprfx_render_hook): render a window of a graph node through its plug-in
  * instance, created at its first render; destroy the instance. */

@@ -1,8 +1,10 @@
 /* nprfx OpenFX test host — render driving, the graph's render hook: a plug-in instance per graph
- * node created at its first render, params and channel selectors synced from the graph with the
- * instance-changed actions of an edit, clip preferences, the region and frame queries a host
- * makes, begin/endSequenceRender, then render of the window into a whole-frame output image
- * that is copied back; release destroys the instance. */
+ * node created at its first render in the context the profile picks, params and channel
+ * selectors synced from the graph with the instance-changed actions of an edit, clip
+ * preferences, the region and frame queries a host makes, begin/endSequenceRender, then render
+ * of the window into a whole-frame output image in the profile's depth that is converted back;
+ * on the first render the frames fetched are checked against the frames declared; a failure
+ * carries the plug-in's message (messages.c); release destroys the instance. */
 #define _POSIX_C_SOURCE 200809L /* strdup */
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,8 +19,9 @@ static void inst_free(node_inst *ni)
     if (!ni) return;
     internal_effect_free(ni->fx);
     free(ni->in_comps);
-    free(ni->need_lo);
-    free(ni->need_hi);
+    for (int k = 0; ni->frames && ni->desc && k < ni->desc->num_inputs; k++)
+        internal_frames_free(&ni->frames[k]);
+    free(ni->frames);
     free(ni);
 }
 
@@ -32,19 +35,47 @@ static hplugin *find_plugin(nprfx_ofx_host *h, const nprfx_node_desc *d)
     return NULL;
 }
 
-/* The instance of a graph node, created at its first render from the General context: clips
- * connected as the graph connects the node's inputs, params at their defaults. */
+/* The context of a new instance. Strict: Filter when the plug-in offers it and only the main
+ * input is connected (as a host would for a plain filter), so both contexts get exercised;
+ * General otherwise. Natron: General always. MLT: Filter always, so a node with another input
+ * connected cannot be built there. Returns 1 for Filter, 0 for General, -1 (error raised). */
+static int choose_context(nprfx_ofx_host *h, hplugin *pl, const nprfx_render_args *a)
+{
+    const nprfx_node_desc *d = a->node;
+    int main = nprfx_ofx_main_input(d), only_main = 1;
+    for (int k = 0; k < d->num_inputs; k++)
+        only_main &= k == main || !a->inputs[k].data;
+    if (!h->profile->filter) return 0;
+    if (h->profile->general) return pl->filter && only_main;
+    for (int k = 0; k < d->num_inputs; k++)
+        if (k != main && a->inputs[k].data) {
+            nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
+                        "%s: this host (%s) has only the Filter context, whose one input clip is "
+                        "Source ('%s'): input '%s' cannot be connected",
+                        pl->p->pluginIdentifier, h->profile->like, d->inputs[main].name,
+                        d->inputs[k].name);
+            return -1;
+        }
+    return 1;
+}
+
+/* The instance of a graph node, created at its first render in the context the profile picks:
+ * clips connected as the graph connects the node's inputs, params at their defaults. */
 static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, node_inst **out)
 {
     const nprfx_node_desc *d = a->node;
     hplugin *pl = find_plugin(h, d);
-    if (!pl || !pl->general)
+    if (!pl)
         return nprfx_error(a->ctx, NPRFX_ERR_UNKNOWN_NODE, "the bundle %s has no plug-in for %s",
                            h->bundle, d->id);
+    if (pl->unavailable)
+        return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED, "%s is not available in this host: %s",
+                           pl->p->pluginIdentifier, pl->reason);
+    int filter = choose_context(h, pl, a);
+    if (filter < 0) return NPRFX_ERR_UNSUPPORTED;
     node_inst *ni = calloc(1, sizeof *ni);
     size_t ni_n = (size_t)d->num_inputs + 1;
-    if (!ni || !(ni->need_lo = calloc(ni_n, sizeof(double))) ||
-        !(ni->need_hi = calloc(ni_n, sizeof(double))) ||
+    if (!ni || !(ni->frames = calloc(ni_n, sizeof *ni->frames)) ||
         !(ni->in_comps = calloc(ni_n, sizeof(int))) ||
         !(ni->fx = internal_effect_new(pl, kOfxTypeImageEffectInstance))) {
         inst_free(ni);
@@ -54,11 +85,8 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, n
     ni->pl = pl;
     ni->desc = d;
     ni->out_comps = 4;
-    /* The Filter context when the plug-in offers it and only the main input is connected (as
-     * a host would for a plain filter), so both contexts get exercised; General otherwise. */
-    int main = nprfx_ofx_main_input(d), filter = pl->filter != NULL;
-    for (int k = 0; k < d->num_inputs; k++)
-        filter &= k == main || !a->inputs[k].data;
+    ni->filter = filter;
+    const hprofile *pf = h->profile;
     heffect *e = ni->fx, *src = filter ? pl->filter : pl->general;
     OfxStatus st = internal_props_copy(&e->props, &src->props);
     OfxPropertySetHandle ep = (OfxPropertySetHandle)&e->props;
@@ -99,8 +127,10 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, n
                 c->input = k;
                 connected = a->inputs[k].data != NULL;
                 /* A 1-channel main input comes as Alpha, the other inputs as RGBA: both kinds
-                 * of host image reach the adapter, and a 1-channel result goes out as Alpha. */
-                alpha = connected && k == nprfx_ofx_main_input(d) && a->inputs[k].channels == 1;
+                 * of host image reach the adapter, and a 1-channel result goes out as Alpha
+                 * (where the profile's host has Alpha images). */
+                alpha = connected && pf->alpha && k == nprfx_ofx_main_input(d) &&
+                        a->inputs[k].channels == 1;
                 ni->in_comps[k] = alpha ? 1 : 4;
             }
         }
@@ -111,10 +141,9 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, n
                                        : kOfxImageComponentRGBA;
         internal_set_string(cp, kOfxImageEffectPropComponents, 0, comps);
         internal_set_string(cp, kOfxImageClipPropUnmappedComponents, 0, comps);
-        internal_set_string(cp, kOfxImageEffectPropPixelDepth, 0,
-                            connected ? kOfxBitDepthFloat : kOfxBitDepthNone);
-        internal_set_string(cp, kOfxImageClipPropUnmappedPixelDepth, 0,
-                            connected ? kOfxBitDepthFloat : kOfxBitDepthNone);
+        const char *depth = connected ? internal_depth_name(pf->depth) : kOfxBitDepthNone;
+        internal_set_string(cp, kOfxImageEffectPropPixelDepth, 0, depth);
+        internal_set_string(cp, kOfxImageClipPropUnmappedPixelDepth, 0, depth);
         internal_set_string(cp, kOfxImageEffectPropPreMultiplication, 0, kOfxImageUnPreMultiplied);
         internal_set_double(cp, kOfxImagePropPixelAspectRatio, 0, 1.0);
         internal_set_double(cp, kOfxImageEffectPropFrameRate, 0, 24.0);
@@ -154,12 +183,15 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, n
     }
     ni->args = a;
     ni->frame_flip = a->frame.y0 + a->frame.y1 - 1;
+    internal_messages_reset(ni);
     st = internal_call(pl, kOfxActionCreateInstance, e, NULL, NULL);
     ni->args = NULL;
     if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+        char what[64];
+        snprintf(what, sizeof what, "createInstance failed (OFX status %d)", st);
+        nprfx_result r = internal_failure(ni, a->ctx, what);
         inst_free(ni);
-        return nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: createInstance failed (%d): %s",
-                           pl->p->pluginIdentifier, st, h->message);
+        return r;
     }
     h->instances++;
     *out = ni;
@@ -288,7 +320,9 @@ static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int f
             snprintf(key, sizeof key, "%s%s", kOfxImageClipPropComponentsPrefix,
                      NPRFX_OFX_OUTPUT_CLIP);
             const char *comps = internal_pstr(&out, key, 0, kOfxImageComponentRGBA);
-            ni->out_comps = !strcmp(comps, kOfxImageComponentAlpha) ? 1 : 4;
+            /* A host without Alpha images keeps the output RGBA whatever the plug-in asks. */
+            ni->out_comps =
+                !strcmp(comps, kOfxImageComponentAlpha) && ni->h->profile->alpha ? 1 : 4;
             hclip *oc = internal_effect_clip(e, NPRFX_OFX_OUTPUT_CLIP);
             internal_set_string((OfxPropertySetHandle)&oc->props, kOfxImageEffectPropComponents, 0,
                                 ni->out_comps == 1 ? kOfxImageComponentAlpha
@@ -352,24 +386,74 @@ static nprfx_result query_regions(node_inst *ni, const nprfx_render_args *a)
         r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: getFramesNeeded failed (%d)", id, st);
         goto done;
     }
+    /* Frames on a clip that is not connected are a plan for nothing: a host may act on them
+     * (Nuke pre-fetches them), so the declaration must be exact. */
+    size_t plen = strlen(kOfxImageClipPropFrameRangePrefix);
+    for (int i = 0; st == kOfxStatOK && i < out.count; i++) {
+        const char *key = out.items[i].name;
+        if (strncmp(key, kOfxImageClipPropFrameRangePrefix, plen)) continue;
+        hclip *c = internal_effect_clip(e, key + plen);
+        if (!c || c->input < 0 || !a->inputs[c->input].data) {
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL,
+                            "%s: getFramesNeeded declares frames on unconnected clip %s", id,
+                            key + plen);
+            goto done;
+        }
+    }
     char key[NPRFX_OFX_NAME_MAX + 32], name[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
         nprfx_ofx_clip_name(d, k, name, sizeof name);
         snprintf(key, sizeof key, "%s%s", kOfxImageClipPropFrameRangePrefix, name);
         int n = st == kOfxStatOK ? internal_pdim(&out, key) : 0;
-        ni->need_lo[k] = ni->need_hi[k] = a->time; /* the default: the frame itself */
-        for (int j = 0; j + 1 < n; j += 2) {
-            double lo = a->time, hi = a->time;
-            internal_get_double((OfxPropertySetHandle)&out, key, j, &lo);
-            internal_get_double((OfxPropertySetHandle)&out, key, j + 1, &hi);
-            if (lo < ni->need_lo[k]) ni->need_lo[k] = lo;
-            if (hi > ni->need_hi[k]) ni->need_hi[k] = hi;
+        double v[64];
+        if (n > 64) n = 64;
+        if (n % 2 || (n && internal_get_double_n((OfxPropertySetHandle)&out, key, n, v)) ||
+            !internal_frames_declare(&ni->frames[k], v, n, a->time)) {
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL,
+                            "%s: getFramesNeeded: %s is not a list of "
+                            "[lo, hi] pairs",
+                            id, key);
+            goto done;
         }
     }
 done:
     internal_props_free(&in);
     internal_props_free(&out);
     return r;
+}
+
+/* The output channels of the runner from the host image's components at pixel px: one each,
+ * the first four. A node with more channels than RGBA has one case so far, stipple's 'coverage'
+ * (5 channels: R, G, B, A, coverage), which the adapter hands out as R, G, B and the coverage in
+ * A, so that a host that composites it sees the dots and where they are; here channels 0-2 come
+ * from R, G, B, channel 4 (coverage) from A, and channel 3 (the runner's alpha, which the host
+ * image does not carry) from A as well. A test compares R, G, B and coverage with the runner's
+ * (tests/cli/ofx_profiles.sh); channel 3 is not comparable. */
+static void unpack_pixel(const node_inst *ni, const void *pixels, size_t px, float *d, int nout)
+{
+    hdepth depth = ni->h->profile->depth;
+    int nc = ni->out_comps;
+    for (int c = 0; c < nout && c < nc; c++)
+        d[c] = internal_depth_load(depth, pixels, px * (size_t)nc + (size_t)c);
+    for (int c = nc; c < nout; c++)
+        d[c] = internal_depth_load(depth, pixels, px * (size_t)nc + (size_t)(nc - 1));
+}
+
+/* On an instance's first render (no cache yet), every connected input must have been fetched at
+ * exactly the frames getFramesNeeded declared (frames.c). */
+static nprfx_result check_frames(node_inst *ni, const nprfx_render_args *a)
+{
+    const nprfx_node_desc *d = ni->desc;
+    char why[600], name[NPRFX_OFX_NAME_MAX];
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (!a->inputs[k].data || internal_frames_match(&ni->frames[k], why, sizeof why)) continue;
+        nprfx_ofx_clip_name(d, k, name, sizeof name);
+        return nprfx_error(a->ctx, NPRFX_ERR_INTERNAL,
+                           "%s: frames needed differ from frames fetched on clip %s at frame %g "
+                           "(first render): %s",
+                           ni->pl->p->pluginIdentifier, name, a->time, why);
+    }
+    return NPRFX_OK;
 }
 
 nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void **slot)
@@ -384,11 +468,18 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
         first = 1;
     }
     const char *id = ni->pl->p->pluginIdentifier;
-    h->message[0] = 0;
     ni->args = a;
     ni->frame_flip = a->frame.y0 + a->frame.y1 - 1;
+    internal_messages_reset(ni);
+    for (int k = 0; k < ni->desc->num_inputs; k++)
+        ni->frames[k].nfetched = 0;
     if ((r = sync_params(ni, a, first)) || (r = query_regions(ni, a))) goto done;
     double s = a->render_scale;
+    if (s != 1.0 && !h->profile->multires) {
+        r = nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED, "%s: this host (%s) renders at scale 1 only",
+                        id, h->profile->like);
+        goto done;
+    }
     hprops in;
     internal_props_init(&in, K_PLAIN);
     OfxPropertySetHandle ip = (OfxPropertySetHandle)&in;
@@ -403,21 +494,23 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
             internal_call(ni->pl, kOfxImageEffectActionBeginSequenceRender, ni->fx, &in, NULL);
         if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
             internal_props_free(&in);
-            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: beginSequenceRender failed (%d)", id,
-                            st);
+            char what[64];
+            snprintf(what, sizeof what, "beginSequenceRender failed (OFX status %d)", st);
+            r = internal_failure(ni, a->ctx, what);
             goto done;
         }
         ni->began = 1;
     }
     /* The output image covers the whole frame while the window may be one tile, so the adapter
-     * meets bounds that differ from the render window. */
+     * meets bounds that differ from the render window. It has the profile's depth. */
+    hdepth depth = h->profile->depth;
+    size_t es = internal_depth_size(depth);
     OfxRectI ob = internal_ofx_rect(a->frame, ni->frame_flip);
     OfxRectI win = internal_ofx_rect(a->window, ni->frame_flip);
     int w = ob.x2 - ob.x1, hgt = ob.y2 - ob.y1;
     ni->out_bounds = ob;
-    ni->out_row_bytes = w * ni->out_comps * (int)sizeof(float);
-    ni->out_pixels =
-        calloc((size_t)w * (size_t)(hgt > 0 ? hgt : 1) * (size_t)ni->out_comps, sizeof(float));
+    ni->out_row_bytes = w * ni->out_comps * (int)es;
+    ni->out_pixels = calloc((size_t)w * (size_t)(hgt > 0 ? hgt : 1) * (size_t)ni->out_comps, es);
     if (!ni->out_pixels) {
         internal_props_free(&in);
         r = nprfx_error(a->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
@@ -433,8 +526,9 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
     OfxStatus st = internal_call(ni->pl, kOfxImageEffectActionRender, ni->fx, &in, NULL);
     internal_props_free(&in);
     if (st != kOfxStatOK) {
-        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s render failed (OFX status %d)%s%s", id, st,
-                        h->message[0] ? ": " : "", h->message);
+        char what[64];
+        snprintf(what, sizeof what, "render failed (OFX status %d)", st);
+        r = internal_failure(ni, a->ctx, what);
         goto done;
     }
     if (ni->images) {
@@ -442,6 +536,7 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
                         ni->images);
         goto done;
     }
+    if (first && (r = check_frames(ni, a))) goto done;
     int nout = a->output->channels;
     if (ni->out_comps == 1 && nout != 1) {
         r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: Alpha output for %d channels", id, nout);
@@ -449,18 +544,13 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
     }
     for (int y = a->window.y0; y < a->window.y1; y++)
         for (int x = a->window.x0; x < a->window.x1; x++) {
-            const float *s_px = ni->out_pixels + ((size_t)(ni->frame_flip - y - ob.y1) * (size_t)w +
-                                                  (size_t)(x - ob.x1)) *
-                                                     (size_t)ni->out_comps;
-            float *d_px = nprfx_image_at(a->output, x, y);
-            for (int c = 0; c < nout && c < 4; c++)
-                d_px[c] = s_px[c];
+            size_t px = (size_t)(ni->frame_flip - y - ob.y1) * (size_t)w + (size_t)(x - ob.x1);
+            unpack_pixel(ni, ni->out_pixels, px, nprfx_image_at(a->output, x, y), nout);
         }
 done:
     free(ni->out_pixels);
     ni->out_pixels = NULL;
     ni->args = NULL;
-    (void)first;
     return r;
 }
 

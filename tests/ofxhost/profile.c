@@ -1,0 +1,65 @@
+/* nprfx OpenFX test host — host profiles (`nprfx-ofxtest run --profile NAME`): the ways real hosts
+ * differ that have broken, or could break, the adapter, so that CI meets them before users do.
+ *
+ *   strict  the default: both contexts (Filter where only the main input is connected), float
+ *           RGBA and Alpha images, temporal clip access, render scales, message suites 1 and 2
+ *           formatting their arguments; the strict checks of ofx_host_internal.h.
+ *   natron  Natron 2.5: the General context always (named clips even where Filter would fit),
+ *           float images, render scale 1, temporal clip access, message suites 1 and 2 whose
+ *           formatting loses the variadic arguments (Natron forwards its va_list into a second
+ *           variadic formatter: "%s" comes out empty, "%%" as "%").
+ *   mlt     MLT 7's OpenFX module (Kdenlive, Shotcut): the Filter context only (Source clip
+ *           only), no temporal clip access, 8-bit RGBA images whatever getClipPreferences asked,
+ *           message suite 1 only, formatting correctly.
+ *   mlt16   mlt with 16-bit images.
+ *
+ * The strict checks (frames needed equal to frames fetched, non-empty error messages, ...) hold
+ * in every profile. */
+#include <string.h>
+
+#include "ofx_host_internal.h"
+
+static const hprofile profiles[] = {
+    /* name, like, general, filter, temporal, multires, alpha, depth, message_v2, lossy */
+    {"strict", "the strict test host", 1, 1, 1, 1, 1, HD_FLOAT, 1, 0},
+    {"natron", "Natron 2.5", 1, 0, 1, 0, 1, HD_FLOAT, 1, 1},
+    {"mlt", "MLT 7 (8-bit)", 0, 1, 0, 0, 0, HD_BYTE, 0, 0},
+    {"mlt16", "MLT 7 (16-bit)", 0, 1, 0, 0, 0, HD_SHORT, 0, 0},
+};
+
+const hprofile *internal_profile_find(const char *name)
+{
+    for (size_t i = 0; name && i < sizeof profiles / sizeof profiles[0]; i++)
+        if (!strcmp(profiles[i].name, name)) return &profiles[i];
+    return NULL;
+}
+
+const char *internal_profile_names(void)
+{
+    return "strict, natron, mlt, mlt16";
+}
+
+void internal_profile_host_props(const hprofile *pf, OfxPropertySetHandle p)
+{
+    int n = 0;
+    if (pf->general)
+        internal_set_string(p, kOfxImageEffectPropSupportedContexts, n++,
+                            kOfxImageEffectContextGeneral);
+    if (pf->filter)
+        internal_set_string(p, kOfxImageEffectPropSupportedContexts, n++,
+                            kOfxImageEffectContextFilter);
+    internal_set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, pf->temporal);
+    internal_set_int(p, kOfxImageEffectPropSupportsMultiResolution, 0, pf->multires);
+    n = 0;
+    internal_set_string(p, kOfxImageEffectPropSupportedComponents, n++, kOfxImageComponentRGBA);
+    if (pf->alpha)
+        internal_set_string(p, kOfxImageEffectPropSupportedComponents, n++,
+                            kOfxImageComponentAlpha);
+    /* MLT lists both integer depths whichever one it hands out. */
+    if (pf->depth == HD_FLOAT) {
+        internal_set_string(p, kOfxImageEffectPropSupportedPixelDepths, 0, kOfxBitDepthFloat);
+    } else {
+        internal_set_string(p, kOfxImageEffectPropSupportedPixelDepths, 0, kOfxBitDepthByte);
+        internal_set_string(p, kOfxImageEffectPropSupportedPixelDepths, 1, kOfxBitDepthShort);
+    }
+}
