@@ -100,7 +100,7 @@ typedef struct nprfx_pam_build_params {
     double k;      /* Eq. 7: one in-between step per k of mean intensity (Y * 255), > 0 */
     int align;     /* 1: rotate each sample so its dominant stroke direction (structure tensor)
                     * is vertical, along v (§4.1, §5.3); 0: use the samples as they are */
-    int css_links; /* the most CSS links kept per patch (Eq. 3), >= 1 */
+    int css_links; /* the most CSS links kept per patch (Eq. 3), 1..32 */
     double css_tolerance; /* links: S_css <= (1 + tolerance) * the best S_css of the patch */
     double tolerance;     /* the first key map's coarsest level: a random block among those whose
                            * overlap error is within (1 + tolerance) of the best (quilting) */
