@@ -83,8 +83,9 @@ nprfx_result internal_pam_overlap_costs(nprfx_context *ctx, const internal_pam_l
                                         const internal_pam_img *src, int t, const int *cx,
                                         const int *cy, int nc, double *cost);
 /* Paste the source block at (qx, qy) on tile t, cut along minimum-error seams (dynamic
- * programming, Efros & Freeman 2001) through each overlap strip that is already filled, and
- * record the choice. */
+ * programming, Efros & Freeman 2001) through each overlap strip that is already filled (left and
+ * top; right and bottom across the wrap), cross-faded over two pixels at the cut, and record the
+ * choice. */
 nprfx_result internal_pam_paste(nprfx_context *ctx, internal_pam_level *lv,
                                 const internal_pam_img *src, int t, int qx, int qy);
 

@@ -27,7 +27,15 @@
 /* Rotate, measure, rotate again: two passes bring the crop within about a degree of vertical. */
 #define ALIGN_PASSES 2
 
-enum { STREAM_PICK = 1 };
+/* A candidate that copies (part of) the source block of a tile placed within REUSE_RADIUS tiles
+ * has its overlap error multiplied by 1 + REUSE_PENALTY: the best match of a tile is often the
+ * block its neighbour took (a flat patch of ground matches flat ground), and repeating it is what
+ * made the quilt read as recurring blocks. The natural continuation (the neighbour's block moved
+ * by one tile) does not overlap it and stays free. */
+#define REUSE_RADIUS 2
+#define REUSE_PENALTY 1.0
+
+enum { STREAM_PICK = 1, STREAM_FOLLOW_LINK = 2, STREAM_FOLLOW_ROUTE = 3 };
 
 typedef struct level_geom {
     int tile, overlap, block;
@@ -154,6 +162,48 @@ static int argmin(const double *c, int n)
     return k;
 }
 
+/* Raise the costs of candidates that reuse the source of an already placed tile nearby (raster
+ * order with the wrap: a tile is placed when its index is below t). */
+static void penalise_reuse(const internal_pam_level *lv, int t, const int *cx, const int *cy,
+                           int nc, double *cost)
+{
+    int n = lv->n, i = t % n, j = t / n;
+    int near[(2 * REUSE_RADIUS + 1) * (2 * REUSE_RADIUS + 1)], m = 0;
+    for (int dj = -REUSE_RADIUS; dj <= REUSE_RADIUS; dj++)
+        for (int di = -REUSE_RADIUS; di <= REUSE_RADIUS; di++) {
+            int o = ((j + dj + n) % n) * n + (i + di + n) % n;
+            int dup = 0;
+            for (int k = 0; k < m; k++)
+                dup |= near[k] == o;
+            if (o < t && !dup) near[m++] = o;
+        }
+    for (int c = 0; c < nc; c++)
+        for (int k = 0; k < m; k++)
+            if (abs(cx[c] - lv->qx[near[k]]) < lv->tile &&
+                abs(cy[c] - lv->qy[near[k]]) < lv->tile) {
+                cost[c] *= 1.0 + REUSE_PENALTY;
+                break;
+            }
+}
+
+/* Quilting's randomness: one of the candidates whose cost is within (1 + tolerance) of the
+ * best, chosen by the hash h (counter-based, so any thread count picks the same). */
+static int choose(const double *cost, int nc, double tolerance, uint64_t h, int *pick)
+{
+    int k = argmin(cost, nc), m = 0;
+    double lim = cost[k] * (1.0 + tolerance);
+    for (int i = 0; i < nc; i++)
+        if (cost[i] <= lim) pick[m++] = i;
+    return pick[h % (uint64_t)m];
+}
+
+/* The hash of one choice: the seed, the sample, the level, the tile's position and the stream. */
+static uint64_t pick_hash(const nprfx_pam_build_params *p, int sample, int l,
+                          const internal_pam_level *lv, int t, uint32_t stream)
+{
+    return nprfx_hash(p->seed, sample, t % lv->n, t / lv->n, (uint32_t)l, stream);
+}
+
 /* Candidates around the upsampled block of tile t of the level below, clamped to src. */
 static int refine_candidates(const internal_pam_level *below, level_geom gb, level_geom g,
                              const internal_pam_img *src, int t, int *cx, int *cy)
@@ -209,16 +259,11 @@ static nprfx_result synth_first(nprfx_context *ctx, const nprfx_pam_build_params
                 nc = refine_candidates(&lv[l - 1], geom(p, l - 1), g, src, t, cx, cy);
             }
             if ((r = internal_pam_overlap_costs(ctx, &lv[l], src, t, cx, cy, nc, cost))) break;
-            int k = argmin(cost, nc);
-            if (l == 0) {
-                /* Quilting's randomness: any block within the tolerance of the best, picked by a
-                 * hash of (seed, tile), so the same seed gives the same map. */
-                int m = 0;
-                double lim = cost[k] * (1.0 + p->tolerance);
-                for (int i = 0; i < nc; i++)
-                    if (cost[i] <= lim) pick[m++] = i;
-                k = pick[nprfx_hash(p->seed, 0, t, l, 0, STREAM_PICK) % (uint64_t)m];
-            }
+            penalise_reuse(&lv[l], t, cx, cy, nc, cost);
+            /* Random among the near-best at every level: on the finer ones this is a jitter of a
+             * pixel or two around the coarse choice, which still breaks exact repeats. */
+            int k =
+                choose(cost, nc, p->tolerance, pick_hash(p, 0, l, &lv[l], t, STREAM_PICK), pick);
             r = internal_pam_paste(ctx, &lv[l], src, t, cx[k], cy[k]);
         }
     }
@@ -234,7 +279,7 @@ done:
  * *out (its image is the key map). */
 static nprfx_result synth_follow(nprfx_context *ctx, const nprfx_pam_build_params *p,
                                  const sample_pyr *a, const internal_pam_level *alv,
-                                 const sample_pyr *b, internal_pam_level *out)
+                                 const sample_pyr *b, int sample, internal_pam_level *out)
 {
     int n = p->map_size / p->patch, L = p->levels, T = n * n;
     internal_pam_level cur, prev;
@@ -243,6 +288,7 @@ static nprfx_result synth_follow(nprfx_context *ctx, const nprfx_pam_build_param
     internal_pam_links *links = malloc(sizeof *links * (size_t)T);
     int cx[INTERNAL_PAM_MAX_LINKS + REFINE_MAX], cy[INTERNAL_PAM_MAX_LINKS + REFINE_MAX];
     double cost[INTERNAL_PAM_MAX_LINKS + REFINE_MAX];
+    int pick[INTERNAL_PAM_MAX_LINKS + REFINE_MAX];
     nprfx_result r = NPRFX_OK;
     if (!links) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "pam build: out of memory");
     for (int l = 0; l < L && !r; l++) {
@@ -267,11 +313,15 @@ static nprfx_result synth_follow(nprfx_context *ctx, const nprfx_pam_build_param
             if (l > 0) nr = refine_candidates(&prev, geom(p, l - 1), g, src, t, cx + m, cy + m);
             nc += nr;
             if ((r = internal_pam_overlap_costs(ctx, &cur, src, t, cx, cy, nc, cost))) break;
-            int ks = argmin(cost, m); /* q*: the links are ordered best first, so ties follow
-                                       * the CSS */
+            penalise_reuse(&cur, t, cx, cy, nc, cost);
+            /* q*: a link among the near-best by overlap error (Eq. 4-5), and q**: the coarser
+             * level's route; each drawn like the first key map's blocks. */
+            int ks = choose(cost, m, p->tolerance,
+                            pick_hash(p, sample, l, &cur, t, STREAM_FOLLOW_LINK), pick);
             int k = ks;
             if (l > 0) {
-                int kr = m + argmin(cost + m, nr); /* q**: the coarser level's route */
+                int kr = m + choose(cost + m, nr, p->tolerance,
+                                    pick_hash(p, sample, l, &cur, t, STREAM_FOLLOW_ROUTE), pick);
                 if (w * cost[kr] < (1.0 - w) * cost[ks]) k = kr;
             }
             r = internal_pam_paste(ctx, &cur, src, t, cx[k], cy[k]);
@@ -346,7 +396,7 @@ nprfx_result nprfx_pam_build(nprfx_context *ctx, const nprfx_pam_build_params *p
     }
     for (int s = 1; s < nsamples && !r; s++) {
         internal_pam_level fin;
-        r = synth_follow(ctx, &p, &pyr[0], alv, &pyr[s], &fin);
+        r = synth_follow(ctx, &p, &pyr[0], alv, &pyr[s], s, &fin);
         if (r) break;
         keys[s] = fin.out;
         memset(&fin.out, 0, sizeof fin.out);

@@ -7,7 +7,7 @@
  * left and top boundaries constrain the right and bottom ones, which makes the map tileable (end
  * of §4.3). A block is cut along minimum-error paths through each filled overlap strip (dynamic
  * programming, as in Efros & Freeman's quilting), one of the stitching methods the paper
- * defers to. */
+ * defers to, and feathered across the cut by a pixel each side so no hard step remains. */
 #include <float.h>
 #include <stdlib.h>
 #include <string.h>
@@ -145,6 +145,24 @@ static void seam(const double *err, int b, int u0, int w, int transpose, int *cu
     }
 }
 
+/* Smooth the b x b weights w in place with [1 2 1] / 4 along rows, then columns (edges clamped). */
+static void feather(float *w, float *tmp, int b)
+{
+    for (int pass = 0; pass < 2; pass++) {
+        const float *in = pass ? tmp : w;
+        float *out = pass ? w : tmp;
+        for (int v = 0; v < b; v++)
+            for (int u = 0; u < b; u++) {
+                int lo = pass ? (v > 0 ? v - 1 : 0) : (u > 0 ? u - 1 : 0);
+                int hi = pass ? (v + 1 < b ? v + 1 : b - 1) : (u + 1 < b ? u + 1 : b - 1);
+                float m = in[v * b + u];
+                float l = pass ? in[lo * b + u] : in[v * b + lo];
+                float h = pass ? in[hi * b + u] : in[v * b + hi];
+                out[v * b + u] = 0.25f * l + 0.5f * m + 0.25f * h;
+            }
+    }
+}
+
 nprfx_result internal_pam_paste(nprfx_context *ctx, internal_pam_level *lv,
                                 const internal_pam_img *src, int t, int qx, int qy)
 {
@@ -154,8 +172,10 @@ nprfx_result internal_pam_paste(nprfx_context *ctx, internal_pam_level *lv,
     int *cut = malloc(sizeof(int) * (size_t)b);
     unsigned char *old = calloc((size_t)b * b, 1);
     unsigned char *fil = calloc((size_t)b * b, 1);
+    float *wgt = malloc(sizeof(float) * (size_t)b * b),
+          *tmp = malloc(sizeof(float) * (size_t)b * b);
     nprfx_result r = NPRFX_OK;
-    if (!err || !acc || !cut || !old || !fil) {
+    if (!err || !acc || !cut || !old || !fil || !wgt || !tmp) {
         r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "pam: out of memory");
         goto done;
     }
@@ -176,38 +196,58 @@ nprfx_result internal_pam_paste(nprfx_context *ctx, internal_pam_level *lv,
         /* A strip is cut when its middle is filled: the left/top ones by the previous tiles, the
          * right/bottom ones by the first column/row wrapped round (the tileable constraint). */
         int mid = b / 2;
+        /* The paths keep off the strip's outer line when the strip is wide enough, so the block's
+         * edge stays old and the cut (with its feather) lies wholly inside the overlap: a path on
+         * the edge would put new pixels right against the old ones outside the block. */
+        int e = O >= 3 ? 1 : 0, w = O - 2 * e;
         if (fil[mid * b + 0]) { /* left: keep old pixels left of the path */
-            seam(err, b, 0, O, 0, cut, acc);
+            seam(err, b, e, w, 0, cut, acc);
             for (int v = 0; v < b; v++)
                 for (int u = 0; u < cut[v]; u++)
                     old[v * b + u] = 1;
         }
         if (fil[mid * b + b - 1]) { /* right: old pixels right of the path */
-            seam(err, b, P, O, 0, cut, acc);
+            seam(err, b, P + e, w, 0, cut, acc);
             for (int v = 0; v < b; v++)
                 for (int u = cut[v] + 1; u < b; u++)
                     old[v * b + u] = 1;
         }
         if (fil[0 * b + mid]) { /* top: old pixels above the path */
-            seam(err, b, 0, O, 1, cut, acc);
+            seam(err, b, e, w, 1, cut, acc);
             for (int u = 0; u < b; u++)
                 for (int v = 0; v < cut[u]; v++)
                     old[v * b + u] = 1;
         }
         if (fil[(b - 1) * b + mid]) { /* bottom: old pixels below the path */
-            seam(err, b, P, O, 1, cut, acc);
+            seam(err, b, P + e, w, 1, cut, acc);
             for (int u = 0; u < b; u++)
                 for (int v = cut[u] + 1; v < b; v++)
                     old[v * b + u] = 1;
         }
     }
+    /* The new block's weight: 0 on the old side of a cut, 1 elsewhere, then softened by the 3-tap
+     * binomial across both axes so the cut is a two-pixel cross-fade instead of a hard step (a cut
+     * across a stroke would otherwise show as a notch). Only pixels already filled are blended;
+     * the rest take the new block whatever the weight. */
+    for (int i = 0; i < b * b; i++)
+        wgt[i] = old[i] && fil[i] ? 0.0f : 1.0f;
+    feather(wgt, tmp, b);
+    /* Old pixels on the block's edge stay old: the feather cannot see the pixels beyond it. */
+    for (int i = 0; i < b; i++) {
+        int edge[4] = {i, (b - 1) * b + i, i * b, i * b + b - 1};
+        for (int k = 0; k < 4; k++)
+            if (old[edge[k]] && fil[edge[k]]) wgt[edge[k]] = 0.0f;
+    }
     for (int v = 0; v < b; v++)
         for (int u = 0; u < b; u++) {
-            if (old[v * b + u] && fil[v * b + u]) continue;
+            float a = fil[v * b + u] ? wgt[v * b + u] : 1.0f;
+            if (a <= 0.0f) continue;
             int x, y;
             block_to_map(lv, t, u, v, &x, &y);
-            memcpy(internal_pam_px(&lv->out, x, y), internal_pam_px(src, qx + u, qy + v),
-                   3 * sizeof(float));
+            float *o = internal_pam_px(&lv->out, x, y);
+            const float *n = internal_pam_px(src, qx + u, qy + v);
+            for (int c = 0; c < 3; c++)
+                o[c] = a >= 1.0f ? n[c] : a * n[c] + (1.0f - a) * o[c];
             lv->filled[(size_t)y * lv->size + x] = 1;
         }
     lv->qx[t] = qx;
@@ -218,5 +258,7 @@ done:
     free(cut);
     free(old);
     free(fil);
+    free(wgt);
+    free(tmp);
     return r;
 }

@@ -109,7 +109,7 @@ typedef struct nprfx_pam_build_params {
 
 #define NPRFX_PAM_BUILD_PARAMS_DEFAULT                                                             \
     {                                                                                              \
-        sizeof(nprfx_pam_build_params), 256, 32, 5, 3, 5.0, 1, 16, 0.5, 0.1, 2008u                 \
+        sizeof(nprfx_pam_build_params), 256, 64, 16, 3, 5.0, 1, 16, 0.5, 0.1, 2008u                \
     }
 
 /* Build a PAM from nsamples >= 2 brushstroke samples (scene-linear, at least 3 channels: the

@@ -10,14 +10,14 @@
 #include "nprfx/exec.h"
 #include "nprfx/pam.h"
 
-#define N 128 /* samples; the maps are 64 x 64 with 16-pixel patches */
+#define N 128 /* samples; the maps are 64 x 64 with 16-pixel patches (the seam test: defaults) */
 
 static nprfx_pam_build_params small_params(void)
 {
     nprfx_pam_build_params p = NPRFX_PAM_BUILD_PARAMS_DEFAULT;
     p.map_size = 64;
     p.patch = 16;
-    p.overlap = 3;
+    p.overlap = 4;
     p.levels = 3;
     return p;
 }
@@ -56,6 +56,37 @@ static void seam_errors(const nprfx_image *v, int vertical, double *inside, doub
         else if (e > *inside)
             *inside = e;
     }
+}
+
+/* Patch seams: the mean squared step between adjacent rows (vertical = 0: columns) that lie in the
+ * overlap bands where blocks are cut, over the mean step between the other (interior) rows. The
+ * strokes run along v, so steps between rows are small inside a stroke and large where a pasted
+ * block chops one: a quilted map's boundary rows stand out. */
+static double seam_ratio(const nprfx_image *v, int vertical, int patch, int overlap)
+{
+    int S = nprfx_rect_height(v->bounds), x0 = v->bounds.x0;
+    double eb = 0, ei = 0;
+    int nb = 0, ni = 0;
+    for (int b = 0; b < S; b++) {
+        /* The pair (b, b + 1) is in a band when b + 1 lies in [j * patch - overlap, j * patch]:
+         * the cut and its feather stay inside the overlap, one pixel either side. */
+        int r = (b + 1 + overlap) % patch;
+        int band = r <= overlap;
+        double e = 0;
+        for (int a = 0; a < S; a++) {
+            int b1 = (b + 1) % S;
+            e += vertical ? sq(nprfx_image_at(v, x0 + b, a), nprfx_image_at(v, x0 + b1, a))
+                          : sq(nprfx_image_at(v, x0 + a, b), nprfx_image_at(v, x0 + a, b1));
+        }
+        if (band) {
+            eb += e;
+            nb++;
+        } else {
+            ei += e;
+            ni++;
+        }
+    }
+    return (eb / nb) / (ei / ni);
 }
 
 /* Normalised correlation of the luma gradient magnitudes of two maps: how much their stroke
@@ -272,6 +303,38 @@ int main(void)
         CHECK(strstr(th_error(ctx), "raise k") != NULL);
         nprfx_image_free(&big);
         nprfx_image_free(&tiny);
+    }
+
+    /* No quilting seams at the defaults (256-pixel maps of 64-pixel patches from 256-pixel
+     * samples, as `nprfx pam build` makes them): along the strokes, the steps between rows where
+     * blocks are cut are within 50% of those inside the blocks (1.1-1.25 as built; the quilt of
+     * 32-pixel patches with no feather or varied picks measured 2.3-3.7, its stroke ends chopped at
+     * every row of patches); across the strokes, where the steps are large everywhere, within
+     * 40% (1.0-1.26 as built). */
+    {
+        static const double tn[3] = {0.12, 0.45, 0.9}, dn[3] = {80, 65, 110};
+        nprfx_image big[3], st;
+        for (int s = 0; s < 3; s++) {
+            CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 256, 256), 3, &big[s]));
+            CHECK_OK(nprfx_pam_sample_strokes(ctx, tn[s], dn[s], 5 + s, &big[s]));
+        }
+        nprfx_pam_build_params d = NPRFX_PAM_BUILD_PARAMS_DEFAULT;
+        nprfx_pam_info bi;
+        memset(&bi, 0, sizeof bi);
+        bi.size = sizeof bi;
+        CHECK_OK(nprfx_pam_build(ctx, &d, big, 3, &st, &bi));
+        for (int m = 0; m < bi.count; m++) {
+            if (!bi.key[m]) continue;
+            nprfx_image v = map_view(&st, m, d.map_size);
+            double along = seam_ratio(&v, 0, d.patch, d.overlap);
+            double across = seam_ratio(&v, 1, d.patch, d.overlap);
+            if (!(along < 1.5 && across < 1.4))
+                fprintf(stderr, "map %d: seam ratio along %.3f across %.3f\n", m, along, across);
+            CHECK(along < 1.5 && across < 1.4);
+        }
+        nprfx_image_free(&st);
+        for (int s = 0; s < 3; s++)
+            nprfx_image_free(&big[s]);
     }
 
     nprfx_image_free(&strip);
