@@ -44,11 +44,32 @@ typedef struct nprfx_file_info {
 nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprfx_file_info *out);
 void nprfx_file_info_free(nprfx_file_info *info);
 
+/* A header attribute, given as text and stored with its type (EXR: int, float or string). */
+typedef enum nprfx_attribute_type {
+    NPRFX_ATTR_STRING = 0,
+    NPRFX_ATTR_INT = 1,
+    NPRFX_ATTR_FLOAT = 2
+} nprfx_attribute_type;
+typedef struct nprfx_attribute {
+    const char *name; /* "nprfx:pamCount" */
+    int type;         /* nprfx_attribute_type */
+    const char *value;
+} nprfx_attribute;
+
 typedef struct nprfx_write_options {
     size_t size;             /* sizeof(nprfx_write_options) */
     const char *compression; /* EXR: "zip" (default), "piz", "none", "dwaa", ... */
     int half;                /* 1: store EXR channels as half floats */
+    const nprfx_attribute *attributes; /* extra header attributes (NULL: none) */
+    int nattributes;
 } nprfx_write_options;
+
+/* The header attributes of a file's first subimage whose names begin with `prefix`, as text
+ * (ints and floats printed, strings as they are); *names and *values are arrays of *count
+ * strings, freed with nprfx_attributes_free. */
+nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char *path, const char *prefix,
+                                      char ***names, char ***values, int *count);
+void nprfx_attributes_free(char **names, char **values, int count);
 
 /* Write an EXR (or any format OIIO knows, by extension) with the given channel names
  * (names may be NULL: default names by count). display: the display window (NULL = bounds). */

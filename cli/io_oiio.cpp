@@ -440,6 +440,60 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
     }
 }
 
+extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char *path,
+                                                 const char *prefix, char ***names,
+                                                 char ***values, int *count)
+{
+    if (!path || !names || !values || !count)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "nprfx_io_read_attributes: NULL argument");
+    *names = *values = nullptr;
+    *count = 0;
+    try {
+        std::unique_ptr<ImageInput> in = ImageInput::open(path);
+        if (!in) {
+            std::string e = OIIO::geterror();
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path,
+                               e.empty() ? "unknown error" : e.c_str());
+        }
+        const ImageSpec &spec = in->spec();
+        std::string pre = prefix ? prefix : "";
+        std::vector<std::string> n, v;
+        for (const OIIO::ParamValue &p : spec.extra_attribs) {
+            std::string name = p.name().string();
+            if (name.compare(0, pre.size(), pre) != 0) continue;
+            n.push_back(name);
+            v.push_back(spec.metadata_val(p)); /* strings come back quoted */
+            std::string &s = v.back();
+            if (p.type() == TypeDesc::STRING && s.size() >= 2 && s.front() == '"' &&
+                s.back() == '"')
+                s = s.substr(1, s.size() - 2);
+        }
+        in->close();
+        *names = dup_names(n);
+        *values = dup_names(v);
+        if (!*names || !*values) {
+            nprfx_attributes_free(*names, *values, (int)n.size());
+            *names = *values = nullptr;
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'", path);
+        }
+        *count = (int)n.size();
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
+    }
+}
+
+extern "C" void nprfx_attributes_free(char **names, char **values, int count)
+{
+    for (int i = 0; i < count; i++) {
+        if (names) std::free(names[i]);
+        if (values) std::free(values[i]);
+    }
+    std::free(names);
+    std::free(values);
+}
+
 /* ---- writing ------------------------------------------------------------------------------ */
 
 extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
@@ -454,7 +508,7 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
             ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': empty image (%dx%d, %d channels)",
             path, nprfx_rect_width(im->bounds), nprfx_rect_height(im->bounds), im->channels);
     /* Read only the option fields the caller's struct has (size-versioned). */
-    nprfx_write_options o = {sizeof o, "zip", 0};
+    nprfx_write_options o = {sizeof o, "zip", 0, nullptr, 0};
     if (opt) {
         if (opt->size < offsetof(nprfx_write_options, compression) + sizeof(const char *) ||
             opt->size > sizeof o)
@@ -503,6 +557,30 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
                                "zip, piz, pxr24, b44, b44a, dwaa, dwab)",
                                path, o.compression);
         spec.attribute("compression", o.compression);
+        for (int i = 0; o.attributes && i < o.nattributes; i++) {
+            const nprfx_attribute &a = o.attributes[i];
+            if (!a.name || !*a.name || !a.value)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': attribute %d has no name or value", path, i);
+            char *end = nullptr;
+            if (a.type == NPRFX_ATTR_INT) {
+                long v = std::strtol(a.value, &end, 10);
+                if (end == a.value || *end)
+                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                       "cannot write '%s': attribute %s: '%s' is not an integer",
+                                       path, a.name, a.value);
+                spec.attribute(a.name, (int)v);
+            } else if (a.type == NPRFX_ATTR_FLOAT) {
+                float v = std::strtof(a.value, &end);
+                if (end == a.value || *end)
+                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                       "cannot write '%s': attribute %s: '%s' is not a number",
+                                       path, a.name, a.value);
+                spec.attribute(a.name, v);
+            } else {
+                spec.attribute(a.name, a.value);
+            }
+        }
         return write_atomic(ctx, path, spec, TypeDesc::FLOAT, im->data,
                             (OIIO::stride_t)(im->pixel_stride * (ptrdiff_t)sizeof(float)),
                             (OIIO::stride_t)(im->row_stride * (ptrdiff_t)sizeof(float)));

@@ -26,6 +26,8 @@ static const command commands[] = {
     {"host-project", nprfx_cmd_host_project,
      "write a graph as a Natron project, Natron script and Nuke script (OpenFX nodes)"},
     {"ivs", nprfx_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
+    {"pam", nprfx_cmd_pam,
+     "painterly art maps: build one from brushstroke samples, check one, paint samples"},
 };
 
 static void usage(FILE *f)
