@@ -218,7 +218,8 @@ static inline void texel_add(const pam_prep *pp, int m, double u, double v, doub
     double fu = u - 0.5, fv = v - 0.5;
     double cu = floor(fu), cv = floor(fv);
     double tu = fu - cu, tv = fv - cv;
-    int x0 = (int)fmod(cu, S), y0 = (int)fmod(cv, S);
+    /* |u|, |v| stay far below 2^31 (a map offset plus a splat's reach, plus the flow) */
+    int x0 = (int)cu % S, y0 = (int)cv % S;
     if (x0 < 0) x0 += S;
     if (y0 < 0) y0 += S;
     int x1 = x0 + 1 == S ? 0 : x0 + 1, y1 = y0 + 1 == S ? 0 : y0 + 1;
@@ -236,6 +237,7 @@ typedef struct tile_buf {
     int *mi;
     float *mt;
     double *acc; /* 4 per pixel: Y, U, V, weight */
+    double *gx;  /* a splat's envelope along its columns */
 } tile_buf;
 
 static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx1, int ty1,
@@ -253,6 +255,10 @@ static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx
     if (xa > xb || ya > yb) return;
     size_t ww = (size_t)nprfx_rect_width(J->window);
     double tolz = P->tol * s->z;
+    for (int x = xa; x <= xb; x++) {
+        double dx = x - s->sx;
+        B->gx[x - xa] = exp(-P->pa2 * dx * dx);
+    }
     for (int y = ya; y <= yb; y++) {
         double dy = y - s->sy;
         double gy = s->w * exp(-P->pa2 * dy * dy);
@@ -264,7 +270,7 @@ static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx
             if (!(ir[x] == s->id)) continue; /* NaN: no surface */
             double zp = s->z + s->gzx * dx + s->gzy * dy;
             if (!(fabs(zr[x] - zp) <= tolz)) continue;
-            double g = gy * exp(-P->pa2 * dx * dx);
+            double g = gy * B->gx[x - xa];
             size_t o = (size_t)(y - ty0) * (size_t)tw + (size_t)(x - tx0);
             double u = s->u0 + dx * s->eux + dy * s->euy;
             double v = s->v0 + dx * s->evx + dy * s->evy;
@@ -365,12 +371,14 @@ static void render_tiles(void *user, int begin, int end, int worker)
     B.mi = malloc(sizeof(int) * PAM_TILE * PAM_TILE);
     B.mt = malloc(sizeof(float) * PAM_TILE * PAM_TILE);
     B.acc = malloc(sizeof(double) * 4 * PAM_TILE * PAM_TILE);
-    if (B.mi && B.mt && B.acc)
+    B.gx = malloc(sizeof(double) * PAM_TILE);
+    if (B.mi && B.mt && B.acc && B.gx)
         for (int t = begin; t < end; t++)
             render_tile(P, t, &B);
     free(B.mi);
     free(B.mt);
     free(B.acc);
+    free(B.gx);
 }
 
 /* ---- the render ----------------------------------------------------------------------------- */
@@ -483,7 +491,9 @@ nprfx_result nprfx_pam_splat_render(nprfx_context *ctx, const nprfx_pam_splat_pa
     double a = nprfx_gabor_bandwidth(gp.radius);
     P.pa2 = k_pi * a * a;
     P.inv_texel = 1.0 / p->texel;
-    P.shift = p->flow * time / p->texel; /* Eq. 11: v_t = v_0 + noise_v + t flow */
+    /* Eq. 11: v_t = v_0 + noise_v + t flow; the maps tile, so the shift is taken modulo a map
+     * (exactly: fmod is exact), which keeps texture coordinates small at any frame */
+    P.shift = fmod(p->flow * time / p->texel, (double)pp->info.size);
     P.tol = p->depth_tolerance;
     P.theta0 = p->orientation * (k_pi / 180.0);
     P.out = out;
