@@ -39,12 +39,12 @@
  * virtual: they extrapolate the nearest real pixel's anchor and depth along its Jacobian, so
  * kernels keep their density up to the frame edge and slide in smoothly instead of popping.
  *
- * Files: this one runs the two phases (strips, emission rows, splat tiles, normalisation) and
- * picks the paths; gabor_kernel.c has the params, variance, level-of-detail tables and a
- * kernel's setup; gabor_pixels.c a block's pixel attributes and patch labels; gabor_emit.c its
- * cells, owner search and points; gabor_splatting.c adds a tile's kernels to its samples;
- * internal_gabor.h holds what they share (the vector helpers and the level-of-detail rule
- * among it).
+ * Files: core/anchored_scatter.c runs phase 1 (strips, emission rows; shared with pam-splat,
+ * internal_scatter.h); this one runs phase 2 (splat tiles, normalisation) and picks its paths;
+ * gabor_kernel.c has the params, variance, level-of-detail tables and a kernel's setup;
+ * gabor_pixels.c a block's pixel attributes and patch labels; gabor_emit.c its cells, owner search
+ * and points; gabor_splatting.c adds a tile's kernels to its samples; internal_gabor.h holds what
+ * they share (the vector helpers and the level-of-detail rule among it).
  *
  * Speed (issue 5's target: a 1080p frame at N0 = 32 in 150 ms on two cores). The work per
  * frame is about 2.2M pixel attributes, 1.3M anchor cells hashed, 0.75M owner searches, 0.24M
@@ -73,40 +73,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_gabor.h"
+#include "internal_scatter.h"
 #include "nprfx/exec.h"
 
 /* splat tiles, in samples: few kernels straddle two (each does its tables again), and a tile's
  * buffers stay in cache */
 #define TILE_SAMPLES 320
-#define MIN_STEP_TOLERANCE 0.01 /* a finite difference may always cross a 1% depth step */
 
 /* ---- the paths ------------------------------------------------------------------------------- */
-
-#if GABOR_X86
-static int cpu_avx512(void)
-{
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-           __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
-}
-
-static int cpu_avx2(void)
-{
-    return __builtin_cpu_supports("avx2");
-}
-#endif
-
-/* simd: 0 the fastest path, 1 scalar, 2 the baseline ISA's vectors (emission: scalar; its vector
- * code needs AVX2's registers to pay), 3 AVX2 (as 2 without it) */
-static emit_fn pick_emit_fn(int simd)
-{
-#if GABOR_X86
-    if (simd == 0 && cpu_avx512()) return internal_gabor_emit_block_avx512;
-    if ((simd == 0 || simd == 3) && cpu_avx2()) return internal_gabor_emit_block_avx2;
-#endif
-    (void)simd;
-    return internal_gabor_emit_block_scalar;
-}
 
 /* simd: 0 the fastest path, 1 scalar, 2 the baseline ISA's vectors, 3 AVX2 (as 2 without it) */
 static splat_fn pick_splat_fn(int simd)
@@ -114,8 +88,9 @@ static splat_fn pick_splat_fn(int simd)
 #if GABOR_VEC
     if (simd == 1) return internal_gabor_splat_points_scalar;
 #if GABOR_X86
-    if (simd == 0 && cpu_avx512()) return internal_gabor_splat_points_avx512;
-    if ((simd == 0 || simd == 3) && cpu_avx2()) return internal_gabor_splat_points_avx2;
+    if (simd == 0 && internal_scatter_cpu_avx512()) return internal_gabor_splat_points_avx512;
+    if ((simd == 0 || simd == 3) && internal_scatter_cpu_avx2())
+        return internal_gabor_splat_points_avx2;
 #endif
     return internal_gabor_splat_points_rows;
 #else
@@ -124,67 +99,7 @@ static splat_fn pick_splat_fn(int simd)
 #endif
 }
 
-/* ---- the render ------------------------------------------------------------------------------ */
-
-static int floor_div(int a, int b)
-{
-    return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-
-/* The rows [y0, y1) of the window's depth and id planes, from the strip (which holds every
- * pixel of them inside the inputs). */
-static void window_rows(const gjob *J, const gstrip *T, int y0, int y1)
-{
-    const gsrc *S = &J->G->S;
-    nprfx_rect w = J->window, reg = S->region;
-    int ww = nprfx_rect_width(w);
-    const float nan = nanf("");
-    if (y0 < w.y0) y0 = w.y0;
-    if (y1 > w.y1) y1 = w.y1;
-    /* the window's columns inside the inputs */
-    int xa = w.x0 > reg.x0 ? w.x0 : reg.x0, xb = w.x1 < reg.x1 ? w.x1 : reg.x1;
-    for (int y = y0; y < y1; y++) {
-        float *zr = J->zwin + (size_t)(y - w.y0) * (size_t)ww - w.x0;
-        float *ir = J->idwin + (size_t)(y - w.y0) * (size_t)ww - w.x0;
-        int in = y >= reg.y0 && y < reg.y1 && xa < xb;
-        for (int x = w.x0; x < w.x1; x++) {
-            zr[x] = 0.0f;
-            ir[x] = nan;
-        }
-        if (!in) continue;
-        const float *Z = strip_plane(T, ST_Z, xa, y) - xa, *ID = strip_plane(T, ST_ID, xa, y) - xa;
-        for (int x = xa; x < xb; x++) {
-            double zz = Z[x];
-            float ii = ID[x];
-            if (is_surface_depth(zz) && isfinite(ii)) {
-                zr[x] = (float)zz;
-                ir[x] = ii;
-            }
-        }
-    }
-}
-
-static void emit_rows(void *user, int begin, int end, int worker)
-{
-    gjob *J = user;
-    emit_scratch *scr = J->scratch[worker];
-    for (int r = begin; r < end; r++) {
-        /* the inputs the row's windows read (a window depends on the block row only in y, and
-         * grows with the block column in x) */
-        int cx0, cy0, cw, ch, lx0, ly0, lw, lh;
-        if (internal_gabor_block_window(&J->G->S, J->bx0, J->by0 + r, &cx0, &cy0, &cw, &ch) &&
-            internal_gabor_block_window(&J->G->S, J->bx0 + J->nbx - 1, J->by0 + r, &lx0, &ly0, &lw,
-                                        &lh))
-            internal_gabor_strip_fill(&J->G->S, &scr->T, cx0, lx0 + lw, cy0, cy0 + ch);
-        else
-            scr->T.w = scr->T.h = 0;
-        window_rows(J, &scr->T, (J->by0 + r) * BLOCK, (J->by0 + r + 1) * BLOCK);
-        int ok = 1;
-        for (int i = 0; i < J->nbx && ok; i++)
-            ok = J->G->emit(J->G, J->bx0 + i, J->by0 + r, &J->blocks[r * J->nbx + i], scr);
-        J->row_ok[r] = ok;
-    }
-}
+/* ---- the render: phase 2, the splat tiles (phase 1 is core/anchored_scatter.c) --------------- */
 
 /* A splat worker's buffers, for tiles of up to J->tile x J->tile pixels. */
 typedef struct splat_scratch {
@@ -284,8 +199,10 @@ static void splat_tile(gjob *J, int t, splat_scratch *B)
     T.tab = tab;
     T.span = span;
     T.evals = 0;
-    T.bxa = floor_div(tx0 - J->reach, BLOCK), T.bxb = floor_div(tx1 - 1 + J->reach, BLOCK);
-    T.bya = floor_div(ty0 - J->reach, BLOCK), T.byb = floor_div(ty1 - 1 + J->reach, BLOCK);
+    T.bxa = internal_scatter_floor_div(tx0 - J->reach, BLOCK),
+    T.bxb = internal_scatter_floor_div(tx1 - 1 + J->reach, BLOCK);
+    T.bya = internal_scatter_floor_div(ty0 - J->reach, BLOCK),
+    T.byb = internal_scatter_floor_div(ty1 - 1 + J->reach, BLOCK);
     if (T.bxa < J->bx0) T.bxa = J->bx0;
     if (T.bya < J->by0) T.bya = J->by0;
     if (T.bxb > J->bx0 + J->nbx - 1) T.bxb = J->bx0 + J->nbx - 1;
@@ -313,8 +230,10 @@ static void splat_tile(gjob *J, int t, splat_scratch *B)
             if (G->points) o[1] = 0.0f;
         }
     /* owned points: the debug channel and the statistics */
-    int cbxa = floor_div(tx0, BLOCK), cbxb = floor_div(tx1 - 1, BLOCK);
-    int cbya = floor_div(ty0, BLOCK), cbyb = floor_div(ty1 - 1, BLOCK);
+    int cbxa = internal_scatter_floor_div(tx0, BLOCK),
+        cbxb = internal_scatter_floor_div(tx1 - 1, BLOCK);
+    int cbya = internal_scatter_floor_div(ty0, BLOCK),
+        cbyb = internal_scatter_floor_div(ty1 - 1, BLOCK);
     for (int by = cbya; by <= cbyb; by++)
         for (int bx = cbxa; bx <= cbxb; bx++) {
             const gblock *b = &J->blocks[(by - J->by0) * J->nbx + (bx - J->bx0)];
@@ -393,119 +312,29 @@ nprfx_result nprfx_gabor_render(nprfx_context *ctx, const nprfx_gabor_params *p,
     if (nprfx_rect_empty(window)) return NPRFX_OK;
 
     gconf G;
-    memset(&G, 0, sizeof G);
-    G.S.anchor = in->anchor;
-    G.S.depth = in->depth;
-    G.S.id = in->id && in->id->data ? in->id : NULL;
-    G.S.orient = in->orientation && in->orientation->data ? in->orientation : NULL;
-    G.S.freq = in->frequency && in->frequency->data ? in->frequency : NULL;
-    G.S.dims = p->anchor_dims;
-    G.S.cov_ch = in->anchor->channels > p->anchor_dims ? p->anchor_dims : -1;
-    G.S.region = nprfx_rect_intersect(in->anchor->bounds, in->depth->bounds);
-    if (G.S.id) G.S.region = nprfx_rect_intersect(G.S.region, G.S.id->bounds);
-    G.S.step_tol =
-        p->depth_tolerance > MIN_STEP_TOLERANCE ? p->depth_tolerance : MIN_STEP_TOLERANCE;
-    G.a = nprfx_gabor_bandwidth(p->radius);
-    G.radius = p->radius;
-    G.r2 = p->radius * p->radius;
-    G.lambda = p->n0 / (k_pi * G.r2);
-    G.h0 = p->cell;
-    G.F0 = p->frequency;
-    G.w0 = p->orientation * (k_pi / 180.0);
-    G.tol = p->depth_tolerance;
-    G.W = p->lod_levels;
-    G.stagger = p->fade == NPRFX_GABOR_FADE_STAGGERED;
-    G.dims = p->anchor_dims;
-    G.ss = p->supersample;
-    G.iso = p->isotropic != 0;
-    G.amp = p->amplitude;
-    G.dtest = p->depth_test;
-    G.points = p->points != 0;
-    G.output = p->output;
-    G.contrast = p->contrast;
-    G.seed = p->seed;
-    G.var_k1 = internal_gabor_variance_k1(p, G.a);
-    internal_gabor_lod_table_init(&G.lod, G.W);
-    G.pa2 = k_pi * G.a * G.a;
-    G.lh2 = G.lambda * G.h0 * G.h0;
-    G.emit = pick_emit_fn(p->simd);
-    G.step_tolf = (float)G.S.step_tol;
-    G.uniform_wave = !G.iso && !G.S.orient && !G.S.freq;
-    if (G.uniform_wave) {
-        /* as kernel_wave computes it for every point */
-        double F = G.F0 * 1.0, step = 1.0 / G.ss;
-        G.kx0 = F * cos(G.w0);
-        G.ky0 = -F * sin(G.w0);
-        G.csx = (float)cos(2.0 * k_pi * G.kx0 * step);
-        G.ssx = (float)sin(2.0 * k_pi * G.kx0 * step);
-        G.csy = (float)cos(2.0 * k_pi * G.ky0 * step);
-        G.ssy = (float)sin(2.0 * k_pi * G.ky0 * step);
-    }
-    G.rr = exp(-2.0 * G.pa2 / ((double)G.ss * G.ss));
+    internal_scatter_conf_init(&G, p, in);
 
     gjob J;
-    memset(&J, 0, sizeof J);
-    J.G = &G;
-    J.window = window;
-    J.out = out;
     /* an owner lies within r + 1/2 of its point, a sample within 1/2 of its pixel centre */
-    J.reach = (int)ceil(p->radius) + 1;
-    J.bx0 = floor_div(window.x0 - J.reach, BLOCK);
-    J.by0 = floor_div(window.y0 - J.reach, BLOCK);
-    J.nbx = floor_div(window.x1 - 1 + J.reach, BLOCK) - J.bx0 + 1;
-    J.nby = floor_div(window.y1 - 1 + J.reach, BLOCK) - J.by0 + 1;
+    internal_scatter_job_init(&J, &G, window, (int)ceil(p->radius) + 1, out);
     J.tile = TILE_SAMPLES / p->supersample > 32 ? TILE_SAMPLES / p->supersample : 32;
     J.splat = pick_splat_fn(p->simd);
     J.ntx = (nprfx_rect_width(window) + J.tile - 1) / J.tile;
     J.nty = (nprfx_rect_height(window) + J.tile - 1) / J.tile;
     int ntiles = J.ntx * J.nty;
-    J.blocks = calloc((size_t)J.nbx * (size_t)J.nby, sizeof(gblock));
-    J.row_ok = calloc((size_t)J.nby, sizeof(int));
     J.tile_ok = calloc((size_t)ntiles, sizeof(int));
     J.t_kernels = calloc((size_t)ntiles, sizeof(long long));
     J.t_evals = calloc((size_t)ntiles, sizeof(long long));
     J.t_w2 = calloc((size_t)ntiles, sizeof(double));
     nprfx_result r = NPRFX_OK;
-    if (!J.blocks || !J.row_ok || !J.tile_ok || !J.t_kernels || !J.t_evals || !J.t_w2) {
+    if (!J.tile_ok || !J.t_kernels || !J.t_evals || !J.t_w2) {
         r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "gabor: out of memory");
         goto done;
     }
+    r = internal_scatter_emit(ctx, &J, "gabor");
+    if (r) goto done;
     const nprfx_executor *ex = nprfx_context_executor(ctx);
-    size_t wpx = (size_t)nprfx_rect_width(window) * (size_t)nprfx_rect_height(window);
-    J.zwin = malloc(sizeof(float) * wpx);
-    J.idwin = malloc(sizeof(float) * wpx);
-    if (!J.zwin || !J.idwin) {
-        r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "gabor: out of memory");
-        goto done;
-    }
-    J.nworkers = nprfx_executor_workers(ex);
-    if (J.nworkers < 1) J.nworkers = 1;
-    J.scratch = calloc((size_t)J.nworkers, sizeof(void *));
-    int ok = J.scratch != NULL;
-    /* a row of blocks reads at most CW input rows, and columns from its first window to its
-     * last */
-    size_t strip_w = (size_t)J.nbx * BLOCK + 2 * (1 + HALO);
-    for (int i = 0; i < J.nworkers && ok; i++) {
-        emit_scratch *e = calloc(1, sizeof(emit_scratch)); /* padding rows: zero */
-        J.scratch[i] = e;
-        ok = e != NULL && (e->T.data = malloc(sizeof(float) * ST_PLANES * CW * strip_w)) != NULL;
-    }
-    if (ok) nprfx_parallel_for(ex, J.nby, 1, emit_rows, &J);
-    for (int i = 0; J.scratch && i < J.nworkers; i++) {
-        emit_scratch *e = J.scratch[i];
-        if (e) free(e->T.data);
-        free(e);
-        J.scratch[i] = NULL;
-    }
-    if (!ok) {
-        r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "gabor: out of memory");
-        goto done;
-    }
-    for (int i = 0; i < J.nby; i++)
-        if (!J.row_ok[i]) {
-            r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "gabor: out of memory for the points");
-            goto done;
-        }
+    int ok = 1;
     for (int i = 0; i < J.nworkers && ok; i++)
         ok = (J.scratch[i] = splat_scratch_new(&J)) != NULL;
     if (!ok) {
@@ -525,19 +354,10 @@ nprfx_result nprfx_gabor_render(nprfx_context *ctx, const nprfx_gabor_params *p,
         }
     }
 done:
-    free(J.zwin);
-    free(J.idwin);
-    if (J.scratch) {
-        /* emission's scratch is freed after emission: what is left is the splat's */
-        for (int i = 0; i < J.nworkers; i++)
-            splat_scratch_free(J.scratch[i]);
-        free(J.scratch);
-    }
-    if (J.blocks)
-        for (int i = 0; i < J.nbx * J.nby; i++)
-            free(J.blocks[i].p);
-    free(J.blocks);
-    free(J.row_ok);
+    /* the scatter's scratch slots hold the splat's buffers by now (or NULL) */
+    for (int i = 0; J.scratch && i < J.nworkers; i++)
+        splat_scratch_free(J.scratch[i]);
+    internal_scatter_job_free(&J);
     free(J.tile_ok);
     free(J.t_kernels);
     free(J.t_evals);

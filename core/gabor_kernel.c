@@ -255,6 +255,9 @@ int internal_gabor_make_point(const gconf *G, const gpixels *X, int o, int ox, i
     pt->id = id;
     pt->ox = ox;
     pt->oy = oy;
+    pt->rx = X->rx[o];
+    pt->ry = X->ry[o];
+    pt->h = h;
     double kx, ky;
     kernel_wave(G, X->rx[o], X->ry[o], h, &kx, &ky);
     axis_start(G, sample_pos(pt->X0, s) - sx, 2.0 * k_pi * kx, 0, &pt->ax);

@@ -419,6 +419,8 @@ typedef struct gpoint {
     float gzx, gzy;
     float id;
     int ox, oy;         /* owner pixel */
+    int rx, ry;         /* the real pixel whose per-point inputs it reads */
+    uint64_t h;         /* its hash (seed, level, cell, object id): the point's own randoms */
     int X0, X1, Y0, Y1; /* first and last samples of the bounding box (sample coordinates) */
     gaxis ax, ay;
 } gpoint;

@@ -1,0 +1,141 @@
+/* nprfx — painterly rendering with a painterly art map (Yan, Chi, Lee, Lin, "Stylized Rendering
+ * Using Samples of a Painted Image", IEEE TVCG 14(2), 2008, §5), docs/design.md §3.7.
+ *
+ * A PAM (painterly art map) is one RGB image: `count` square, tileable maps of S x S pixels side
+ * by side, left to right from dark to light (width = count * S, height = S, count >= 2), linear
+ * float. The pam-splat node covers the surfaces with splats placed by gabor-splat's
+ * anchored-point scatter (constant density on screen, continuous level of detail, so they stay
+ * on the surfaces frame to frame). Each splat is a Gaussian-edged patch of the PAM at the local
+ * tone, its rows (the PAM's v axis, along which its strokes run) turned along the direction
+ * field, and changes the model colour by the PAM's luminance and chroma deviations (Eq. 9-10):
+ *
+ *     S_Y  = model_Y  + beta  * (texel_Y  - mean_Y)
+ *     S_UV = model_UV + gamma * (texel_UV - mean_UV)
+ *
+ * with mean the PAM's mean over all its maps (Eq. 9's single mean, so darker maps darken and
+ * lighter ones lighten). The texture can flow along the direction with time (Eq. 11). */
+#ifndef NPRFX_PAM_SPLAT_H
+#define NPRFX_PAM_SPLAT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nprfx/context.h"
+#include "nprfx/image.h"
+#include "nprfx/export.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- YUV, BT.601 (Kr = 0.299, Kb = 0.114; U in [-0.436, 0.436], V in [-0.615, 0.615]) ---- */
+
+#define NPRFX_YUV_KR 0.299
+#define NPRFX_YUV_KB 0.114
+#define NPRFX_YUV_UMAX 0.436
+#define NPRFX_YUV_VMAX 0.615
+
+/* rgb -> yuv: Y = Kr R + (1 - Kr - Kb) G + Kb B, U = Umax (B - Y) / (1 - Kb),
+ * V = Vmax (R - Y) / (1 - Kr). In and out may alias. */
+static inline void nprfx_rgb_to_yuv(const double rgb[3], double yuv[3])
+{
+    double r = rgb[0], g = rgb[1], b = rgb[2];
+    double y = NPRFX_YUV_KR * r + (1.0 - NPRFX_YUV_KR - NPRFX_YUV_KB) * g + NPRFX_YUV_KB * b;
+    yuv[0] = y;
+    yuv[1] = NPRFX_YUV_UMAX * (b - y) / (1.0 - NPRFX_YUV_KB);
+    yuv[2] = NPRFX_YUV_VMAX * (r - y) / (1.0 - NPRFX_YUV_KR);
+}
+
+/* The inverse of nprfx_rgb_to_yuv. In and out may alias. */
+static inline void nprfx_yuv_to_rgb(const double yuv[3], double rgb[3])
+{
+    double y = yuv[0];
+    double r = y + yuv[2] * ((1.0 - NPRFX_YUV_KR) / NPRFX_YUV_VMAX);
+    double b = y + yuv[1] * ((1.0 - NPRFX_YUV_KB) / NPRFX_YUV_UMAX);
+    double g = (y - NPRFX_YUV_KR * r - NPRFX_YUV_KB * b) / (1.0 - NPRFX_YUV_KR - NPRFX_YUV_KB);
+    rgb[0] = r;
+    rgb[1] = g;
+    rgb[2] = b;
+}
+
+/* ---- the PAM ---- */
+
+#define NPRFX_PAM_MAX_MAPS 256
+
+/* What the node knows of a PAM: its layout and means, measured from the pixels. */
+typedef struct nprfx_pam_info {
+    int count;                        /* maps */
+    int size;                         /* S: each map is S x S */
+    double map_y[NPRFX_PAM_MAX_MAPS]; /* each map's mean luminance (BT.601 Y) */
+    double mean[3];                   /* Eq. 9's mean: Y, U, V over every map */
+} nprfx_pam_info;
+
+/* Check that pam is a PAM (3 or more channels, finite pixels, width a multiple >= 2 of its
+ * height, at most NPRFX_PAM_MAX_MAPS maps) and measure it. Errors name `who` ("pam-splat: input
+ * 'pam'") and the image's size. */
+NPRFX_API nprfx_result nprfx_pam_measure(nprfx_context *ctx, const nprfx_image *pam,
+                                         const char *who, nprfx_pam_info *info);
+
+/* Where tone w lands among the maps: maps i and i + 1 mixed as (1 - t) map_i + t map_(i+1).
+ * w is clamped to [0, 1] (NaN: 0) and picks the luminance map_y[0] + w (map_y[count-1] -
+ * map_y[0]) on the running maximum of map_y (a PAM whose means dip is read as flat there); when
+ * the maps' means do not rise at all, w is spread evenly over the maps. */
+NPRFX_API void nprfx_pam_tone_position(const nprfx_pam_info *info, double w, int *i, double *t);
+
+/* The builtin PAM the node uses when no pam input is connected: `count` maps of `size` px (0:
+ * 6 maps of 64 px) of short vertical brush strokes from dark to light, tileable, made from
+ * hashes (the same on every machine). Allocates out (3 channels, origin at 0, 0). */
+NPRFX_API nprfx_result nprfx_pam_builtin(nprfx_context *ctx, int count, int size, uint64_t seed,
+                                         nprfx_image *out);
+
+/* ---- the pam-splat node (its descriptor is plugins/pam_splat.c) ---- */
+
+typedef enum nprfx_pam_anchor_space {
+    NPRFX_PAM_SPACE_PREF = 0, /* 3D rest position */
+    NPRFX_PAM_SPACE_UV = 1,   /* 2D texture coordinates */
+    NPRFX_PAM_SPACE_COUNT
+} nprfx_pam_anchor_space;
+
+/* The node's params as its descriptor binds them (pixel lengths already times the render
+ * scale). */
+typedef struct nprfx_pam_splat_params {
+    int anchor_space;       /* nprfx_pam_anchor_space */
+    double size;            /* splat diameter in pixels (Gaussian edge: 5% at the rim) */
+    double density;         /* expected number of splats overlapping a pixel */
+    double beta, gamma;     /* Eq. 10: luminance and chroma strength */
+    double texel;           /* screen pixels per PAM pixel */
+    double orientation;     /* degrees, counter-clockwise, added to the direction */
+    double flow;            /* Eq. 11: texture speed along the direction, pixels per frame */
+    double jitter;          /* Eq. 11's noise offsets: per splat, in map widths (1: anywhere) */
+    int seed;               /* >= 0 */
+    double cell;            /* the scatter's level-0 cell (anchor units) */
+    double depth_tolerance; /* relative depth error a splat's fragment tolerates */
+} nprfx_pam_splat_params;
+
+typedef struct nprfx_pam_splat_inputs {
+    size_t size;                  /* sizeof(nprfx_pam_splat_inputs) */
+    const nprfx_image *anchor;    /* Pref (3 channels) or UV (2), optional coverage after them */
+    const nprfx_image *tone;      /* 1 channel, w in [0, 1] (clamped) */
+    const nprfx_image *color;     /* model colour, RGB or RGBA: the output has its channels */
+    const nprfx_image *direction; /* optional: 1 channel degrees, or 2 a direction (x right, y
+                                     down) */
+    const nprfx_image *depth;     /* 1 channel */
+    const nprfx_image *id;        /* optional, 1 channel */
+    const nprfx_image *pam;       /* optional (NULL: the builtin PAM), passed whole */
+} nprfx_pam_splat_inputs;
+
+/* Render `window` of out at frame `time`. state: the node instance's cache slot (may be NULL):
+ * the measured PAM, keyed by a fingerprint of its pixels; it never changes a result. *splats,
+ * when not NULL, grows by the splats owned by pixels of the window. */
+NPRFX_API nprfx_result nprfx_pam_splat_render(nprfx_context *ctx, const nprfx_pam_splat_params *p,
+                                              const nprfx_pam_splat_inputs *in, double time,
+                                              void **state, nprfx_rect window, nprfx_image *out,
+                                              long long *splats);
+
+/* Free a state left in the node's slot. */
+NPRFX_API void nprfx_pam_splat_state_free(void *state);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
