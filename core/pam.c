@@ -7,7 +7,7 @@
 #include "nprfx/rng.h"
 
 nprfx_result nprfx_pam_measure(nprfx_context *ctx, const nprfx_image *pam, const char *who,
-                               nprfx_pam_info *info)
+                               nprfx_pam_stats *info)
 {
     if (!pam || !pam->data || !info)
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "%s is missing", who);
@@ -53,7 +53,7 @@ nprfx_result nprfx_pam_measure(nprfx_context *ctx, const nprfx_image *pam, const
     return NPRFX_OK;
 }
 
-void nprfx_pam_tone_position(const nprfx_pam_info *info, double w, int *i, double *t)
+void nprfx_pam_tone_position(const nprfx_pam_stats *info, double w, int *i, double *t)
 {
     int n = info->count;
     if (!(w > 0.0)) w = 0.0; /* NaN too */

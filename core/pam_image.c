@@ -46,7 +46,7 @@ nprfx_result internal_pam_from_view(nprfx_context *ctx, const nprfx_image *v, in
 
 static double luma(const float *p)
 {
-    return NPRFX_PAM_KR * p[0] + NPRFX_PAM_KG * p[1] + NPRFX_PAM_KB * p[2];
+    return nprfx_luma(p[0], p[1], p[2]);
 }
 
 void internal_pam_orientation(const internal_pam_img *im, double *degrees, double *coherence)

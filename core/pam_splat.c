@@ -43,7 +43,7 @@
 typedef struct pam_prep {
     int refs;
     uint64_t key;
-    nprfx_pam_info info;
+    nprfx_pam_stats info;
     float *dev; /* count x S x S x 3 */
 } pam_prep;
 

@@ -26,31 +26,61 @@
 extern "C" {
 #endif
 
-/* ---- colour: the paper's YUV (BT.601 luma; U, V scaled colour differences) ----
+/* ---- colour: the paper's YUV, BT.601 (Kr = 0.299, Kb = 0.114; U in [-0.436, 0.436], V in
+ * [-0.615, 0.615]) ----
  *
- * Defined here once so the builder, `nprfx pam info` and the node agree to the bit. The inverse
- * is the exact algebraic inverse of the forward transform (not the rounded textbook matrix), so a
- * round trip is exact up to float rounding. */
-#define NPRFX_PAM_KR 0.299
-#define NPRFX_PAM_KG 0.587
-#define NPRFX_PAM_KB 0.114
-#define NPRFX_PAM_SU 0.492111 /* U = SU * (B - Y) */
-#define NPRFX_PAM_SV 0.877283 /* V = SV * (R - Y) */
+ * Defined here once so the builder, `nprfx pam info` and the pam-splat node agree to the bit. The
+ * inverse is the exact algebraic inverse of the forward transform (not the rounded textbook
+ * matrix), so a round trip is exact up to rounding. */
+#define NPRFX_YUV_KR 0.299
+#define NPRFX_YUV_KB 0.114
+#define NPRFX_YUV_UMAX 0.436
+#define NPRFX_YUV_VMAX 0.615
 
+/* The luma alone. */
+static inline double nprfx_luma(double r, double g, double b)
+{
+    return NPRFX_YUV_KR * r + (1.0 - NPRFX_YUV_KR - NPRFX_YUV_KB) * g + NPRFX_YUV_KB * b;
+}
+
+/* rgb -> yuv: Y = Kr R + (1 - Kr - Kb) G + Kb B, U = Umax (B - Y) / (1 - Kb),
+ * V = Vmax (R - Y) / (1 - Kr). In and out may alias. */
+static inline void nprfx_rgb_to_yuv(const double rgb[3], double yuv[3])
+{
+    double r = rgb[0], g = rgb[1], b = rgb[2];
+    double y = nprfx_luma(r, g, b);
+    yuv[0] = y;
+    yuv[1] = NPRFX_YUV_UMAX * (b - y) / (1.0 - NPRFX_YUV_KB);
+    yuv[2] = NPRFX_YUV_VMAX * (r - y) / (1.0 - NPRFX_YUV_KR);
+}
+
+/* The inverse of nprfx_rgb_to_yuv. In and out may alias. */
+static inline void nprfx_yuv_to_rgb(const double yuv[3], double rgb[3])
+{
+    double y = yuv[0];
+    double r = y + yuv[2] * ((1.0 - NPRFX_YUV_KR) / NPRFX_YUV_VMAX);
+    double b = y + yuv[1] * ((1.0 - NPRFX_YUV_KB) / NPRFX_YUV_UMAX);
+    double g = (y - NPRFX_YUV_KR * r - NPRFX_YUV_KB * b) / (1.0 - NPRFX_YUV_KR - NPRFX_YUV_KB);
+    rgb[0] = r;
+    rgb[1] = g;
+    rgb[2] = b;
+}
+
+/* The same for float pixels (the builder's images). */
 static inline void nprfx_pam_rgb_to_yuv(const float rgb[3], float yuv[3])
 {
-    double y = NPRFX_PAM_KR * rgb[0] + NPRFX_PAM_KG * rgb[1] + NPRFX_PAM_KB * rgb[2];
-    yuv[0] = (float)y;
-    yuv[1] = (float)(NPRFX_PAM_SU * (rgb[2] - y));
-    yuv[2] = (float)(NPRFX_PAM_SV * (rgb[0] - y));
+    double d[3] = {rgb[0], rgb[1], rgb[2]};
+    nprfx_rgb_to_yuv(d, d);
+    for (int c = 0; c < 3; c++)
+        yuv[c] = (float)d[c];
 }
 
 static inline void nprfx_pam_yuv_to_rgb(const float yuv[3], float rgb[3])
 {
-    double y = yuv[0], r = y + yuv[2] / NPRFX_PAM_SV, b = y + yuv[1] / NPRFX_PAM_SU;
-    rgb[0] = (float)r;
-    rgb[1] = (float)((y - NPRFX_PAM_KR * r - NPRFX_PAM_KB * b) / NPRFX_PAM_KG);
-    rgb[2] = (float)b;
+    double d[3] = {yuv[0], yuv[1], yuv[2]};
+    nprfx_yuv_to_rgb(d, d);
+    for (int c = 0; c < 3; c++)
+        rgb[c] = (float)d[c];
 }
 
 /* ---- the file format (an EXR written by `nprfx pam build`) ----

@@ -23,64 +23,33 @@
 #include "nprfx/context.h"
 #include "nprfx/image.h"
 #include "nprfx/export.h"
+#include "nprfx/pam.h" /* the format, YUV, NPRFX_PAM_MAX_MAPS */
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* ---- YUV, BT.601 (Kr = 0.299, Kb = 0.114; U in [-0.436, 0.436], V in [-0.615, 0.615]) ---- */
-
-#define NPRFX_YUV_KR 0.299
-#define NPRFX_YUV_KB 0.114
-#define NPRFX_YUV_UMAX 0.436
-#define NPRFX_YUV_VMAX 0.615
-
-/* rgb -> yuv: Y = Kr R + (1 - Kr - Kb) G + Kb B, U = Umax (B - Y) / (1 - Kb),
- * V = Vmax (R - Y) / (1 - Kr). In and out may alias. */
-static inline void nprfx_rgb_to_yuv(const double rgb[3], double yuv[3])
-{
-    double r = rgb[0], g = rgb[1], b = rgb[2];
-    double y = NPRFX_YUV_KR * r + (1.0 - NPRFX_YUV_KR - NPRFX_YUV_KB) * g + NPRFX_YUV_KB * b;
-    yuv[0] = y;
-    yuv[1] = NPRFX_YUV_UMAX * (b - y) / (1.0 - NPRFX_YUV_KB);
-    yuv[2] = NPRFX_YUV_VMAX * (r - y) / (1.0 - NPRFX_YUV_KR);
-}
-
-/* The inverse of nprfx_rgb_to_yuv. In and out may alias. */
-static inline void nprfx_yuv_to_rgb(const double yuv[3], double rgb[3])
-{
-    double y = yuv[0];
-    double r = y + yuv[2] * ((1.0 - NPRFX_YUV_KR) / NPRFX_YUV_VMAX);
-    double b = y + yuv[1] * ((1.0 - NPRFX_YUV_KB) / NPRFX_YUV_UMAX);
-    double g = (y - NPRFX_YUV_KR * r - NPRFX_YUV_KB * b) / (1.0 - NPRFX_YUV_KR - NPRFX_YUV_KB);
-    rgb[0] = r;
-    rgb[1] = g;
-    rgb[2] = b;
-}
-
 /* ---- the PAM ---- */
 
-#define NPRFX_PAM_MAX_MAPS 256
-
 /* What the node knows of a PAM: its layout and means, measured from the pixels. */
-typedef struct nprfx_pam_info {
+typedef struct nprfx_pam_stats {
     int count;                        /* maps */
     int size;                         /* S: each map is S x S */
     double map_y[NPRFX_PAM_MAX_MAPS]; /* each map's mean luminance (BT.601 Y) */
     double mean[3];                   /* Eq. 9's mean: Y, U, V over every map */
-} nprfx_pam_info;
+} nprfx_pam_stats;
 
 /* Check that pam is a PAM (3 or more channels, finite pixels, width a multiple >= 2 of its
  * height, at most NPRFX_PAM_MAX_MAPS maps) and measure it. Errors name `who` ("pam-splat: input
  * 'pam'") and the image's size. */
 NPRFX_API nprfx_result nprfx_pam_measure(nprfx_context *ctx, const nprfx_image *pam,
-                                         const char *who, nprfx_pam_info *info);
+                                         const char *who, nprfx_pam_stats *info);
 
 /* Where tone w lands among the maps: maps i and i + 1 mixed as (1 - t) map_i + t map_(i+1).
  * w is clamped to [0, 1] (NaN: 0) and picks the luminance map_y[0] + w (map_y[count-1] -
  * map_y[0]) on the running maximum of map_y (a PAM whose means dip is read as flat there); when
  * the maps' means do not rise at all, w is spread evenly over the maps. */
-NPRFX_API void nprfx_pam_tone_position(const nprfx_pam_info *info, double w, int *i, double *t);
+NPRFX_API void nprfx_pam_tone_position(const nprfx_pam_stats *info, double w, int *i, double *t);
 
 /* The builtin PAM the node uses when no pam input is connected: `count` maps of `size` px (0:
  * 6 maps of 64 px) of short vertical brush strokes from dark to light, tileable, made from

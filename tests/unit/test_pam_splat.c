@@ -161,7 +161,7 @@ static void test_formulas(void)
     for (int k = 0; k < 3; k++)
         CHECK_NEAR(back[k], c[k], 1e-12);
 
-    nprfx_pam_info info;
+    nprfx_pam_stats info;
     memset(&info, 0, sizeof info);
     info.count = 3;
     info.size = 8;
@@ -200,7 +200,7 @@ static void test_eq10(void)
     int w = 96, h = 64;
     const double tones[2] = {0.0, 0.3};
     nprfx_image pam = test_pam(3, 16, 1);
-    nprfx_pam_info info;
+    nprfx_pam_stats info;
     CHECK_OK(nprfx_pam_measure(ctx, &pam, "test", &info));
     for (int k = 0; k < 2; k++) {
         plane P = make_plane(w, h, tones[k], 1.0, 0.0);
