@@ -8,6 +8,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "graph.h"
+#include "output_lock.h"
 
 static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
 {
@@ -30,6 +31,8 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  --cache-mb N        memory for cached node results (default 2048)\n"
         "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
         "  --keep-going        render the remaining frames after a failed one, exit 1\n"
+        "  --wait              when another run is writing one of the graph's sequences,\n"
+        "                      wait for it to finish (default: fail at once, naming it)\n"
         "%s"
         "  --quiet             no progress output\n\n"
         "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
@@ -42,7 +45,10 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  REF:   \"node\" or \"node:channels\", e.g. \"plate:Depth.Z\", \"plate:Vector.XY\"\n"
         "Read paths are relative to the graph file, write paths to the current directory.\n"
         "Files are written under a temporary name and renamed, so a failed frame never leaves\n"
-        "a partial file. See 'nprfx list' and 'nprfx help NODE' for the node types.\n",
+        "a partial file. A run locks every sequence it writes (a hidden .NAME.nprfx-lock file\n"
+        "beside it; across hosts only where the file system supports locks, e.g. NFSv4) and\n"
+        "removes what a killed run left there. See 'nprfx list' and 'nprfx help NODE' for the\n"
+        "node types.\n",
         prog, ext && ext->options_usage ? ext->options_usage : "");
 }
 
@@ -57,7 +63,7 @@ static double now_seconds(void)
 typedef struct run_opts {
     const char *prog, *frames, *shot;
     const char *const *sets;
-    int nsets, keep_going, quiet, several;
+    int nsets, keep_going, quiet, several, wait;
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -71,6 +77,26 @@ static int graph_has_node_of(nprfx_graph *g, const char *assignment)
     return nprfx_graph_has_node(g, name);
 }
 
+static void lock_notice(void *user, const char *message)
+{
+    const run_opts *ro = user;
+    if (!ro->quiet) fprintf(stderr, "%s run: %s\n", ro->prog, message);
+}
+
+/* Lock every sequence g writes before its first frame (output_lock.h). */
+static nprfx_result lock_outputs(nprfx_context *ctx, nprfx_graph *g, const char *graph_path,
+                                 const run_opts *ro, nprfx_output_locks **locks)
+{
+    char **paths;
+    int n;
+    nprfx_result r = nprfx_graph_output_patterns(g, &paths, &n);
+    if (r) return r;
+    r = nprfx_output_locks_take(ctx, (const char *const *)paths, n, graph_path, ro->wait,
+                                lock_notice, (void *)ro, locks);
+    nprfx_graph_output_patterns_free(paths, n);
+    return r;
+}
+
 /* Load and render one graph; the exit status: 0 ok, 1 frames failed, 2 not rendered. */
 static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const char *graph_path,
                      const run_opts *ro)
@@ -82,6 +108,7 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
     int nsets = ro->nsets, keep_going = ro->keep_going, quiet = ro->quiet;
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
+    nprfx_output_locks *locks = NULL;
     int status = 0;
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
@@ -106,6 +133,11 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
             goto done;
         }
     if (nprfx_graph_frames(g, frames, &fl)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    if (lock_outputs(env.ctx, g, graph_path, ro, &locks)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
         goto done;
@@ -146,6 +178,7 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
                fl.count - failed == 1 ? "" : "s", now_seconds() - t0, buf);
     }
 done:
+    nprfx_output_locks_release(locks);
     nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
     return status;
@@ -162,7 +195,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
     int ngraphs = 0;
     const char *sets[256];
-    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0;
+    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -186,6 +219,8 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
             outdir = argv[++i];
         else if (!strcmp(a, "--keep-going"))
             keep_going = 1;
+        else if (!strcmp(a, "--wait"))
+            wait = 1;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = 1;
         else if (a[0] != '-' && ngraphs < 64)
@@ -208,7 +243,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     if (nprfx_cli_env_init(&env, threads)) return 1;
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
     int status = 0;
-    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1};
+    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait};
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;

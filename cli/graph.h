@@ -69,6 +69,13 @@ nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written);
 /* Describe the write nodes' outputs ("out/x.####.exr (preview out/x.####.png)"), one per line. */
 void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
 
+/* Every file pattern the graph writes: write nodes' paths and previews and the export params of
+ * processing nodes, placed under the output directory as their frames' files are, frame tokens
+ * kept ("out/x.####.exr"); in graph order, possibly repeated. Free with
+ * nprfx_graph_output_patterns_free. */
+nprfx_result nprfx_graph_output_patterns(const nprfx_graph *g, char ***paths, int *count);
+void nprfx_graph_output_patterns_free(char **paths, int count);
+
 /* Whether the graph has a node called name. */
 int nprfx_graph_has_node(const nprfx_graph *g, const char *name);
 /* Number of write nodes (a graph to run needs at least one). */

@@ -140,6 +140,59 @@ void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n)
     }
 }
 
+/* pattern relative to the output directory, as internal_graph_resolve_path places a frame's
+ * file, with its frame tokens left in; appended to *list (NULL on no memory). */
+static int push_output(const nprfx_graph *g, const char *pattern, char ***list, int *count)
+{
+    if (!pattern || !pattern[0]) return 1;
+    const char *dir = g->out_dir;
+    int plain = pattern[0] == '/' || !dir || !dir[0] || !strcmp(dir, ".");
+    size_t n = strlen(pattern) + (plain ? 0 : strlen(dir) + 1) + 1;
+    char *path = malloc(n), **grown = realloc(*list, (size_t)(*count + 1) * sizeof *grown);
+    if (grown) *list = grown;
+    if (!path || !grown) {
+        free(path);
+        return 0;
+    }
+    if (plain)
+        snprintf(path, n, "%s", pattern);
+    else
+        snprintf(path, n, "%s/%s", dir, pattern);
+    grown[(*count)++] = path;
+    return 1;
+}
+
+nprfx_result nprfx_graph_output_patterns(const nprfx_graph *g, char ***paths, int *count)
+{
+    *paths = NULL;
+    *count = 0;
+    int ok = 1;
+    for (int i = 0; ok && i < g->count; i++) {
+        const gnode *n = &g->nodes[i];
+        if (n->kind == GK_WRITE) {
+            ok = push_output(g, n->path, paths, count) && push_output(g, n->preview, paths, count);
+            continue;
+        }
+        if (n->kind != GK_NODE || !n->desc->export_text) continue;
+        for (int k = 0; ok && k < n->desc->num_params; k++)
+            if (n->desc->params[k].flags & NPRFX_PARAM_EXPORT)
+                ok = push_output(g, n->params[k].s, paths, count);
+    }
+    if (ok) return NPRFX_OK;
+    nprfx_graph_output_patterns_free(*paths, *count);
+    *paths = NULL;
+    *count = 0;
+    return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
+                       "out of memory listing the graph's outputs");
+}
+
+void nprfx_graph_output_patterns_free(char **paths, int count)
+{
+    for (int i = 0; i < count; i++)
+        free(paths[i]);
+    free(paths);
+}
+
 long long nprfx_graph_take_render_items(nprfx_graph *g)
 {
     long long n = g->render_items;

@@ -207,6 +207,55 @@ static int cmp_int(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+int nprfx_seq_match(const char *pattern, const char *name, int *frame)
+{
+    const char *base = basename_of(pattern);
+    char prefix[4096], again[4096];
+    if (!nprfx_seq_has_pattern(base)) return !strcmp(base, name);
+    if (!expand(base, 0, 1, prefix, sizeof prefix)) return 0;
+    size_t plen = strlen(prefix);
+    if (strncmp(name, prefix, plen)) return 0;
+    const char *p = name + plen;
+    while (*p == ' ')
+        p++; /* "%4d" pads with spaces */
+    long f;
+    if (!parse_int(&p, &f)) return 0;
+    /* Only an exact re-expansion counts: rejects wrong padding and other suffixes. */
+    if (!expand(base, (int)f, 0, again, sizeof again) || strcmp(again, name)) return 0;
+    if (frame) *frame = (int)f;
+    return 1;
+}
+
+nprfx_result nprfx_seq_canonical(nprfx_context *ctx, const char *pattern, char *out, size_t size)
+{
+    size_t o = 0;
+    int len, width;
+    char pad;
+    for (const char *s = basename_of(pattern); *s; s += len) {
+        int t = token_at(s, &len, &width, &pad);
+        const char *piece = s;
+        size_t n = 1, hashes = 0;
+        if (t == TOK_NONE)
+            len = 1;
+        else if (t == TOK_PERCENT_LITERAL)
+            piece = "%";
+        else if (pad == '0' || width <= 1) /* "%d" prints what "#" prints */
+            hashes = width > 1 ? (size_t)width : 1;
+        else
+            n = (size_t)len; /* space padded: kept as written */
+        if (hashes) n = hashes;
+        if (o + n + 1 > size)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "path '%s' is too long", pattern);
+        if (hashes)
+            memset(out + o, '#', n);
+        else
+            memcpy(out + o, piece, n);
+        o += n;
+    }
+    out[o] = '\0';
+    return NPRFX_OK;
+}
+
 nprfx_result nprfx_seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame_list *out)
 {
     out->frames = NULL;
@@ -216,7 +265,7 @@ nprfx_result nprfx_seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame
                            "'%s' has no frame number pattern (####, @, %%04d)", pattern);
     const char *base = basename_of(pattern);
     size_t dirlen = (size_t)(base - pattern);
-    char dir[4096], prefix[4096], name[4096];
+    char dir[4096], prefix[4096];
     if (dirlen + 2 > sizeof dir || strlen(base) + 1 > sizeof prefix)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "path '%s' is too long", pattern);
     if (dirlen) {
@@ -235,15 +284,9 @@ nprfx_result nprfx_seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame
     int cap = 0;
     struct dirent *e;
     while ((e = readdir(d))) {
-        if (strncmp(e->d_name, prefix, plen)) continue;
-        const char *p = e->d_name + plen;
-        while (*p == ' ')
-            p++; /* "%4d" pads with spaces */
-        long f;
-        if (!parse_int(&p, &f)) continue;
-        /* Only an exact re-expansion counts: rejects wrong padding and other suffixes. */
-        if (!expand(base, (int)f, 0, name, sizeof name) || strcmp(name, e->d_name)) continue;
-        if (!push_frame(out, &cap, (int)f)) {
+        int f;
+        if (strncmp(e->d_name, prefix, plen) || !nprfx_seq_match(base, e->d_name, &f)) continue;
+        if (!push_frame(out, &cap, f)) {
             closedir(d);
             nprfx_seq_frames_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory listing '%s'", pattern);

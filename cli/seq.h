@@ -36,6 +36,16 @@ int nprfx_seq_has_pattern(const char *path);
 nprfx_result nprfx_seq_expand(nprfx_context *ctx, const char *pattern, int frame, char *out,
                               size_t size);
 
+/* 1 when name (a file name, no directory) is the file of some frame of pattern's file name, by
+ * the same exact re-expansion rule as nprfx_seq_list (*frame receives it; frame may be NULL); a
+ * pattern without a token matches its own file name only. */
+int nprfx_seq_match(const char *pattern, const char *name, int *frame);
+
+/* pattern's file name with every frame token written one way, so that spellings of one sequence
+ * agree: zero padded tokens ("####", "@@@@", "%04d") and "%d" become '#' runs of their width,
+ * "%%" becomes '%', space padded "%4d" stays as written (the output locks' names). */
+nprfx_result nprfx_seq_canonical(nprfx_context *ctx, const char *pattern, char *out, size_t size);
+
 /* The frames whose files exist for pattern (ascending, no duplicates; count 0 when none). A name
  * matches only if expanding the pattern with its frame gives that name exactly, so "####" does
  * not pick up "12.exr" or "00012.exr". */
