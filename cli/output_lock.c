@@ -18,11 +18,11 @@
 #include "seq.h"
 
 typedef struct lock_entry {
-    char pattern[4096];        /* as the graph names it, for messages */
-    char dir[4096];            /* the sequence's folder as given ("." when none) */
-    char base[1024];           /* the pattern's file name */
-    char path[4096];           /* the lock file, beside the sequence */
-    char key[PATH_MAX + 1100]; /* the lock file under the folder's real path: sorts, dedups */
+    char pattern[4096];          /* as the graph names it, for messages */
+    char dir[4096];              /* the sequence's folder as given ("." when none) */
+    char base[1024];             /* the pattern's file name */
+    char path[4096 + 1024 + 16]; /* the lock file, beside the sequence */
+    char key[PATH_MAX + 1100];   /* the lock file under the folder's real path: sorts, dedups */
     int fd;
 } lock_entry;
 
