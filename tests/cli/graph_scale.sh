@@ -89,8 +89,8 @@ chain 30000 m30000 > chain30k_cycle.json
 run_bounded chain30k_cycle 2 "the graph has a cycle: m1 -> m2" 60000 \
   -- "$NPRFX" run chain30k_cycle.json --quiet
 echo "validating 30,000 nodes: $((took - base)) ms beyond start-up"
-[ $((took - base)) -lt 3000 ] && passes=$((passes+1)) ||
-  fail "validating 30,000 nodes took $((took - base)) ms beyond start-up (bound 3000)"
+[ $((took - base)) -lt 5000 ] && passes=$((passes+1)) ||
+  fail "validating 30,000 nodes took $((took - base)) ms beyond start-up (bound 5000; it took minutes before)"
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]
