@@ -43,6 +43,8 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  write: {\"node\": \"write\", \"inputs\": {\"image\": REF}, \"path\": "
         "\"out/x.####.exr\", \"preview\": \"out/x.####.png\"}\n"
         "  REF:   \"node\" or \"node:channels\", e.g. \"plate:Depth.Z\", \"plate:Vector.XY\"\n"
+        "Node names are unique; a graph has at most 1,000,000 nodes, in any depth, and no\n"
+        "cycles (an error names the nodes on one).\n"
         "Read paths are relative to the graph file, write paths to the current directory.\n"
         "Files are written under a temporary name and renamed, so a failed frame never leaves\n"
         "a partial file. A run locks every sequence it writes (a hidden .NAME.nprfx-lock file\n"

@@ -19,71 +19,6 @@
 #include "seq.h"
 #include "internal_graph.h"
 
-/* ---------------------------------------------------------------- cache ---- */
-
-static void cache_unlink(nprfx_graph *g, centry *e)
-{
-    if (e->prev)
-        e->prev->next = e->next;
-    else
-        g->head = e->next;
-    if (e->next) e->next->prev = e->prev;
-    e->prev = e->next = NULL;
-}
-
-static void cache_push_front(nprfx_graph *g, centry *e)
-{
-    e->prev = NULL;
-    e->next = g->head;
-    if (g->head) g->head->prev = e;
-    g->head = e;
-}
-
-static centry *cache_find(nprfx_graph *g, int node, int frame)
-{
-    for (centry *e = g->head; e; e = e->next)
-        if (e->node == node && e->frame == frame) {
-            cache_unlink(g, e);
-            cache_push_front(g, e);
-            return e;
-        }
-    return NULL;
-}
-
-static void cache_evict(nprfx_graph *g)
-{
-    centry *e = g->head;
-    while (e && e->next)
-        e = e->next; /* least recently used is last */
-    while (e && g->cache_bytes > g->cache_limit) {
-        centry *prev = e->prev;
-        if (e->pins == 0 && e != g->head) {
-            cache_unlink(g, e);
-            g->cache_bytes -= e->bytes;
-            internal_graph_centry_free(e);
-        }
-        e = prev;
-    }
-}
-
-/* Take ownership of im and names (names: nc malloc'd strings). */
-static centry *cache_insert(nprfx_graph *g, int node, int frame, nprfx_image *im, char **names)
-{
-    centry *e = calloc(1, sizeof *e);
-    if (!e) return NULL;
-    e->node = node;
-    e->frame = frame;
-    e->im = *im;
-    e->names = names;
-    e->bytes = (size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
-               (size_t)im->channels * sizeof(float);
-    memset(im, 0, sizeof *im);
-    cache_push_front(g, e);
-    g->cache_bytes += e->bytes;
-    cache_evict(g);
-    return e;
-}
-
 /* ---------------------------------------------------------------- evaluation ---- */
 
 char **internal_graph_names_dup(const char *const *names, int n)
@@ -378,7 +313,7 @@ static void render_frame_release(render_frame *rf)
     for (int i = 0; i < RING; i++)
         slot_release(&rf->ring[i]);
     rf->nbase = 0;
-    cache_evict(rf->g);
+    internal_graph_cache_evict(rf->g);
 }
 
 static nprfx_result fetch_input(render_frame *rf, int k, int frame, int base, nprfx_image *out)
@@ -523,13 +458,9 @@ done:
     return r;
 }
 
-nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out)
+/* Render one node whose inputs at frame are cached (and pinned), and cache its result. */
+static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
 {
-    centry *e = cache_find(g, node, frame);
-    if (e) {
-        *out = e;
-        return NPRFX_OK;
-    }
     nprfx_image im;
     memset(&im, 0, sizeof im);
     char **names = NULL;
@@ -549,8 +480,114 @@ nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **o
         break;
     }
     if (r) return r;
-    e = cache_insert(g, node, frame, &im, names);
-    if (!e) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-    *out = e;
+    *out = internal_graph_cache_insert(g, node, frame, &im, names);
+    if (!*out) {
+        nprfx_image_free(&im);
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
     return NPRFX_OK;
+}
+
+/* The evaluation's work: a node to evaluate at a frame; once its inputs are pushed (expanded),
+ * the results they leave pinned on the pin stack from pin_base on. */
+typedef struct work {
+    int node, frame, expanded;
+    size_t pin_base;
+} work;
+
+typedef struct eval_stacks {
+    work *w;
+    size_t nw, capw;
+    centry **pin;
+    size_t npin, cappin;
+} eval_stacks;
+
+static int push_work(eval_stacks *s, int node, int frame)
+{
+    if (s->nw == s->capw) {
+        size_t n = s->capw ? s->capw * 2 : 64;
+        work *w = realloc(s->w, n * sizeof *w);
+        if (!w) return 0;
+        s->w = w;
+        s->capw = n;
+    }
+    s->w[s->nw++] = (work){node, frame, 0, 0};
+    return 1;
+}
+
+static int push_pin(eval_stacks *s, centry *e)
+{
+    if (s->npin == s->cappin) {
+        size_t n = s->cappin ? s->cappin * 2 : 64;
+        centry **p = realloc(s->pin, n * sizeof *p);
+        if (!p) return 0;
+        s->pin = p;
+        s->cappin = n;
+    }
+    e->pins++;
+    s->pin[s->npin++] = e;
+    return 1;
+}
+
+static void unpin_to(eval_stacks *s, size_t base)
+{
+    while (s->npin > base)
+        s->pin[--s->npin]->pins--;
+}
+
+static nprfx_result out_of_memory(nprfx_graph *g, int node)
+{
+    return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory evaluating node '%s'",
+                       g->nodes[node].name);
+}
+
+/* Evaluation is driven by an explicit work stack, not recursion, so a graph's depth never meets
+ * the C stack: a node's inputs at the frame are evaluated first (input 0 first) and stay pinned
+ * until the node has rendered, then the node's own result is pinned for the node that asked.
+ * Results come from the cache when it still has them; the graph is acyclic (checked at load), so
+ * the stack empties. Only temporal fetches of other frames re-enter here from inside a render. */
+nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out)
+{
+    centry *e = internal_graph_cache_find(g, node, frame);
+    if (e) {
+        *out = e;
+        return NPRFX_OK;
+    }
+    if (g->fetch_depth >= NPRFX_GRAPH_MAX_FETCH_DEPTH)
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
+                           "node '%s': temporal nodes nest more than %d deep (each fetches "
+                           "other frames of the next)",
+                           g->nodes[node].name, NPRFX_GRAPH_MAX_FETCH_DEPTH);
+    g->fetch_depth++;
+    eval_stacks s;
+    memset(&s, 0, sizeof s);
+    nprfx_result r = push_work(&s, node, frame) ? NPRFX_OK : out_of_memory(g, node);
+    while (!r && s.nw > 0) {
+        work *w = &s.w[s.nw - 1];
+        if (!w->expanded) {
+            if ((e = internal_graph_cache_find(g, w->node, w->frame))) {
+                s.nw--;
+                if (!push_pin(&s, e)) r = out_of_memory(g, node);
+                continue;
+            }
+            w->expanded = 1;
+            w->pin_base = s.npin;
+            const gnode *n = &g->nodes[w->node];
+            int f = w->frame; /* w moves when the stack grows */
+            for (int k = n->ninputs - 1; k >= 0 && !r; k--)
+                if (n->inputs[k].src >= 0 && !push_work(&s, n->inputs[k].src, f))
+                    r = out_of_memory(g, node);
+            continue;
+        }
+        r = eval_one(g, w->node, w->frame, &e);
+        unpin_to(&s, w->pin_base);
+        s.nw--;
+        if (!r && !push_pin(&s, e)) r = out_of_memory(g, node);
+    }
+    if (!r) *out = s.pin[0]; /* the root's result, the only pin left */
+    unpin_to(&s, 0);
+    free(s.w);
+    free(s.pin);
+    g->fetch_depth--;
+    return r;
 }

@@ -44,13 +44,6 @@ double internal_graph_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int internal_graph_find_node(const nprfx_graph *g, const char *name)
-{
-    for (int i = 0; i < g->count; i++)
-        if (!strcmp(g->nodes[i].name, name)) return i;
-    return -1;
-}
-
 /* ---------------------------------------------------------------- parsing ---- */
 
 static nprfx_result parse_ref(nprfx_graph *g, const char *node, const char *input, const cJSON *j,
@@ -298,29 +291,7 @@ static nprfx_result link_graph(nprfx_graph *g)
             }
         }
     }
-    /* cycles: iterative marking by depth-first search */
-    for (int i = 0; i < g->count; i++)
-        g->nodes[i].mark = 0;
-    for (int i = 0; i < g->count; i++) {
-        /* walk every path from i; with small graphs a simple bounded DFS per node suffices */
-        int stack[256], depth = 0;
-        stack[depth++] = i;
-        int steps = 0;
-        while (depth > 0) {
-            int cur = stack[--depth];
-            if (++steps > 100000) break;
-            gnode *n = &g->nodes[cur];
-            for (int k = 0; k < n->ninputs; k++) {
-                int s = n->inputs[k].src;
-                if (s < 0) continue;
-                if (s == i)
-                    return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
-                                       "the graph has a cycle through node '%s'", g->nodes[i].name);
-                if (depth < 256) stack[depth++] = s;
-            }
-        }
-    }
-    return NPRFX_OK;
+    return internal_graph_check_cycles(g);
 }
 
 /* first_frame and last_frame from frames_text: the shot temporal nodes see. */
@@ -339,17 +310,31 @@ static nprfx_result shot_range(nprfx_graph *g)
     return NPRFX_OK;
 }
 
+/* Line and column (1-based; a column counts characters, not UTF-8 bytes) of at in json. */
+static void json_position(const char *json, const char *at, int *line, int *column)
+{
+    *line = *column = 1;
+    for (const char *c = json; at && *c && c < at; c++) {
+        if (*c == '\n') {
+            ++*line;
+            *column = 1;
+        } else if (((unsigned char)*c & 0xc0) != 0x80) {
+            ++*column;
+        }
+    }
+}
+
 nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char *base_dir,
                                const nprfx_graph_options *opt, nprfx_graph **out)
 {
     *out = NULL;
-    cJSON *root = cJSON_Parse(json);
+    const char *at = NULL; /* per call, unlike cJSON_GetErrorPtr's global */
+    cJSON *root = cJSON_ParseWithOpts(json, &at, 0);
     if (!root) {
-        const char *at = cJSON_GetErrorPtr();
-        int line = 1;
-        for (const char *c = json; at && c < at; c++)
-            line += *c == '\n';
-        return nprfx_error(ctx, NPRFX_ERR_PARSE, "malformed JSON near line %d", line);
+        int line, column;
+        json_position(json, at, &line, &column);
+        return nprfx_error(ctx, NPRFX_ERR_PARSE, "malformed JSON near line %d, column %d", line,
+                           column);
     }
     nprfx_graph *g = calloc(1, sizeof *g);
     if (!g) {
@@ -359,6 +344,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     g->ctx = ctx;
     g->base_dir = internal_graph_strdup(base_dir ? base_dir : ".");
     g->cache_limit = (opt && opt->cache_bytes) ? opt->cache_bytes : (size_t)2 << 30;
+    g->cache_entry_limit = NPRFX_GRAPH_CACHE_ENTRIES;
     g->tile = opt ? opt->tile : 0;
     if (opt && opt->size >= offsetof(nprfx_graph_options, hook) + sizeof opt->hook && opt->hook) {
         g->hook = *opt->hook;
@@ -394,15 +380,33 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
             goto done;
         }
     }
-    g->count = cJSON_GetArraySize(nodes);
-    g->nodes = calloc((size_t)(g->count ? g->count : 1), sizeof *g->nodes);
+    int count = cJSON_GetArraySize(nodes);
+    if (count > NPRFX_GRAPH_MAX_NODES) {
+        r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
+                        "the graph has %d nodes; at most %d are allowed", count,
+                        NPRFX_GRAPH_MAX_NODES);
+        goto done;
+    }
+    g->nodes = calloc((size_t)(count ? count : 1), sizeof *g->nodes);
     if (!g->nodes) {
         r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         goto done;
     }
+    if ((r = internal_graph_names_init(g, count))) goto done;
     int i = 0;
     for (const cJSON *e = nodes->child; e; e = e->next, i++) {
+        g->count = i + 1; /* what nprfx_graph_free releases */
         g->nodes[i].name = internal_graph_strdup(e->string);
+        if (!g->nodes[i].name) {
+            r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+            goto done;
+        }
+        if (internal_graph_names_add(g, i) >= 0) {
+            r = nprfx_error(ctx, NPRFX_ERR_PARSE,
+                            "node name '%s' is given twice in \"nodes\" (names must be unique)",
+                            e->string);
+            goto done;
+        }
         char scope[512];
         snprintf(scope, sizeof scope, "node '%s'", e->string);
         if (nprfx_context_create_scoped(ctx, scope, &g->nodes[i].ctx)) {
@@ -464,10 +468,7 @@ nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_
 void nprfx_graph_free(nprfx_graph *g)
 {
     if (!g) return;
-    for (centry *e = g->head, *next; e; e = next) {
-        next = e->next;
-        internal_graph_centry_free(e);
-    }
+    internal_graph_cache_clear(g);
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
@@ -494,6 +495,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->view);
     }
     free(g->nodes);
+    free(g->name_slots);
     nprfx_context_destroy(g->owned_ctx);
     free(g->frames_text);
     free(g->base_dir);

@@ -30,7 +30,6 @@ typedef struct gnode {
     char *path, *preview, *colorspace, *vectors, *compression, *scene;
     char *display, *view;
     int half, raw, width, height;
-    int mark; /* cycle detection */
 } gnode;
 
 typedef struct centry {
@@ -40,7 +39,19 @@ typedef struct centry {
     size_t bytes;
     int pins;
     struct centry *prev, *next; /* most recent first */
+    struct centry *hnext;       /* the next entry in the same hash slot */
 } centry;
+
+/* The most nodes a graph may have: generous, and still a graph whose bookkeeping (names, scoped
+ * contexts, parsed params) fits in memory. README and `nprfx run --help` say it. */
+#define NPRFX_GRAPH_MAX_NODES 1000000
+/* Cached results kept besides the byte bound: graphs of many tiny frames would otherwise keep
+ * every node's result with its bookkeeping. */
+#define NPRFX_GRAPH_CACHE_ENTRIES 16384
+/* How deep renders may nest through temporal fetches (a temporal node fetching another frame of
+ * an input that is itself temporal, and so on): each level is a render call on the C stack,
+ * which the evaluation's own work stack cannot replace. */
+#define NPRFX_GRAPH_MAX_FETCH_DEPTH 64
 
 struct nprfx_graph {
     nprfx_context *ctx;
@@ -49,9 +60,14 @@ struct nprfx_graph {
     char *frames_text;
     int first_frame, last_frame;
     char *base_dir, *out_dir, *ocio;
-    char *fmt_text; /* "format": "WxH" for graphs without inputs */
-    centry *head;
+    char *fmt_text;  /* "format": "WxH" for graphs without inputs */
+    int *name_slots; /* hash index of node names (graph_names.c) */
+    size_t name_nslots;
+    centry *head, *tail;
+    centry **cache_slots; /* hash table of the entries (graph_cache.c) */
+    size_t cache_nslots, cache_entries, cache_entry_limit;
     size_t cache_bytes, cache_limit;
+    int fetch_depth; /* evaluations in progress, one per nested temporal fetch */
     int tile;
     double render_seconds;
     long long render_items; /* what nodes counted (nprfx_render_args.items) */
@@ -63,8 +79,24 @@ struct nprfx_graph {
 
 char *internal_graph_strdup(const char *s);
 double internal_graph_now(void);
-/* The index of the node called name, or -1. */
+/* The index of the node called name, or -1 (graph_names.c). */
 int internal_graph_find_node(const nprfx_graph *g, const char *name);
+/* An empty name index with room for count nodes. */
+nprfx_result internal_graph_names_init(nprfx_graph *g, int count);
+/* Index node's name; when another node has it already, that node's index (else -1). */
+int internal_graph_names_add(nprfx_graph *g, int node);
+/* An error naming the nodes of a cycle, if the linked graph has one (graph_cycles.c). */
+nprfx_result internal_graph_check_cycles(nprfx_graph *g);
+/* The result cache (graph_cache.c): the entry of (node, frame), made the most recent, or NULL. */
+centry *internal_graph_cache_find(nprfx_graph *g, int node, int frame);
+/* Add a result (taking im and names), evicting unpinned old ones over the bounds; NULL: no memory.
+ */
+centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_image *im,
+                                    char **names);
+/* Evict unpinned entries, oldest first, until the cache is within its bounds. */
+void internal_graph_cache_evict(nprfx_graph *g);
+/* Free every entry. */
+void internal_graph_cache_clear(nprfx_graph *g);
 void internal_graph_centry_free(centry *e);
 /* Copies of n channel names (NULL names become "C"). */
 char **internal_graph_names_dup(const char *const *names, int n);

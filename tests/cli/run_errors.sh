@@ -54,10 +54,19 @@ graph dangling '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "gho
 expect 2 "refers to 'ghost', which is not a node" -- "$NPRFX" run dangling.json
 
 printf '{"nodes": {"a": {"node": "synth",\n "scene": }}}\n' > malformed.json
-expect 2 "malformed JSON near line 2" -- "$NPRFX" run malformed.json
+expect 2 "malformed JSON near line 2, column 11" -- "$NPRFX" run malformed.json
+# Columns count characters, not UTF-8 bytes: the error is at the "2" after the "1".
+printf '{"nodes": {"a": {"node": "synth",\n  "\303\251": 1 2}}}\n' > malformed_utf8.json
+expect 2 "malformed JSON near line 2, column 10" -- "$NPRFX" run malformed_utf8.json
+
+# cJSON keeps both of two equal keys: a name given twice is an error, not a hidden node.
+graph duplicate '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate"}}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
+expect 2 "duplicate.json: node name 'b' is given twice" -- "$NPRFX" run duplicate.json
 
 graph cycle '"a": {"node": "blend", "inputs": {"base": "plate", "layer": "b"}}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "a"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
-expect 2 "cycle" -- "$NPRFX" run cycle.json
+expect 2 "cycle.json: the graph has a cycle: a -> b -> a" -- "$NPRFX" run cycle.json
+graph self_cycle '"a": {"node": "blend", "inputs": {"base": "plate", "layer": "a"}}, "w": {"node": "write", "inputs": {"image": "a"}, "path": "o/x.####.exr"}'
+expect 2 "the graph has a cycle: a -> a" -- "$NPRFX" run self_cycle.json
 
 # A failed frame leaves the frames before it whole and no temporary file behind.
 mkdir -p seq
