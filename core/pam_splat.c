@@ -8,13 +8,17 @@
  *  1. visibility: the depth and id AOVs are the depth buffer (a renderer has already resolved
  *     what is visible); a splat reaches a pixel of its own object id whose depth is within the
  *     tolerance of the depth expected on the splat's plane (gabor-splat's hard test);
- *  2. accumulation: each fragment adds g = w exp(-pi a^2 |d|^2) (a as gabor's: 5% at the rim)
- *     times the PAM's YUV deviation from its mean (Eq. 9) at the splat's texture coordinates and
- *     the fragment's tone, and g to the weight;
- *  3. normalisation: D = sum g dev / sum g, and the fragment's colour is Eq. 10 applied to the
- *     model colour there: Y + beta D_Y, UV + gamma D_UV, back to RGB.
- * The model colour and the tone are the fragment's (the paper's per-splat colour, evaluated at
- * each pixel: with a smooth model colour the two agree, and the model's own edges stay sharp).
+ *  2. accumulation: each fragment adds g = w exp(-pi a^2 sharpness (|d|^2 + (aspect^2 - 1)
+ *     across^2)) (a as gabor's: 5% at the rim; narrower across the direction, so dabs are long
+ *     and the nearest wins) times the texel's YUV deviation from its map's mean at the splat's
+ *     texture coordinates and the fragment's tone, g to the weight and g times the splat's
+ *     model colour;
+ *  3. normalisation: D = (the tone's maps' mean - Eq. 9's mean) + detail * sum g dev / sum g,
+ *     and the colour is Eq. 10 applied to the model colour (the splats' blend, or the pixel's):
+ *     Y + beta D_Y, UV + gamma D_UV, back to RGB. detail = 1 is the paper's Eq. 10; more gives
+ *     back the stroke contrast the average over overlapping splats takes away.
+ * The tone is the fragment's; the model colour the splat's (the paper's, read at its owner
+ * pixel: dab-shaped colour) or, with color_from pixel, the fragment's (sharp model edges).
  * A splat's texture coordinates, in PAM pixels: a hashed origin (Eq. 11's noise offsets, fixed
  * per splat) plus the screen offset from its centre, turned so that the map's rows (v, along
  * which its strokes run) follow the direction, divided by `texel`, and v moved back by

@@ -338,7 +338,10 @@ const nprfx_node_desc nprfx_node_pam_splat = {
         " run along the direction field, that changes the model colour by the paint's "
         "luminance and chroma variations (Eq. 10 in YUV: Y + beta (texel Y - mean Y), UV + "
         "gamma (texel UV - mean UV), the mean taken over the whole PAM, so dark maps darken and "
-        "light maps lighten). With flow, the strokes move along the direction inside the "
+        "light maps lighten); the strokes' own part of the deviation (texel minus its map's "
+        "mean) is scaled by detail, since overlapping splats average it away. Dabs are long "
+        "along the direction (aspect) and the nearest one dominates (sharpness), so single "
+        "strokes show. With flow, the strokes move along the direction inside the "
         "splats (Eq. 11).\n"
         "\n"
         "The splats are gabor-splat's anchored points: anchored on the surfaces through Pref or"
@@ -353,7 +356,8 @@ const nprfx_node_desc nprfx_node_pam_splat = {
         "The tone picks the maps by their mean luminance: w = 0 the darkest, 1 the lightest, "
         "in between the two maps whose mean luminance brackets the darkest mean plus w times "
         "the range, mixed linearly, so the mean brightness follows the tone. Tones outside [0,"
-        " 1] are clamped. Model colour and tone are read per pixel; background pixels pass "
+        " 1] are clamped. The tone is read per pixel, the model colour at each splat's "
+        "centre (color_from splat: dab-shaped colour) or per pixel; background pixels pass "
         "through. Output is bit-identical for any thread count and tile split.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
