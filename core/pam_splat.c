@@ -8,13 +8,17 @@
  *  1. visibility: the depth and id AOVs are the depth buffer (a renderer has already resolved
  *     what is visible); a splat reaches a pixel of its own object id whose depth is within the
  *     tolerance of the depth expected on the splat's plane (gabor-splat's hard test);
- *  2. accumulation: each fragment adds g = w exp(-pi a^2 |d|^2) (a as gabor's: 5% at the rim)
- *     times the PAM's YUV deviation from its mean (Eq. 9) at the splat's texture coordinates and
- *     the fragment's tone, and g to the weight;
- *  3. normalisation: D = sum g dev / sum g, and the fragment's colour is Eq. 10 applied to the
- *     model colour there: Y + beta D_Y, UV + gamma D_UV, back to RGB.
- * The model colour and the tone are the fragment's (the paper's per-splat colour, evaluated at
- * each pixel: with a smooth model colour the two agree, and the model's own edges stay sharp).
+ *  2. accumulation: each fragment adds g = w exp(-pi a^2 sharpness (|d|^2 + (aspect^2 - 1)
+ *     across^2)) (a as gabor's: 5% at the rim; narrower across the direction, so dabs are long
+ *     and the nearest wins) times the texel's YUV deviation from its map's mean at the splat's
+ *     texture coordinates and the fragment's tone, g to the weight and g times the splat's
+ *     model colour;
+ *  3. normalisation: D = (the tone's maps' mean - Eq. 9's mean) + detail * sum g dev / sum g,
+ *     and the colour is Eq. 10 applied to the model colour (the splats' blend, or the pixel's):
+ *     Y + beta D_Y, UV + gamma D_UV, back to RGB. detail = 1 is the paper's Eq. 10; more gives
+ *     back the stroke contrast the average over overlapping splats takes away.
+ * The tone is the fragment's; the model colour the splat's (the paper's, read at its owner
+ * pixel: dab-shaped colour) or, with color_from pixel, the fragment's (sharp model edges).
  * A splat's texture coordinates, in PAM pixels: a hashed origin (Eq. 11's noise offsets, fixed
  * per splat) plus the screen offset from its centre, turned so that the map's rows (v, along
  * which its strokes run) follow the direction, divided by `texel`, and v moved back by
@@ -34,17 +38,20 @@
 #include "nprfx/rng.h"
 
 #define PAM_TILE 64
+#define ACC 7 /* accumulated per pixel (tile_buf.acc) */
 
 /* ---- the measured PAM, shared by the renders of an instance ---------------------------------- */
 
-/* The PAM as splats read it: its info and, per map, row and column, the texel's YUV minus
- * Eq. 9's mean. Reference-counted: a render keeps the one it started with even if another
- * render of the instance swaps in a new PAM. */
+/* The PAM as splats read it: its info, each map's mean YUV and, per map, row and column, the
+ * texel's YUV minus its map's mean (the stroke detail; the tone's part, the map's mean minus
+ * Eq. 9's, is added per pixel after the splats are averaged). Reference-counted: a render keeps the
+ * one it started with even if another render of the instance swaps in a new PAM. */
 typedef struct pam_prep {
     int refs;
     uint64_t key;
     nprfx_pam_stats info;
-    float *dev; /* count x S x S x 3 */
+    double map_mean[NPRFX_PAM_MAX_MAPS][3]; /* YUV */
+    float *dev;                             /* count x S x S x 3 */
 } pam_prep;
 
 typedef struct pam_cache {
@@ -94,7 +101,8 @@ static nprfx_result prep_make(nprfx_context *ctx, const nprfx_image *pam, uint64
         free(p);
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "pam-splat: out of memory for the PAM");
     }
-    for (int m = 0; m < n; m++)
+    for (int m = 0; m < n; m++) {
+        double sum[3] = {0.0, 0.0, 0.0};
         for (int y = 0; y < S; y++)
             for (int x = 0; x < S; x++) {
                 const float *px =
@@ -102,9 +110,18 @@ static nprfx_result prep_make(nprfx_context *ctx, const nprfx_image *pam, uint64
                 double rgb[3] = {px[0], px[1], px[2]}, yuv[3];
                 nprfx_rgb_to_yuv(rgb, yuv);
                 float *d = p->dev + (((size_t)m * S + y) * S + x) * 3;
-                for (int c = 0; c < 3; c++)
-                    d[c] = (float)(yuv[c] - p->info.mean[c]);
+                for (int c = 0; c < 3; c++) {
+                    d[c] = (float)yuv[c];
+                    sum[c] += yuv[c];
+                }
             }
+        for (int c = 0; c < 3; c++)
+            p->map_mean[m][c] = sum[c] / ((double)S * S);
+        float *d = p->dev + (size_t)m * S * S * 3;
+        for (size_t k = 0; k < (size_t)S * S; k++)
+            for (int c = 0; c < 3; c++)
+                d[3 * k + c] = (float)(d[3 * k + c] - p->map_mean[m][c]);
+    }
     p->key = key;
     p->refs = 1;
     *out = p;
@@ -165,6 +182,8 @@ typedef struct pam_job {
     const nprfx_pam_splat_params *p;
     const nprfx_pam_splat_inputs *in;
     double radius, r2, pa2, inv_texel, shift, tol, theta0;
+    double pa2s; /* the weights' Gaussian, narrowed by sharpness */
+    double pa2x; /* its extra narrowing across the direction */
     nprfx_image *out;
     int ntx, nty;
     int *tile_ok;
@@ -177,6 +196,7 @@ typedef struct splat {
     float id;
     double eux, euy, evx, evy; /* screen offset -> map columns (u) and rows (v), per pixel */
     double u0, v0;
+    double yuv[3]; /* the model colour at the splat's owner pixel (color_from splat) */
 } splat;
 
 static void splat_setup(const pam_job *P, const gpoint *pt, splat *s)
@@ -205,6 +225,15 @@ static void splat_setup(const pam_job *P, const gpoint *pt, splat *s)
     s->evy = -sn * P->inv_texel;
     s->eux = sn * P->inv_texel;
     s->euy = c * P->inv_texel;
+    if (P->p->color_from == NPRFX_PAM_COLOR_SPLAT) {
+        const nprfx_image *col = P->in->color;
+        double rgb[3];
+        for (int k = 0; k < 3; k++)
+            rgb[k] = sample_input(col, pt->rx, pt->ry, k, 0.0f);
+        nprfx_rgb_to_yuv(rgb, s->yuv);
+    } else {
+        s->yuv[0] = s->yuv[1] = s->yuv[2] = 0.0;
+    }
     uint64_t h = nprfx_mix64(pt->h ^ 0x1f83d9abfb41bd6bull);
     double S = P->pam->info.size, j = P->p->jitter;
     s->u0 = j * S * nprfx_u01(h);
@@ -236,7 +265,7 @@ static inline void texel_add(const pam_prep *pp, int m, double u, double v, doub
 typedef struct tile_buf {
     int *mi;
     float *mt;
-    double *acc; /* 4 per pixel: Y, U, V, weight */
+    double *acc; /* ACC per pixel: deviation Y, U, V, weight, the splats' model Y, U, V */
     double *gx;  /* a splat's envelope along its columns */
 } tile_buf;
 
@@ -257,11 +286,11 @@ static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx
     double tolz = P->tol * s->z;
     for (int x = xa; x <= xb; x++) {
         double dx = x - s->sx;
-        B->gx[x - xa] = exp(-P->pa2 * dx * dx);
+        B->gx[x - xa] = exp(-P->pa2s * dx * dx);
     }
     for (int y = ya; y <= yb; y++) {
         double dy = y - s->sy;
-        double gy = s->w * exp(-P->pa2 * dy * dy);
+        double gy = s->w * exp(-P->pa2s * dy * dy);
         const float *zr = J->zwin + (size_t)(y - J->window.y0) * ww - J->window.x0;
         const float *ir = J->idwin + (size_t)(y - J->window.y0) * ww - J->window.x0;
         for (int x = xa; x <= xb; x++) {
@@ -272,17 +301,22 @@ static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx
             if (!(fabs(zr[x] - zp) <= tolz)) continue;
             double g = gy * B->gx[x - xa];
             size_t o = (size_t)(y - ty0) * (size_t)tw + (size_t)(x - tx0);
-            double u = s->u0 + dx * s->eux + dy * s->euy;
+            double du = dx * s->eux + dy * s->euy;
+            if (P->pa2x > 0.0) g *= exp(-P->pa2x * du * du);
+            double u = s->u0 + du;
             double v = s->v0 + dx * s->evx + dy * s->evy;
             double t = B->mt[o], dev[3] = {0.0, 0.0, 0.0};
             int m = B->mi[o];
             texel_add(P->pam, m, u, v, 1.0 - t, dev);
             if (t > 0.0) texel_add(P->pam, m + 1, u, v, t, dev);
-            double *a = B->acc + 4 * o;
+            double *a = B->acc + ACC * o;
             a[0] += g * dev[0];
             a[1] += g * dev[1];
             a[2] += g * dev[2];
             a[3] += g;
+            a[4] += g * s->yuv[0];
+            a[5] += g * s->yuv[1];
+            a[6] += g * s->yuv[2];
         }
     }
 }
@@ -296,7 +330,7 @@ static void render_tile(pam_job *P, int t, tile_buf *B)
     int ty1 = ty0 + PAM_TILE < J->window.y1 ? ty0 + PAM_TILE : J->window.y1;
     int tw = tx1 - tx0;
     size_t npx = (size_t)tw * (size_t)(ty1 - ty0);
-    memset(B->acc, 0, sizeof(double) * 4 * npx);
+    memset(B->acc, 0, sizeof(double) * ACC * npx);
     for (int y = ty0; y < ty1; y++)
         for (int x = tx0; x < tx1; x++) {
             size_t o = (size_t)(y - ty0) * (size_t)tw + (size_t)(x - tx0);
@@ -342,18 +376,30 @@ static void render_tile(pam_job *P, int t, tile_buf *B)
                              ? nprfx_image_at(in->color, x, y)[c]
                              : 0.0f;
             float zz = J->zwin[(size_t)(y - J->window.y0) * ww + (size_t)(x - J->window.x0)];
-            const double *a = B->acc + 4 * o;
+            const double *a = B->acc + ACC * o;
             if (!(zz > 0.0f) || !(a[3] > 0.0)) {
                 /* background, or a surface pixel no splat reached: the model colour */
                 for (int c = 0; c < och; c++)
                     dst[c] = col[c];
                 continue;
             }
-            double rgb[3] = {col[0], col[1], col[2]}, yuv[3];
-            nprfx_rgb_to_yuv(rgb, yuv);
-            yuv[0] += P->p->beta * (a[0] / a[3]);
-            yuv[1] += P->p->gamma * (a[1] / a[3]);
-            yuv[2] += P->p->gamma * (a[2] / a[3]);
+            double rgb[3] = {col[0], col[1], col[2]}, yuv[3], d[3];
+            /* Eq. 9-10's deviation, texel - mean: the local maps' mean minus the PAM's (the
+             * tone) plus the averaged strokes' own deviation, scaled by detail */
+            const pam_prep *pp = P->pam;
+            int m = B->mi[o];
+            double t = B->mt[o];
+            for (int c = 0; c < 3; c++)
+                d[c] = (1.0 - t) * pp->map_mean[m][c] + t * pp->map_mean[m + 1][c] -
+                       pp->info.mean[c] + P->p->detail * (a[c] / a[3]);
+            if (P->p->color_from == NPRFX_PAM_COLOR_SPLAT)
+                for (int c = 0; c < 3; c++)
+                    yuv[c] = a[4 + c] / a[3]; /* each dab painted in its splat's colour */
+            else
+                nprfx_rgb_to_yuv(rgb, yuv);
+            yuv[0] += P->p->beta * d[0];
+            yuv[1] += P->p->gamma * d[1];
+            yuv[2] += P->p->gamma * d[2];
             nprfx_yuv_to_rgb(yuv, rgb);
             for (int c = 0; c < 3; c++)
                 dst[c] = (float)rgb[c];
@@ -370,7 +416,7 @@ static void render_tiles(void *user, int begin, int end, int worker)
     tile_buf B;
     B.mi = malloc(sizeof(int) * PAM_TILE * PAM_TILE);
     B.mt = malloc(sizeof(float) * PAM_TILE * PAM_TILE);
-    B.acc = malloc(sizeof(double) * 4 * PAM_TILE * PAM_TILE);
+    B.acc = malloc(sizeof(double) * ACC * PAM_TILE * PAM_TILE);
     B.gx = malloc(sizeof(double) * PAM_TILE);
     if (B.mi && B.mt && B.acc && B.gx)
         for (int t = begin; t < end; t++)
@@ -397,6 +443,12 @@ static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p,
         if (!req[k].im || !req[k].im->data)
             return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
                                "pam-splat: input '%s' is not connected", req[k].name);
+    if (p->color_from < 0 || p->color_from >= NPRFX_PAM_COLOR_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
+                           "pam-splat.color_from: no choice with index %d", p->color_from);
+    if (!(p->aspect >= 1.0 && p->aspect <= 100.0))
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "pam-splat.aspect: %g is outside [1, 100]",
+                           p->aspect);
     if (p->anchor_space < 0 || p->anchor_space >= NPRFX_PAM_SPACE_COUNT)
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
                            "pam-splat.anchor_space: no anchor space with index %d",
@@ -431,11 +483,13 @@ static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p,
     if (!(p->density > 0.0 && p->density <= 1e4))
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
                            "pam-splat.density: %g is outside (0, 10000]", p->density);
-    if (!(p->texel > 0.0) || !(p->cell > 0.0) || !(p->depth_tolerance >= 0.0) ||
-        !isfinite(p->flow) || !isfinite(p->beta) || !isfinite(p->gamma))
+    if (!(p->texel >= 0.0) || !(p->cell > 0.0) || !(p->depth_tolerance >= 0.0) ||
+        !isfinite(p->flow) || !isfinite(p->beta) || !isfinite(p->gamma) || !isfinite(p->detail) ||
+        !(p->sharpness >= 1.0 && p->sharpness <= 100.0))
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
-                           "pam-splat: texel and cell must be positive, depth_tolerance not "
-                           "negative, flow, beta and gamma finite");
+                           "pam-splat: texel must not be negative, cell positive, depth_tolerance "
+                           "not negative, sharpness in [1, 100], flow, beta, gamma and detail "
+                           "finite");
     return NPRFX_OK;
 }
 
@@ -490,10 +544,17 @@ nprfx_result nprfx_pam_splat_render(nprfx_context *ctx, const nprfx_pam_splat_pa
     P.r2 = gp.radius * gp.radius;
     double a = nprfx_gabor_bandwidth(gp.radius);
     P.pa2 = k_pi * a * a;
-    P.inv_texel = 1.0 / p->texel;
+    P.pa2s = P.pa2 * p->sharpness;
+    /* across the direction the Gaussian is aspect times narrower: dabs along the strokes */
+    P.pa2x = P.pa2s * (p->aspect * p->aspect - 1.0); /* per map pixel^2: times texel^2 below */
+    /* texel 0: a splat's diameter spans a quarter of a map, a few strokes wide for any PAM (the
+     * builder's strokes are about a third of a map long), at any splat size */
+    double texel = p->texel > 0.0 ? p->texel : p->size / (0.25 * pp->info.size);
+    P.inv_texel = 1.0 / texel;
+    P.pa2x *= texel * texel; /* du is in map pixels */
     /* Eq. 11: v_t = v_0 + noise_v + t flow; the maps tile, so the shift is taken modulo a map
      * (exactly: fmod is exact), which keeps texture coordinates small at any frame */
-    P.shift = fmod(p->flow * time / p->texel, (double)pp->info.size);
+    P.shift = fmod(p->flow * time / texel, (double)pp->info.size);
     P.tol = p->depth_tolerance;
     P.theta0 = p->orientation * (k_pi / 180.0);
     P.out = out;

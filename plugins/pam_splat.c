@@ -14,7 +14,11 @@ enum {
     P_DENSITY,
     P_BETA,
     P_GAMMA,
+    P_DETAIL,
+    P_SHARPNESS,
+    P_ASPECT,
     P_TEXEL,
+    P_COLOR_FROM,
     P_ORIENTATION,
     P_FLOW,
     P_JITTER,
@@ -25,6 +29,13 @@ enum {
 };
 typedef nprfx_pam_splat_params pnp;
 
+static const char *const color_names[] = {"splat", "pixel", NULL};
+static const char *const color_help[] = {
+    "at each splat's centre, as the paper: every dab is painted in one colour and dabs blend like"
+    " the strokes, so the model's edges (texture, silhouettes of colour) become dab-shaped",
+    "per pixel: the model's own edges stay sharp, the PAM only modulates them", NULL};
+_Static_assert(sizeof color_names / sizeof color_names[0] == NPRFX_PAM_COLOR_COUNT + 1,
+               "pam-splat: colour choice names must follow nprfx_pam_color_from");
 static const char *const space_names[] = {"pref", "uv", NULL};
 static const char *const space_help[] = {
     "object-space rest position (3 channels, optional 4th = coverage): moving, rotating and "
@@ -106,7 +117,7 @@ static const nprfx_param_desc params[P_COUNT] = {
              "rim, so a splat reads as a dab about half this wide. Kept in screen space at "
              "every zoom: strokes keep their size as objects approach.",
      .type = NPRFX_PARAM_DOUBLE,
-     .def = {24},
+     .def = {32},
      .soft_min = 4,
      .soft_max = 96,
      .hard_min = 1,
@@ -116,8 +127,8 @@ static const nprfx_param_desc params[P_COUNT] = {
      NPRFX_FIELD(pnp, density),
      .label = "Density",
      .help = "Expected number of splats overlapping a pixel (splats per pixel^2 = density / "
-             "(pi (size/2)^2)). Few (2-4) show single dabs; many blend them into a smoother "
-             "texture. Cost grows with it.",
+             "(pi (size/2)^2)). Under 3 leaves pixels no splat reaches (they keep the "
+             "model colour); more blends the dabs into a smoother texture. Cost grows with it.",
      .type = NPRFX_PARAM_DOUBLE,
      .def = {4},
      .soft_min = 1,
@@ -140,25 +151,80 @@ static const nprfx_param_desc params[P_COUNT] = {
      NPRFX_FIELD(pnp, gamma),
      .label = "Chroma Strength",
      .help = "gamma of Eq. 10: how much of the PAM's chroma deviation (texel U, V minus its "
-             "mean) is added to the model colour's; 0 keeps the model's hue.",
+             "mean) is added to the model colour's; 0 keeps the model's hue. 0.5 keeps a "
+             "coloured model's hues under a tinted PAM; 1 or more on a grey model lets the "
+             "PAM's own colours carry the look.",
      .type = NPRFX_PARAM_DOUBLE,
-     .def = {1},
+     .def = {0.5},
      .soft_min = 0,
      .soft_max = 2,
      .hard_min = -100,
+     .hard_max = 100},
+    {.name = "detail",
+     NPRFX_FIELD(pnp, detail),
+     .label = "Stroke Contrast",
+     .help = "How strongly the strokes show: the PAM's deviation is split into the tone's part "
+             "(the mean of the maps at the local tone minus the PAM's mean: shading) and the "
+             "strokes' part (each texel minus its map's mean), and the strokes' part is scaled "
+             "by this before beta and gamma apply. 1 is the paper's Eq. 10; overlapping splats "
+             "average their strokes away, which this gives back without darkening the shadows "
+             "further. 0: the tone alone, no strokes.",
+     .type = NPRFX_PARAM_DOUBLE,
+     .def = {3},
+     .soft_min = 0,
+     .soft_max = 5,
+     .hard_min = -100,
+     .hard_max = 100},
+    {.name = "sharpness",
+     NPRFX_FIELD(pnp, sharpness),
+     .label = "Dab Sharpness",
+     .help = "Where splats overlap, each pixel averages them weighted by a Gaussian of its "
+             "distance to their centres; sharpness narrows that Gaussian (its exponent times "
+             "this), so the nearest splat's strokes dominate and the others fade in only near "
+             "the borders between dabs. 1: the paper's smooth blend, which blurs strokes where "
+             "splats overlap; 3-6: distinct dabs; higher: hard edges between them.",
+     .type = NPRFX_PARAM_DOUBLE,
+     .def = {1.5},
+     .soft_min = 1,
+     .soft_max = 10,
+     .hard_min = 1,
+     .hard_max = 100},
+    {.name = "aspect",
+     NPRFX_FIELD(pnp, aspect),
+     .label = "Dab Aspect",
+     .help = "Length over width of a dab's weight: across the direction its Gaussian is this "
+             "many times narrower, so where splats overlap the one whose axis passes nearest "
+             "wins, and dabs are long and thin along the strokes instead of round (1: round, "
+             "the paper's).",
+     .type = NPRFX_PARAM_DOUBLE,
+     .def = {3},
+     .soft_min = 1,
+     .soft_max = 6,
+     .hard_min = 1,
      .hard_max = 100},
     {.name = "texel",
      NPRFX_FIELD(pnp, texel),
      .label = "Texel Size",
      .help = "Screen pixels per PAM pixel: 1 shows the maps at their own resolution, 2 twice as"
-             " large (coarser strokes).",
+             " large (coarser strokes). 0: relative to the splat, size / (S / 4) for maps of S "
+             "px, so that a splat spans a quarter of a map, as wide as a few strokes of any "
+             "PAM, at any splat size (the builder's strokes are about a third of a map long).",
      .type = NPRFX_PARAM_DOUBLE,
-     .def = {1},
-     .soft_min = 0.25,
+     .def = {0},
+     .soft_min = 0,
      .soft_max = 8,
-     .hard_min = 1e-3,
+     .hard_min = 0,
      .hard_max = 1e4,
      .flags = NPRFX_PARAM_PIXELS},
+    {.name = "color_from",
+     NPRFX_FIELD(pnp, color_from),
+     .label = "Colour From",
+     .help = "Where the model colour is read.",
+     .type = NPRFX_PARAM_CHOICE,
+     .def = {NPRFX_PAM_COLOR_SPLAT},
+     NPRFX_CHOICE_RANGE(NPRFX_PAM_COLOR_COUNT),
+     .choices = color_names,
+     .choice_help = color_help},
     {.name = "orientation",
      NPRFX_FIELD(pnp, orientation),
      .label = "Orientation",
@@ -272,7 +338,10 @@ const nprfx_node_desc nprfx_node_pam_splat = {
         " run along the direction field, that changes the model colour by the paint's "
         "luminance and chroma variations (Eq. 10 in YUV: Y + beta (texel Y - mean Y), UV + "
         "gamma (texel UV - mean UV), the mean taken over the whole PAM, so dark maps darken and "
-        "light maps lighten). With flow, the strokes move along the direction inside the "
+        "light maps lighten); the strokes' own part of the deviation (texel minus its map's "
+        "mean) is scaled by detail, since overlapping splats average it away. Dabs are long "
+        "along the direction (aspect) and the nearest one dominates (sharpness), so single "
+        "strokes show. With flow, the strokes move along the direction inside the "
         "splats (Eq. 11).\n"
         "\n"
         "The splats are gabor-splat's anchored points: anchored on the surfaces through Pref or"
@@ -287,7 +356,8 @@ const nprfx_node_desc nprfx_node_pam_splat = {
         "The tone picks the maps by their mean luminance: w = 0 the darkest, 1 the lightest, "
         "in between the two maps whose mean luminance brackets the darkest mean plus w times "
         "the range, mixed linearly, so the mean brightness follows the tone. Tones outside [0,"
-        " 1] are clamped. Model colour and tone are read per pixel; background pixels pass "
+        " 1] are clamped. The tone is read per pixel, the model colour at each splat's "
+        "centre (color_from splat: dab-shaped colour) or per pixel; background pixels pass "
         "through. Output is bit-identical for any thread count and tile split.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,

@@ -13,7 +13,10 @@
  *     S_UV = model_UV + gamma * (texel_UV - mean_UV)
  *
  * with mean the PAM's mean over all its maps (Eq. 9's single mean, so darker maps darken and
- * lighter ones lighten). The texture can flow along the direction with time (Eq. 11). */
+ * lighter ones lighten). The deviation is split into the tone's part (the local maps' mean minus
+ * the PAM's) and the strokes' (the texel minus its map's mean), the latter scaled by `detail`:
+ * 1 is the paper's Eq. 10, more shows the strokes without darkening the shadows further. The
+ * texture can flow along the direction with time (Eq. 11). */
 #ifndef NPRFX_PAM_SPLAT_H
 #define NPRFX_PAM_SPLAT_H
 
@@ -65,6 +68,14 @@ typedef enum nprfx_pam_anchor_space {
     NPRFX_PAM_SPACE_COUNT
 } nprfx_pam_anchor_space;
 
+/* Where the model colour is read (the paper's colour of a splat, or each pixel's own). */
+typedef enum nprfx_pam_color_from {
+    NPRFX_PAM_COLOR_SPLAT = 0, /* at the splat's centre: each dab one colour, blended like the
+                                  strokes (model edges become dab-shaped) */
+    NPRFX_PAM_COLOR_PIXEL = 1, /* per pixel: the model's edges stay sharp */
+    NPRFX_PAM_COLOR_COUNT
+} nprfx_pam_color_from;
+
 /* The node's params as its descriptor binds them (pixel lengths already times the render
  * scale). */
 typedef struct nprfx_pam_splat_params {
@@ -72,7 +83,11 @@ typedef struct nprfx_pam_splat_params {
     double size;            /* splat diameter in pixels (Gaussian edge: 5% at the rim) */
     double density;         /* expected number of splats overlapping a pixel */
     double beta, gamma;     /* Eq. 10: luminance and chroma strength */
-    double texel;           /* screen pixels per PAM pixel */
+    double detail;          /* the strokes' share of Eq. 10 against the tone's (1: the paper's) */
+    double sharpness;       /* >= 1: how much the nearest splat dominates where splats overlap */
+    double aspect;          /* >= 1: dabs this many times longer along the direction */
+    double texel;           /* screen pixels per PAM pixel; 0: size / (S / 2) */
+    int color_from;         /* nprfx_pam_color_from */
     double orientation;     /* degrees, counter-clockwise, added to the direction */
     double flow;            /* Eq. 11: texture speed along the direction, pixels per frame */
     double jitter;          /* Eq. 11's noise offsets: per splat, in map widths (1: anywhere) */

@@ -11,6 +11,7 @@
 #   0.5 px a frame, as static ones are alike in every variant), the warp error along
 #   the motion vectors is below that of the same graph with its patterns stuck to the screen
 #   (--variant shower-door) and of the same graph drawn anew every frame (--variant white).
+# measure is told the plate (--plate plate): a style may read other images too (pam-splat's PAM).
 # Regenerate the goldens (and say why in the commit): tests/golden/regen.sh BUILD/nprfx
 set -u
 NPRFX=$1; SRC=$2; W=$3
@@ -42,7 +43,7 @@ for g in $graphs; do
     fail "$name did not render on the synthetic plates"
   fi
   # background and tone on the synthetic plates
-  m=$("$NPRFX" measure "$g" --node look --set "plate.path=$W/big/dolly.####.exr" \
+  m=$("$NPRFX" measure "$g" --node look --plate plate --set "plate.path=$W/big/dolly.####.exr" \
         --shot "$STYLE_MEASURE_FRAMES" --matte matte --paper paper --margin 12 --inset 4 \
         --light plate:DiffDir.R 2>"$W/$name.measure.log")
   if [ $? -ne 0 ]; then fail "$name: measure failed"; cat "$W/$name.measure.log"; continue; fi
@@ -54,7 +55,7 @@ for g in $graphs; do
   else fail "$name: the look does not darken with the light: $(printf '%s\n' "$m" | grep tone_curve)"; fi
   # coherence on the Blender crossing shot
   rms() {
-    "$NPRFX" measure "$g" --node look --shot 1-6 --moving 0.5 --variant "$1" 2>/dev/null |
+    "$NPRFX" measure "$g" --node look --plate plate --shot 1-6 --moving 0.5 --variant "$1" 2>/dev/null |
       awk '$1 == "warp_rms" {print $2}'
   }
   c=$(rms coherent); s=$(rms shower-door); wn=$(rms white)

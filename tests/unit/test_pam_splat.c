@@ -498,6 +498,10 @@ static void test_flow(void)
     set(&p, "anchor_space", 1);
     set(&p, "size", 32);
     set(&p, "jitter", 0.0);
+    /* the model colour per pixel: dabs of the plane's colour would be a still pattern over the
+     * moving strokes, and this measures the strokes */
+    set(&p, "color_from", 1);
+    set(&p, "texel", 1.0); /* the 32-px test maps at their own scale: a fine pattern to track */
     CHECK_OK(render_at(in, &p, &o1, 5, NULL));
     CHECK_OK(render_at(in, &p, &o2, 6, NULL));
     CHECK(memcmp(o1.data, o2.data, sizeof(float) * 3 * w * h) == 0); /* no flow: still */
