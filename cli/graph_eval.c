@@ -396,11 +396,24 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             have_rect = 1;
             first_input = k;
         } else if (!nprfx_rect_equal(frame_rect, inputs[k].bounds)) {
-            r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
-                            "node '%s': input '%s' is %dx%d but input '%s' is %dx%d at frame %d",
-                            n->name, d->inputs[k].name, nprfx_rect_width(inputs[k].bounds),
-                            nprfx_rect_height(inputs[k].bounds), d->inputs[first_input].name,
-                            nprfx_rect_width(frame_rect), nprfx_rect_height(frame_rect), frame);
+            /* Name what differs: equal sizes at other origins would otherwise read "is 200x150
+             * but ... is 200x150". Data windows are written as oiiotool does, WxH+X+Y. */
+            const nprfx_rect a = inputs[k].bounds, b = frame_rect;
+            int same_size = nprfx_rect_width(a) == nprfx_rect_width(b) &&
+                            nprfx_rect_height(a) == nprfx_rect_height(b);
+            if (same_size)
+                r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
+                                "node '%s': input '%s' has data window %dx%d%+d%+d but input '%s' "
+                                "has %dx%d%+d%+d at frame %d (same size, other origin)",
+                                n->name, d->inputs[k].name, nprfx_rect_width(a),
+                                nprfx_rect_height(a), a.x0, a.y0, d->inputs[first_input].name,
+                                nprfx_rect_width(b), nprfx_rect_height(b), b.x0, b.y0, frame);
+            else
+                r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
+                                "node '%s': input '%s' is %dx%d but input '%s' is %dx%d at frame %d",
+                                n->name, d->inputs[k].name, nprfx_rect_width(a),
+                                nprfx_rect_height(a), d->inputs[first_input].name,
+                                nprfx_rect_width(b), nprfx_rect_height(b), frame);
             goto done;
         }
     }

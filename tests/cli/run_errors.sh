@@ -34,6 +34,14 @@ expect nz "input 'alpha' needs 1 channel, 'plate:UV' gives 2" -- "$NPRFX" run wr
 graph wrong_size '"small": {"node": "synth", "scene": "orbit", "size": "16x12"}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "small"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect nz "input 'layer' is 16x12 but input 'base' is 32x24" -- "$NPRFX" run wrong_size.json
 
+# Same size, other origin: the message names the data windows, not two equal sizes.
+if command -v oiiotool >/dev/null; then
+  oiiotool --pattern constant:color=0.5,0.5,0.5,1 64x48 4 -d float --crop 20x15+10+0 -o shifted.0001.exr \
+           --pattern constant:color=0.5,0.5,0.5,1 64x48 4 -d float --crop 20x15+0+0 -o home.0001.exr
+  printf '{"frames": "1", "nodes": {"s": {"node": "read", "path": "shifted.####.exr"}, "h": {"node": "read", "path": "home.####.exr"}, "b": {"node": "blend", "inputs": {"base": "h", "layer": "s"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}}}\n' > wrong_origin.json
+  expect nz "input 'layer' has data window 20x15+10+0 but input 'base' has 20x15+0+0" -- "$NPRFX" run wrong_origin.json
+fi
+
 graph unknown_node '"b": {"node": "blurp", "inputs": {}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect 2 "unknown node type 'blurp'" -- "$NPRFX" run unknown_node.json
 
