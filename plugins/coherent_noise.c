@@ -359,7 +359,13 @@ static const char help[] =
     "rendering\" (M. Kass, D. Pesare; priority from US provisional 61/295,981 filed January 18, "
     "2010; issued June 24, 2014). Its claims cover generating image-space noise by a causal "
     "(recursive) filter selected per pixel from depth, velocity and an occlusion test - what "
-    "this node does. Check whether your use needs a licence.";
+    "this node does. Check whether your use needs a licence.\n"
+    "\n"
+    "NaN and infinities, docs/design.md §2.2: a depth that is NaN or infinite is background (fresh "
+    "noise); a NaN or infinite motion vector is a disocclusion (fresh noise); a non-finite zvel is "
+    "ignored (z itself is predicted). noise = input: a NaN or infinite source sample is missing, "
+    "and the filter carries the previous value on alone there (0 at a restart), so it never "
+    "travels along the motion into other pixels or frames.";
 
 static nprfx_result cn_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
 {
@@ -406,5 +412,6 @@ const nprfx_node_desc nprfx_node_coherent_noise = {
     nprfx_coherent_noise_state_free,
     .params_size = sizeof(cnp),
     .version_major = 1,
+    .version_minor = 1, /* 1.1: NaN and infinities as docs/design.md §2.2 says */
     .frames_needed = cn_frames_needed,
 };
