@@ -42,6 +42,12 @@ if command -v oiiotool >/dev/null; then
   expect nz "input 'layer' has data window 20x15+10+0 but input 'base' has 20x15+0+0" -- "$NPRFX" run wrong_origin.json
 fi
 
+# Hours of work are announced before the first frame: a million frames, a huge footprint. The
+# plate is missing, so frame 1 fails at once after the warning and nothing renders for hours.
+printf '{"frames": "1-1000000", "nodes": {"r": {"node": "read", "path": "nowhere/p.####.exr"}, "m": {"node": "morphology", "inputs": {"image": "r"}, "params": {"radius": 200}}, "w": {"node": "write", "inputs": {"image": "m"}, "path": "o/x.####.exr"}}}\n' > hours.json
+expect nz "1000000 frames: at one second a frame that is 278 hours" -- "$NPRFX" run hours.json
+expect nz "node 'm' (morphology) reads up to 160801 pixels (radius 200) for every pixel" -- "$NPRFX" run hours.json
+
 graph unknown_node '"b": {"node": "blurp", "inputs": {}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect 2 "unknown node type 'blurp'" -- "$NPRFX" run unknown_node.json
 
