@@ -144,8 +144,14 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
         status = 2;
         goto done;
     }
+    {
+        char why[2048];
+        if (nprfx_graph_cost_warnings(g, fl.count, why, sizeof why) > 0)
+            fprintf(stderr, "%s run: warning: %s: this may take hours:\n%s", prog, graph_path, why);
+    }
     int tty = isatty(STDERR_FILENO) && !quiet;
     double t0 = now_seconds();
+    int warned_eta = 0;
     int failed = 0, files = 0;
     for (int k = 0; k < fl.count; k++) {
         double tf = now_seconds();
@@ -161,6 +167,15 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
         files += written;
         double el = now_seconds() - t0, fps = (k + 1) / (el > 0 ? el : 1e-9);
         double eta = (fl.count - k - 1) / fps;
+        /* Measured, after the first frames (the first alone includes a temporal warm-up). */
+        if (!warned_eta && k == (fl.count > 2 ? 1 : 0) && eta > 3600.0) {
+            warned_eta = 1;
+            if (tty) fputc('\n', stderr);
+            fprintf(stderr,
+                    "%s run: warning: %.2f s a frame so far: the remaining %d frames take about "
+                    "%.1f hours\n",
+                    prog, el / (k + 1), fl.count - k - 1, eta / 3600.0);
+        }
         if (tty)
             fprintf(stderr, "\r[%d/%d] frame %d  %.2f fps  ETA %.0f s   ", k + 1, fl.count,
                     fl.frames[k], fps, eta);
@@ -244,6 +259,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return 1;
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
+    opt.progress = !quiet;
     int status = 0;
     run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait};
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

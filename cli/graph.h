@@ -41,6 +41,9 @@ typedef struct nprfx_graph_options {
     const char *output_dir;        /* prefix for relative write paths (NULL: current directory) */
     const nprfx_render_hook *hook; /* NULL: call the node's render function */
     int variant;                   /* nprfx_graph_variant (appended: read when size covers it) */
+    /* Non-zero: a temporal node whose render fetches many other frames (a recursion's warm-up)
+     * reports them on stderr once it has taken a second, about once a second (appended). */
+    int progress;
 } nprfx_graph_options;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
@@ -75,6 +78,11 @@ void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
  * nprfx_graph_output_patterns_free. */
 nprfx_result nprfx_graph_output_patterns(const nprfx_graph *g, char ***paths, int *count);
 void nprfx_graph_output_patterns_free(char **paths, int count);
+
+/* Warnings, one a line into buf, when rendering `frames` frames of g would take hours: many frames,
+ * or a node whose footprint (nprfx_node_footprint) makes every pixel read a huge area. Before a
+ * single pixel is read, so it knows no frame size: counts, not seconds. Returns how many. */
+int nprfx_graph_cost_warnings(nprfx_graph *g, int frames, char *buf, size_t n);
 
 /* Whether the graph has a node called name. */
 int nprfx_graph_has_node(const nprfx_graph *g, const char *name);

@@ -296,7 +296,33 @@ typedef struct render_frame {
     int nbase;
     pin_slot ring[RING];
     long nfetch;
+    /* Warm-up progress (g->progress): the frames the render reads (nprfx_node_frames_needed
+     * over all inputs), when it started, when a line last went out. */
+    int frame, warm_first, warm_last;
+    double t0, last_report;
 } render_frame;
+
+/* A render that walks many other frames (coherent-noise's recursion from its start) can take
+ * minutes inside one call, with the frame counter standing still: say where it is, once it has
+ * taken a second, about once a second. */
+#define WARMUP_REPORT_AFTER_S 1.0
+static void warmup_progress(render_frame *rf, int fetched)
+{
+    nprfx_graph *g = rf->g;
+    if (!g->progress || fetched == rf->frame || rf->warm_last <= rf->warm_first) return;
+    double now = internal_graph_now();
+    if (now - rf->t0 < WARMUP_REPORT_AFTER_S || now - rf->last_report < 1.0) return;
+    rf->last_report = now;
+    const gnode *n = &g->nodes[rf->node];
+    long total = (long)rf->warm_last - rf->warm_first + 1;
+    long k = fetched < rf->warm_first  ? 0
+             : fetched > rf->warm_last ? total
+                                       : (long)fetched - rf->warm_first + 1;
+    /* backward passes walk down from the last frame: count from there */
+    if (fetched > rf->frame) k = (long)rf->warm_last - fetched + 1;
+    fprintf(stderr, "%s '%s': frame %d: warming up frames %d-%d (%ld/%ld)\n", n->desc->id, n->name,
+            rf->frame, rf->warm_first, rf->warm_last, k, total);
+}
 
 static void slot_release(pin_slot *s)
 {
@@ -336,7 +362,28 @@ static nprfx_result fetch_input(render_frame *rf, int k, int frame, int base, np
 
 static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *out)
 {
-    return fetch_input(user, input, (int)(time < 0 ? time - 0.5 : time + 0.5), 0, out);
+    int frame = (int)(time < 0 ? time - 0.5 : time + 0.5);
+    warmup_progress(user, frame);
+    return fetch_input(user, input, frame, 0, out);
+}
+
+/* The span of frames node n reads to render `frame` (all inputs): rf's warm-up range. */
+static void warmup_range(nprfx_graph *g, const gnode *n, const nprfx_value *params, int frame,
+                         const int *in_ch, render_frame *rf)
+{
+    const nprfx_node_desc *d = n->desc;
+    rf->frame = rf->warm_first = rf->warm_last = frame;
+    if (!g->progress || !(d->flags & NPRFX_NODE_TEMPORAL)) return;
+    nprfx_frames_query q = {frame, g->first_frame, g->last_frame, in_ch};
+    for (int k = 0; k < d->num_inputs; k++) {
+        nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
+        int nr = 0;
+        if (nprfx_node_frames_needed(NULL, d, params, &q, k, r, &nr)) continue;
+        for (int i = 0; i < nr; i++) {
+            if (r[i].first < rf->warm_first) rf->warm_first = r[i].first;
+            if (r[i].last > rf->warm_last) rf->warm_last = r[i].last;
+        }
+    }
 }
 
 /* Write the node's per-frame export (NPRFX_PARAM_EXPORT param set, desc->export_text given),
@@ -396,11 +443,24 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             have_rect = 1;
             first_input = k;
         } else if (!nprfx_rect_equal(frame_rect, inputs[k].bounds)) {
-            r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
-                            "node '%s': input '%s' is %dx%d but input '%s' is %dx%d at frame %d",
-                            n->name, d->inputs[k].name, nprfx_rect_width(inputs[k].bounds),
-                            nprfx_rect_height(inputs[k].bounds), d->inputs[first_input].name,
-                            nprfx_rect_width(frame_rect), nprfx_rect_height(frame_rect), frame);
+            /* Name what differs: equal sizes at other origins would otherwise read "is 200x150
+             * but ... is 200x150". Data windows are written as oiiotool does, WxH+X+Y. */
+            const nprfx_rect a = inputs[k].bounds, b = frame_rect;
+            int same_size = nprfx_rect_width(a) == nprfx_rect_width(b) &&
+                            nprfx_rect_height(a) == nprfx_rect_height(b);
+            if (same_size)
+                r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
+                                "node '%s': input '%s' has data window %dx%d%+d%+d but input '%s' "
+                                "has %dx%d%+d%+d at frame %d (same size, other origin)",
+                                n->name, d->inputs[k].name, nprfx_rect_width(a),
+                                nprfx_rect_height(a), a.x0, a.y0, d->inputs[first_input].name,
+                                nprfx_rect_width(b), nprfx_rect_height(b), b.x0, b.y0, frame);
+            else
+                r = nprfx_error(
+                    g->ctx, NPRFX_ERR_SIZE_MISMATCH,
+                    "node '%s': input '%s' is %dx%d but input '%s' is %dx%d at frame %d", n->name,
+                    d->inputs[k].name, nprfx_rect_width(a), nprfx_rect_height(a),
+                    d->inputs[first_input].name, nprfx_rect_width(b), nprfx_rect_height(b), frame);
             goto done;
         }
     }
@@ -438,6 +498,8 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     a.items = &g->render_items;
     int tile = g->tile > 0 ? g->tile : 1 << 30;
     double t0 = internal_graph_now();
+    warmup_range(g, n, a.params, frame, in_ch, &rf);
+    rf.t0 = t0;
     for (int ty = frame_rect.y0; ty < frame_rect.y1 && !r; ty += tile)
         for (int tx = frame_rect.x0; tx < frame_rect.x1 && !r; tx += tile) {
             a.window = nprfx_rect_intersect(
@@ -590,4 +652,37 @@ nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **o
     free(s.pin);
     g->fetch_depth--;
     return r;
+}
+
+/* Thresholds of nprfx_graph_cost_warnings. A frame of an HD plate through a few nodes takes a
+ * second or so; 100,000 of them are a day. A footprint of 10,000 pixels (morphology radius 56)
+ * makes an HD frame 2e10 reads a pass, tens of seconds on a workstation. */
+#define COST_MANY_FRAMES 100000
+#define COST_MANY_TAPS 10000.0
+
+int nprfx_graph_cost_warnings(nprfx_graph *g, int frames, char *buf, size_t n)
+{
+    int count = 0;
+    size_t used = 0;
+    if (n) buf[0] = 0;
+#define COST_SAY(...)                                                                              \
+    do {                                                                                           \
+        if (used < n) used += (size_t)snprintf(buf + used, n - used, __VA_ARGS__);                 \
+        count++;                                                                                   \
+    } while (0)
+    if (frames > COST_MANY_FRAMES)
+        COST_SAY("%d frames: at one second a frame that is %.0f hours\n", frames, frames / 3600.0);
+    for (int i = 0; i < g->count; i++) {
+        const gnode *nd = &g->nodes[i];
+        int fp = 0;
+        if (nd->kind != GK_NODE || nprfx_node_footprint(NULL, nd->desc, nd->params, &fp) || fp <= 0)
+            continue;
+        double taps = (2.0 * fp + 1.0) * (2.0 * fp + 1.0);
+        if (taps > COST_MANY_TAPS)
+            COST_SAY("node '%s' (%s) reads up to %.0f pixels (radius %d) for every pixel: %.1e "
+                     "reads per 1920x1080 frame\n",
+                     nd->name, nd->desc->id, taps, fp, taps * 1920.0 * 1080.0);
+    }
+#undef COST_SAY
+    return count;
 }

@@ -352,6 +352,8 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     }
     if (opt && opt->size >= offsetof(nprfx_graph_options, variant) + sizeof opt->variant)
         g->variant = opt->variant;
+    if (opt && opt->size >= offsetof(nprfx_graph_options, progress) + sizeof opt->progress)
+        g->progress = opt->progress;
     g->out_dir = opt && opt->output_dir ? internal_graph_strdup(opt->output_dir) : NULL;
     g->first_frame = 1;
     g->last_frame = 1;

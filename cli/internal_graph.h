@@ -74,6 +74,7 @@ struct nprfx_graph {
     nprfx_render_hook hook;
     int has_hook;
     int variant;              /* nprfx_graph_variant */
+    int progress;             /* nprfx_graph_options.progress */
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
 };
 

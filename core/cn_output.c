@@ -16,6 +16,7 @@ typedef struct internal_combine_job {
     const nprfx_image *s; /* source (input mode) or a band-pass w; NULL: white w made per row */
     nprfx_image *out;
     float g_both, g_one, norm;
+    int input_mode; /* s is the source clip, whose non-finite samples are missing */
     float *scratch;
     size_t scratch_len;
 } internal_combine_job;
@@ -35,7 +36,14 @@ static void internal_combine_rows(void *user, int begin, int end, int worker)
             const float *b = nprfx_image_at(&j->bwd->value, x, y);
             float *o = nprfx_image_at(j->out, x, y);
             float g = ff[x - fr.x0] && fb[x - fr.x0] ? j->g_both : j->g_one;
-            if (j->s)
+            if (j->s && j->input_mode)
+                for (int c = 0; c < C; c++) {
+                    /* A missing source sample is in neither pass (internal_mix_source): their
+                     * mean, each of unit gain, is the filter without it. */
+                    float sv = internal_read(j->s, x, y, c);
+                    o[c] = isfinite(sv) ? (f[c] + b[c] - g * sv) * j->norm : 0.5f * (f[c] + b[c]);
+                }
+            else if (j->s)
                 for (int c = 0; c < C; c++)
                     o[c] = (f[c] + b[c] - g * internal_read(j->s, x, y, c)) * j->norm;
             else
@@ -90,6 +98,7 @@ nprfx_result nprfx_cn_combine(nprfx_context *ctx, const nprfx_cn_params *p, int6
         job.s = &w;
     }
     double a = p->alpha;
+    job.input_mode = input_mode;
     if (input_mode) {
         job.g_both = job.g_one = (float)(1.0 - a);
         job.norm = (float)(1.0 / (1.0 + a));

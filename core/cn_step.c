@@ -112,7 +112,7 @@ INTERNAL_INLINE void internal_px_carry(const internal_step_job *j, int x, int y,
         const float *u = nprfx_image_at(U, ix, iy);
         if (j->input_mode)
             for (int c = 0; c < C; c++)
-                o[c] = a * u[c] + g * internal_read(j->in->source, x, y, c);
+                o[c] = internal_mix_source(a, u[c], g, internal_read(j->in->source, x, y, c));
         else
             for (int c = 0; c < C; c++)
                 o[c] = a * (u[c] + 0.0f) + g * wp[c];
@@ -171,7 +171,7 @@ INTERNAL_INLINE void internal_px_carry(const internal_step_job *j, int x, int y,
     }
     if (j->input_mode)
         for (int c = 0; c < C; c++)
-            o[c] = a * v[c] + g * internal_read(j->in->source, x, y, c);
+            o[c] = internal_mix_source(a, v[c], g, internal_read(j->in->source, x, y, c));
     else
         for (int c = 0; c < C; c++)
             o[c] = a * (v[c] + 0.0f) + g * wp[c];
@@ -183,7 +183,7 @@ static inline void internal_px_fresh(const internal_step_job *j, int x, int y, c
 {
     if (j->input_mode)
         for (int c = 0; c < C; c++)
-            o[c] = internal_read(j->in->source, x, y, c);
+            o[c] = internal_source_fresh(internal_read(j->in->source, x, y, c));
     else
         for (int c = 0; c < C; c++)
             o[c] = wp[c];

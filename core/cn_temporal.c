@@ -420,20 +420,39 @@ static void cn_copy_window(const nprfx_render_args *args, const nprfx_image *src
             contrast);
 }
 
+int64_t nprfx_coherent_noise_auto_window(double alpha)
+{
+    /* alpha^W <= tol. Frozen noise (alpha = 1) is defined by the whole recursion: no window. */
+    if (!(alpha < 1.0)) return 0;
+    if (!(alpha > 0.0)) return 1;
+    double w = ceil(log(NPRFX_CN_WINDOW_TOLERANCE) / log(alpha));
+    return w < 1.0 ? 1 : (w > 1e15 ? (int64_t)1e15 : (int64_t)w);
+}
+
 /* The recursion's span for frame t: the forward pass runs from *start to t, the backward one
  * (symmetric mode) from *last down to t. One definition for the render and for the frames a
- * host must prepare (nprfx_coherent_noise_frames). */
+ * host must prepare (nprfx_coherent_noise_frames).
+ *
+ * window W > 0 slides: frame t starts at t - W. window 0 is automatic: W from alpha
+ * (nprfx_coherent_noise_auto_window), and the start on a grid of W frames from the shot's
+ * start, the latest grid frame at least W before t. So t is 1 to 2W steps from its start (the
+ * cut weight is below the tolerance), any frame alone costs under 2W steps, and in-order
+ * rendering shares one start for W frames: two steps a frame, where a sliding window costs W.
+ * A shot shorter than 2W never moves its start, so it renders as without a window. */
 static void cn_span(const nprfx_coherent_noise_params *np, int64_t t, int first, int last_frame,
                     int64_t *start, int64_t *last)
 {
     int shot_known = last_frame >= first;
     int64_t s = np->start;
     if (shot_known && s < first) s = first;
-    if (np->window > 0 && t - np->window > s) s = t - np->window;
-    if (t < s) s = t;
     int64_t l = shot_known ? last_frame : t;
+    int64_t aw = np->window > 0 ? 0 : nprfx_coherent_noise_auto_window(np->alpha);
+    if (np->window > 0 && t - np->window > s) s = t - np->window;
+    if (aw > 0 && t - aw > s) s += (t - aw - s) / aw * aw;
+    if (t < s) s = t;
     if (np->mode == NPRFX_CN_MODE_SYMMETRIC) {
         if (np->window > 0 && t + np->window < l) l = t + np->window;
+        if (aw > 0 && t + aw < l) l -= (l - t - aw) / aw * aw;
         if (t > l) l = t;
     }
     *start = s;
@@ -606,8 +625,10 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
             cn_slot *s = cn_pass_find(ps, run.frame);
             if (s && d == 0 && s->fingerprint != fp) cn_pass_invalidate(ps);
         }
+        int64_t aw = run.window > 0 ? 0 : nprfx_coherent_noise_auto_window(np->alpha);
         int64_t nf = shot_known ? args->last_frame - run.start + 1 : 1024;
         if (run.window > 0) nf = run.window + 1;
+        if (aw > 0 && 2 * aw < nf) nf = 2 * aw;
         if ((r = cn_pass_configure(&run, &cache->pass[0], NPRFX_CN_FORWARD, run.start, nf)))
             goto unlock;
         const cn_slot *fw = NULL, *bw = NULL;
@@ -621,6 +642,7 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
         }
         if (run.symmetric) {
             int64_t nb = run.window > 0 ? run.window + 1 : run.last - run.start + 1;
+            if (aw > 0 && 2 * aw < nb) nb = 2 * aw;
             if ((r = cn_pass_configure(&run, &cache->pass[1], NPRFX_CN_BACKWARD, run.last, nb)))
                 goto unlock;
             if ((r = cn_pass_get(&run, &cache->pass[1], run.frame, &bw))) goto unlock;

@@ -172,7 +172,7 @@ nprfx_result nprfx_cn_begin(nprfx_context *ctx, const nprfx_cn_params *p, int64_
             for (int x = O->bounds.x0; x < O->bounds.x1; x++) {
                 float *o = nprfx_image_at(O, x, y);
                 for (int c = 0; c < p->channels; c++)
-                    o[c] = internal_read(source, x, y, c);
+                    o[c] = internal_source_fresh(internal_read(source, x, y, c));
             }
         return NPRFX_OK;
     }

@@ -105,6 +105,21 @@ static inline float internal_read(const nprfx_image *im, int x, int y, int c)
     return nprfx_image_at(im, x, y)[c];
 }
 
+/* Input mode's one step with source sample s: alpha * carried + (1 - alpha) * s. A NaN or
+ * infinite s is a missing sample (docs/design.md §2.2): the carried value goes on alone, since
+ * the filter's weights sum to 1, rather than a NaN that the next frames would resample into
+ * their neighbours along the motion. */
+static inline float internal_mix_source(float a, float carried, float g, float s)
+{
+    return isfinite(s) ? a * carried + g * s : carried;
+}
+
+/* Input mode's value at a (re)start: the source, or 0 where it is missing (nothing to carry). */
+static inline float internal_source_fresh(float s)
+{
+    return isfinite(s) ? s : 0.0f;
+}
+
 static inline int internal_is_background(float z)
 {
     return !(fabsf(z) < (float)NPRFX_CN_BACKGROUND_DEPTH);

@@ -26,8 +26,11 @@ static void morph_rows(void *user, int begin, int end, int worker)
     for (int y = j->area.y0 + begin; y < j->area.y0 + end; y++)
         for (int x = j->area.x0; x < j->area.x1; x++) {
             float acc[NPRFX_MAX_CHANNELS];
+            /* NaN is the identity of fmaxf/fminf, which skip a NaN tap as missing: a footprint
+             * of NaN only stays NaN (docs/design.md §2.2). Starting from -inf/+inf, as max/min
+             * usually do, turned it into an infinity the input never had. */
             for (int c = 0; c < C; c++)
-                acc[c] = j->dilate ? -INFINITY : INFINITY;
+                acc[c] = NAN;
             for (int dy = -j->R; dy <= j->R; dy++) {
                 int hw = j->half[dy + j->R];
                 if (hw < 0) continue;

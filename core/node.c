@@ -521,6 +521,25 @@ nprfx_result nprfx_node_frames_needed(nprfx_context *ctx, const nprfx_node_desc 
     return NPRFX_OK;
 }
 
+nprfx_result nprfx_node_footprint(nprfx_context *ctx, const nprfx_node_desc *node,
+                                  const nprfx_value *params, int *radius)
+{
+    if (!radius) return NPRFX_ERR_INVALID_ARGUMENT;
+    *radius = 0;
+    if (!node || (node->num_params > 0 && !params))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "nprfx_node_footprint: no node or params");
+    if (node->size < offsetof(nprfx_node_desc, footprint) + sizeof(void *) || !node->footprint)
+        return NPRFX_OK;
+    typed_buf b;
+    nprfx_result r = typed_bind(ctx, node, params, &b);
+    if (!r) *radius = node->footprint(b.typed);
+    typed_release(&b);
+    if (!r && *radius < -1)
+        return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "%s: footprint gave %d", node->id, *radius);
+    return r;
+}
+
 /* ---- descriptor lint ------------------------------------------------------------------------ */
 
 /* Identifiers are what graphs, --set and OFX use: lower-case letters, digits, '_' ('-' in node

@@ -128,9 +128,22 @@ void nprfx_threshold_map_lookup(const nprfx_image *map, double u, double v, floa
     const float *p00 = nprfx_image_at(map, x0, yb), *p10 = nprfx_image_at(map, x1, yb);
     const float *p01 = nprfx_image_at(map, x0, yt), *p11 = nprfx_image_at(map, x1, yt);
     for (int c = 0; c < map->channels; c++) {
-        double bottom = (1.0 - fx) * p00[c] + fx * p10[c];
-        double top = (1.0 - fx) * p01[c] + fx * p11[c];
-        out[c] = (float)((1.0 - fy) * bottom + fy * top);
+        /* A NaN or infinite texel is missing (docs/design.md §2.2): the bilinear weights of the
+         * finite ones, renormalised. One bad texel is read by every pixel whose (pattern, tone)
+         * falls near it, anywhere in the frame, so passing it on would spread it. NaN only when
+         * all four are missing; exactly the plain bilinear when none is. */
+        const double wt[4] = {(1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx, fy * (1.0 - fx), fy * fx};
+        const float t[4] = {p00[c], p10[c], p01[c], p11[c]};
+        if (isfinite(t[0]) && isfinite(t[1]) && isfinite(t[2]) && isfinite(t[3])) {
+            double bottom = (1.0 - fx) * p00[c] + fx * p10[c];
+            double top = (1.0 - fx) * p01[c] + fx * p11[c];
+            out[c] = (float)((1.0 - fy) * bottom + fy * top);
+            continue;
+        }
+        double sum = 0.0, wsum = 0.0;
+        for (int k = 0; k < 4; k++)
+            if (isfinite(t[k])) sum += wt[k] * t[k], wsum += wt[k];
+        out[c] = wsum > 0.0 ? (float)(sum / wsum) : NAN;
     }
 }
 

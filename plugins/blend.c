@@ -180,7 +180,11 @@ const nprfx_node_desc nprfx_node_blend = {
         "background`.\n"
         "\n"
         "Inputs read as 0 outside their data window. No value is clamped except a and "
-        "coverage.",
+        "coverage."
+        "\n\nNaN and infinities (docs/design.md §2.2): "
+        "base, layer and back (overlayalpha) pass through: a NaN or infinity there blends into "
+        "a NaN or infinity at that pixel only. alpha and coverage are clamped to [0, 1], NaN as "
+        "0, so they never make the output non-finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -116,7 +116,10 @@ const nprfx_node_desc nprfx_node_bump = {
             "elevation, and shade = max(0, n . l) / l_z, the Lambert term divided by a flat "
             "surface's: a flat height leaves the image exactly unchanged. On the colour "
             "channels, out = image * (1 + amount * (shade - 1)) plus an optional highlight; a "
-            "4-channel image keeps its alpha.",
+            "4-channel image keeps its alpha."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "image passes through at the pixel. A NaN or infinite height is missing: no slope "
+            "there, the output stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

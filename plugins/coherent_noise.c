@@ -244,9 +244,15 @@ static const nprfx_param_desc params[P_COUNT] = {
      NPRFX_FIELD(cnp, start)},
     {"window",
      "Window",
-     "0: frame i is filtered from the start frame. W > 0: from max(start, i - W) (and, "
-     "symmetric, back from min(last, i + W)), so any frame costs at most W steps on a farm, at "
-     "W steps per frame when rendering in order. W >= 5 / (1 - alpha) is indistinguishable.",
+     "0 (automatic): W is the fewest frames whose cut-off weight alpha^W is at most 0.001 "
+     "(66 frames at alpha 0.9, 342 at 0.98, 688 at 0.99; no window at alpha 1, frozen noise), "
+     "and frame i starts at the latest frame of a grid of W frames from the start that lies at "
+     "least W before i (symmetric: the same backwards from the last frame). Any frame alone "
+     "then costs under 2W steps, however long the shot (frame 200,000 renders as fast as frame "
+     "200), in-order rendering about 2 steps per frame, and a shot shorter than 2W frames is "
+     "exactly the recursion from the start frame. W > 0: from max(start, i - W) (and, "
+     "symmetric, back from min(last, i + W)), a sliding window: at most W steps for any frame, "
+     "W steps per frame in order. 1000000: from the start frame, whatever the shot's length.",
      NPRFX_PARAM_INT,
      {0},
      0,
@@ -351,7 +357,7 @@ static const char help[] =
     "\n"
     "Noise values are counter-based hashes of (seed, frame, x, y, channel), so a frame is the "
     "same on any machine, thread count, tile split or render order: frame i is defined by the "
-    "recursion from the start frame (or from max(start, i - window)). In-order rendering costs "
+    "recursion from its start frame (see window). In-order rendering costs "
     "one step per frame through a cache of states; random access restarts from checkpoints "
     "within cache_mb.\n"
     "\n"
@@ -359,7 +365,13 @@ static const char help[] =
     "rendering\" (M. Kass, D. Pesare; priority from US provisional 61/295,981 filed January 18, "
     "2010; issued June 24, 2014). Its claims cover generating image-space noise by a causal "
     "(recursive) filter selected per pixel from depth, velocity and an occlusion test - what "
-    "this node does. Check whether your use needs a licence.";
+    "this node does. Check whether your use needs a licence.\n"
+    "\n"
+    "NaN and infinities, docs/design.md §2.2: a depth that is NaN or infinite is background (fresh "
+    "noise); a NaN or infinite motion vector is a disocclusion (fresh noise); a non-finite zvel is "
+    "ignored (z itself is predicted). noise = input: a NaN or infinite source sample is missing, "
+    "and the filter carries the previous value on alone there (0 at a restart), so it never "
+    "travels along the motion into other pixels or frames.";
 
 static nprfx_result cn_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
 {
@@ -406,5 +418,8 @@ const nprfx_node_desc nprfx_node_coherent_noise = {
     nprfx_coherent_noise_state_free,
     .params_size = sizeof(cnp),
     .version_major = 1,
+    /* 1.1: NaN and infinities as docs/design.md §2.2 says; window 0 is automatic, not
+     * unbounded (pixels change only past 2W frames from the start) */
+    .version_minor = 1,
     .frames_needed = cn_frames_needed,
 };

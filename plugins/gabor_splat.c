@@ -394,7 +394,11 @@ const nprfx_node_desc nprfx_node_gabor_splat = {
         "sum, sigma^2 = lambda E[v^2] (1 / (4 a^2)) (1 + exp(-2 pi F0^2 / a^2)); or 0.5 + "
         "contrast * n (output unit01). Background pixels get 0 (unit01: 0.5). Near object edges"
         " the variance drops, since kernels from the other side are cut. Output is "
-        "bit-identical for any thread count and tile split.",
+        "bit-identical for any thread count and tile split."
+        "\n\nNaN and infinities (docs/design.md §2.2): "
+        "A pixel whose anchor, depth or id is NaN or infinite is background (no kernels are "
+        "anchored there); a NaN or infinite orientation or frequency emits no kernel. The "
+        "output stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

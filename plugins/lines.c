@@ -231,7 +231,11 @@ const nprfx_node_desc nprfx_node_lines = {
             "an anti-aliased stroke of width w centred on the edge. The width input thickens it "
             "where dark, wobble displaces it and texture modulates it; feed both from coherent "
             "noise for lines that move with the scene. The output is ink coverage (1 = ink): "
-            "composite it with blend.",
+            "composite it with blend."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "Every input treats NaN and infinities as missing: a NaN id, depth, normal or AOV "
+            "makes no line, a NaN width no thickening, a NaN wobble or texture the neutral 0.5. "
+            "The output stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

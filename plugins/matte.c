@@ -90,7 +90,10 @@ const nprfx_node_desc nprfx_node_matte = {
             "isBackground, antialiased), from whatever the render has: coverage = alpha * "
             "[depth < far] * [id != background_id], each factor only when its input is "
             "connected. Depth and id are not antialiased, so their matte is softened by a small "
-            "Gaussian. Styles put paper where the matte is 0.",
+            "Gaussian. Styles put paper where the matte is 0."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "NaN and infinities are missing: a non-finite depth is background, a NaN alpha or id "
+            "covers nothing. The output stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -75,6 +75,16 @@ static nprfx_result morph_render(const nprfx_render_args *a, const void *params)
                                    a->output);
 }
 
+/* The taps an output pixel reads: the radius, twice for open and close (two passes). A NaN
+ * tap is skipped (missing); an infinite one is the max or min over this footprint. */
+static int morph_footprint(const void *params)
+{
+    const mp *p = params;
+    int R = (int)(p->radius + 1e-9);
+    return p->operation == NPRFX_MORPHOLOGY_OPEN || p->operation == NPRFX_MORPHOLOGY_CLOSE ? 2 * R
+                                                                                           : R;
+}
+
 const nprfx_node_desc nprfx_node_morphology = {
     .size = sizeof(nprfx_node_desc),
     .id = "morphology",
@@ -84,13 +94,19 @@ const nprfx_node_desc nprfx_node_morphology = {
             "erode (min), open (erode then dilate) and close (dilate then erode), with a disc or "
             "square footprint of the given radius. Kass & Pesare's Figure 3a runs a dilation and "
             "an erosion over quantised shading plus smoothed coherent noise to make a painterly "
-            "texture that moves with the objects. Pixels outside the frame repeat the edge.",
+            "texture that moves with the objects. Pixels outside the frame repeat the edge."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "A NaN tap is missing: max and min skip it, and only a footprint of NaN alone stays "
+            "NaN (never an infinity). An infinity is a value like any other: dilate spreads +inf, "
+            "erode -inf, over the footprint.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,
     .num_params = P_COUNT,
     .output_channels = 0, /* as many as image */
     .render = morph_render,
+    .footprint = morph_footprint,
     .params_size = sizeof(mp),
     .version_major = 1,
+    .version_minor = 1, /* 1.1: NaN and infinities as docs/design.md §2.2 says */
 };

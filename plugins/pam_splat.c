@@ -358,7 +358,11 @@ const nprfx_node_desc nprfx_node_pam_splat = {
         "the range, mixed linearly, so the mean brightness follows the tone. Tones outside [0,"
         " 1] are clamped. The tone is read per pixel, the model colour at each splat's "
         "centre (color_from splat: dab-shaped colour) or per pixel; background pixels pass "
-        "through. Output is bit-identical for any thread count and tile split.",
+        "through. Output is bit-identical for any thread count and tile split."
+        "\n\nNaN and infinities (docs/design.md §2.2): "
+        "color passes through at the pixel. A NaN or infinite anchor, tone, direction, depth "
+        "or id is missing (no surface there); the output stays finite. A non-finite pixel in "
+        "the art map (pam) refuses the frame with a message that names it.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -224,7 +224,10 @@ const nprfx_node_desc nprfx_node_paper = {
             "\n"
             "The node makes an image from nothing: its frame comes from the optional image input "
             "(whose pixels are not read), or else from the graph's \"format\" (the host's project "
-            "size in OpenFX).",
+            "size in OpenFX)."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "A NaN or infinite image pixel is missing: the paper alone shows there. The output "
+            "stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -287,7 +287,10 @@ const nprfx_node_desc nprfx_node_stipple = {
         "1 - prod(1 - coverage x pen tone). Results do not depend on threads or tiles. Overlapping "
         "discs cover less than their summed area, which 'tone_correction' (on by default) "
         "compensates for by a measured curve applied to g. The 'export' param writes the dots as "
-        "CSV or SVG for print or pen plotters.",
+        "CSV or SVG for print or pen plotters."
+        "\n\nNaN and infinities (docs/design.md §2.2): "
+        "A NaN tone reads as paper (no stipple), infinities clamp; a NaN or infinite uv or id "
+        "is no object. The output stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -180,7 +180,11 @@ const nprfx_node_desc nprfx_node_threshold_map = {
         " a Gaussian-looking noise the mean follows the tone monotonically, but not exactly);"
         " sharper sigma gives crisper strokes with the same mean. The output is brightness: 1"
         " paper, 0 ink; invert gives ink coverage. Inputs read as 0 outside their data "
-        "window.",
+        "window."
+        "\n\nNaN and infinities (docs/design.md §2.2): "
+        "A NaN pattern passes through at the pixel; infinities clamp to the ends of the "
+        "threshold. tone is clamped to [0, 1], NaN as 0. A NaN or infinite texel of the map "
+        "is missing: the lookup blends its finite neighbours.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,
@@ -189,4 +193,5 @@ const nprfx_node_desc nprfx_node_threshold_map = {
     .render = tm_render,
     .params_size = sizeof(tp),
     .version_major = 1,
+    .version_minor = 1, /* 1.1: NaN and infinities as docs/design.md §2.2 says */
 };

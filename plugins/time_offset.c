@@ -58,7 +58,9 @@ const nprfx_node_desc nprfx_node_time_offset = {
     .label = "Time Offset",
     .group = "Time",
     .help = "Outputs its input as it is at another frame: out_i = image_{i + offset}. The runner "
-            "fetches and caches the other frame; in a host it is a temporal clip access.",
+            "fetches and caches the other frame; in a host it is a temporal clip access."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "Values pass through unchanged, NaN and infinities included, at the shifted frame.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -231,7 +231,11 @@ const nprfx_node_desc nprfx_node_tone = {
             "(out_high - out_low) t, and out = background where coverage is 0.\n\n"
             "Feed it the beauty or a light pass that includes the ambient light, not the direct "
             "light alone (0 in every shadow), and a matte as coverage so the sky is not "
-            "measured and stays paper.",
+            "measured and stays paper."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "NaN and infinities are missing: left out of the range measured over the shot (so one "
+            "bad pixel cannot stretch every frame's range) and mapped as background at their "
+            "pixel. The output stays finite.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,

@@ -76,6 +76,13 @@ static nprfx_result warp_render(const nprfx_render_args *a, const void *params)
                              a->output);
 }
 
+/* Where the image is read depends on the offset input's values, not on params. */
+static int warp_footprint(const void *params)
+{
+    (void)params;
+    return -1;
+}
+
 const nprfx_node_desc nprfx_node_warp = {
     .size = sizeof(nprfx_node_desc),
     .id = "warp",
@@ -84,13 +91,18 @@ const nprfx_node_desc nprfx_node_warp = {
     .help = "Displaces an image by a two-channel offset field: out(p) = image(p + amount * "
             "offset(p)), sampled with a bilinear or Catmull-Rom bicubic filter. Driven by two "
             "channels of coherent-noise it gives the wobbling, hand-made edges of Kass & Pesare's "
-            "Figure 3a that stick to the moving objects.",
+            "Figure 3a that stick to the moving objects."
+            "\n\nNaN and infinities (docs/design.md §2.2): "
+            "image passes through: a NaN or infinity shows wherever the filter's taps read it, "
+            "which the offsets decide. A NaN offset leaves the pixel where it is; an infinite one "
+            "reads outside, which the border decides.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,
     .num_params = P_COUNT,
     .output_channels = 0, /* as many as image */
     .render = warp_render,
+    .footprint = warp_footprint,
     .params_size = sizeof(wp),
     .version_major = 1,
 };

@@ -1,6 +1,7 @@
 /* The watercolor node: Bousseau, Kaplan, Thollot, Sillion 2006 — wobbling edges, edge darkening,
  * pigment turbulence, dispersion and paper granulation, all through the pigment-density model.
  * The math lives in core/watercolor.c; this file is the descriptor and the call into it. */
+#include <math.h>
 #include <stddef.h>
 
 #include "nprfx/node.h"
@@ -156,6 +157,15 @@ static nprfx_result watercolor_render(const nprfx_render_args *a, const void *pa
     return nprfx_watercolor_render(a->ctx, params, &in, a->frame, a->window, a->output);
 }
 
+/* The stages' reach (core/watercolor.c grows each stage's rectangle by it): the edge blur's
+ * taps and gradient, the wobble's displacement, the paper's low-pass, gradient and RMS box. */
+static int watercolor_footprint(const void *params)
+{
+    const wp *p = params;
+    return (int)ceil(3.0 * p->edge_width) + 2 + (int)ceil(p->wobble) + 1 +
+           2 * (int)ceil(p->wobble_scale) + 2;
+}
+
 const nprfx_node_desc nprfx_node_watercolor = {
     .size = sizeof(nprfx_node_desc),
     .id = "watercolor",
@@ -177,13 +187,19 @@ const nprfx_node_desc nprfx_node_watercolor = {
         "Feed turbulence and dispersion from coherent-noise nodes (coarse and fine, output "
         "unit01) so the pigment sticks to the objects, and the paper from a screen-space paper "
         "texture. With nothing optional connected and edge_darkening 0 the image passes through "
-        "unchanged.",
+        "unchanged."
+        "\n\nNaN and infinities (docs/design.md §2.2): "
+        "image passes through within the footprint of the wobble and the edge blur. A NaN "
+        "turbulence, dispersion or paper pixel passes through the same way; infinities there "
+        "clamp to the density range. A NaN or infinite coverage is missing. Never an infinity "
+        "from a NaN.",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,
     .num_params = P_COUNT,
     .output_channels = 0, /* as many as image */
     .render = watercolor_render,
+    .footprint = watercolor_footprint,
     .params_size = sizeof(wp),
     .version_major = 1,
 };

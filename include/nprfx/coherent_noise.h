@@ -180,6 +180,12 @@ NPRFX_API nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args
                                                    const nprfx_coherent_noise_params *p);
 NPRFX_API void nprfx_coherent_noise_state_free(void *state);
 
+/* The automatic window (the node's window = 0): the fewest frames W with alpha^W at most
+ * NPRFX_CN_WINDOW_TOLERANCE, the weight the frames cut off would have had (66 frames at alpha
+ * 0.9, 342 at 0.98); 0 (no window) for alpha = 1, frozen noise. docs/design.md §3.1. */
+#define NPRFX_CN_WINDOW_TOLERANCE 1e-3
+NPRFX_API int64_t nprfx_coherent_noise_auto_window(double alpha);
+
 /* The frames input `input` (NPRFX_CN_IN_*) is read at to render frame q->time with an empty
  * cache: one range, the recursion's span (the node's desc->frames_needed). */
 NPRFX_API int nprfx_coherent_noise_frames(const nprfx_coherent_noise_params *p,

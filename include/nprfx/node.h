@@ -203,6 +203,14 @@ struct nprfx_node_desc {
      * frame itself. Appended after the first release: read it only when `size` covers it. */
     int (*frames_needed)(const void *params, const nprfx_frames_query *q, int input,
                          nprfx_frame_range *ranges);
+    /* Optional: how far from an output pixel, in pixels at render scale 1, the input pixels it
+     * depends on may lie with these params (a filter's radius, both passes of a composite
+     * filter); -1: anywhere in the frame (a warp by an input's values). Without it: 0, the
+     * pixel itself. It bounds where a NaN or infinite input pixel may show in the output
+     * (docs/design.md §2.2, tests/unit/test_nan.c) and how much work a pixel costs (the
+     * runner's warning before hours of work). Called through nprfx_node_footprint. Appended:
+     * read it only when `size` covers it. */
+    int (*footprint)(const void *params);
 };
 
 /* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
@@ -239,6 +247,11 @@ NPRFX_API nprfx_result nprfx_node_frames_needed(nprfx_context *ctx, const nprfx_
                                                 const nprfx_value *params,
                                                 const nprfx_frames_query *q, int input,
                                                 nprfx_frame_range *ranges, int *count);
+
+/* The node's footprint for these params (desc->footprint; 0 without one) into *radius: pixels
+ * at render scale 1, -1 for anywhere in the frame. Params are checked as for render. */
+NPRFX_API nprfx_result nprfx_node_footprint(nprfx_context *ctx, const nprfx_node_desc *node,
+                                            const nprfx_value *params, int *radius);
 
 /* Check a descriptor for mistakes a compiler cannot see: names unique and well formed, help and
  * labels present, defaults inside the hard range and the soft range inside it, choice lists that

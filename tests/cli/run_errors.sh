@@ -34,6 +34,20 @@ expect nz "input 'alpha' needs 1 channel, 'plate:UV' gives 2" -- "$NPRFX" run wr
 graph wrong_size '"small": {"node": "synth", "scene": "orbit", "size": "16x12"}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "small"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect nz "input 'layer' is 16x12 but input 'base' is 32x24" -- "$NPRFX" run wrong_size.json
 
+# Same size, other origin: the message names the data windows, not two equal sizes.
+if command -v oiiotool >/dev/null; then
+  oiiotool --pattern constant:color=0.5,0.5,0.5,1 64x48 4 -d float --crop 20x15+10+0 -o shifted.0001.exr \
+           --pattern constant:color=0.5,0.5,0.5,1 64x48 4 -d float --crop 20x15+0+0 -o home.0001.exr
+  printf '{"frames": "1", "nodes": {"s": {"node": "read", "path": "shifted.####.exr"}, "h": {"node": "read", "path": "home.####.exr"}, "b": {"node": "blend", "inputs": {"base": "h", "layer": "s"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}}}\n' > wrong_origin.json
+  expect nz "input 'layer' has data window 20x15+10+0 but input 'base' has 20x15+0+0" -- "$NPRFX" run wrong_origin.json
+fi
+
+# Hours of work are announced before the first frame: a million frames, a huge footprint. The
+# plate is missing, so frame 1 fails at once after the warning and nothing renders for hours.
+printf '{"frames": "1-1000000", "nodes": {"r": {"node": "read", "path": "nowhere/p.####.exr"}, "m": {"node": "morphology", "inputs": {"image": "r"}, "params": {"radius": 200}}, "w": {"node": "write", "inputs": {"image": "m"}, "path": "o/x.####.exr"}}}\n' > hours.json
+expect nz "1000000 frames: at one second a frame that is 278 hours" -- "$NPRFX" run hours.json
+expect nz "node 'm' (morphology) reads up to 160801 pixels (radius 200) for every pixel" -- "$NPRFX" run hours.json
+
 graph unknown_node '"b": {"node": "blurp", "inputs": {}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect 2 "unknown node type 'blurp'" -- "$NPRFX" run unknown_node.json
 

@@ -969,8 +969,11 @@ static void test_input_mode(nprfx_context *ctx)
     scene_free(&s);
 }
 
-/* In-order rendering costs one recursion step per frame (a bounded number of fetches), and
- * reverse-order rendering stays within a constant factor of it (checkpoints + the recent run). */
+/* In-order rendering of the recursion from the start frame (window 1000000) costs one step per
+ * frame (a bounded number of fetches), and reverse-order rendering stays within a constant factor
+ * of it (checkpoints + the recent run). The automatic window (the default) costs about two steps
+ * a frame in order, and any frame alone, frame 200,000 of a 200,000-frame shot included, under
+ * 2W steps (issue 15: a farm renders frames alone). */
 static void test_cost(nprfx_context *ctx)
 {
     scene s;
@@ -981,6 +984,7 @@ static void test_cost(nprfx_context *ctx)
     s.connected = (1u << IN_DEPTH) | (1u << IN_MPREV);
     nprfx_value pv[32];
     defaults(pv);
+    set_param(pv, "window", 1000000);
     nprfx_image o;
     nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 32, 32), 1, &o);
     void *state = NULL;
@@ -1001,6 +1005,38 @@ static void test_cost(nprfx_context *ctx)
     CHECK(worst <= 8);
     CHECK(reverse <= 200 * 20);
     state_release(&state);
+
+    /* The automatic window: W = 66 at alpha 0.9. */
+    defaults(pv);
+    int64_t W = nprfx_coherent_noise_auto_window(0.9);
+    CHECK(W == 66);
+    CHECK(nprfx_coherent_noise_auto_window(0.98) == 342);
+    CHECK(nprfx_coherent_noise_auto_window(1.0) == 0);
+    CHECK(pow(0.9, (double)W) <= NPRFX_CN_WINDOW_TOLERANCE &&
+          pow(0.9, (double)(W - 1)) > NPRFX_CN_WINDOW_TOLERANCE);
+    long long in_order = s.fetches;
+    for (int f = 1; f <= 400; f++)
+        render_full(&s, ctx, pv, f, 1, 400, &state, &o);
+    in_order = s.fetches - in_order;
+    state_release(&state);
+    /* Frame 200,000 alone: the span the host prepares, and the fetches the render makes. */
+    int ich[NPRFX_CN_IN_COUNT] = {1, 2, 0, 0, 0};
+    nprfx_frames_query q = {200000, 1, 200000, ich};
+    nprfx_frame_range rg[NPRFX_MAX_FRAME_RANGES];
+    int nr = 0;
+    CHECK_OK(nprfx_node_frames_needed(ctx, node, pv, &q, IN_DEPTH, rg, &nr));
+    CHECK(nr == 1 && rg[0].last == 200000 && rg[0].last - rg[0].first >= W &&
+          rg[0].last - rg[0].first < 2 * W);
+    long long alone = s.fetches;
+    render_full(&s, ctx, pv, 200000, 1, 200000, &state, &o);
+    alone = s.fetches - alone;
+    state_release(&state);
+    printf("cost, automatic window %lld: 400 frames in order %lld fetches; frame 200000 alone "
+           "reads frames %d-%d, %lld fetches\n",
+           (long long)W, in_order, nr ? rg[0].first : 0, nr ? rg[0].last : 0, alone);
+    /* about 4 fetches a step (depth, previous depth, motion, fingerprint) */
+    CHECK(alone <= 2 * W * 6);
+    CHECK(in_order <= 400 * 2 * 6);
     nprfx_image_free(&o);
 }
 
