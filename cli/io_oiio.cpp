@@ -4,6 +4,7 @@
  * (a C caller cannot unwind through it) and reports through nprfx_error, naming the file and,
  * where one is at fault, the channel. */
 #include "io.h"
+#include "io_validate.h"
 
 #include <atomic>
 #include <cerrno>
@@ -322,6 +323,8 @@ extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprf
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_read: NULL argument");
     std::memset(out, 0, sizeof *out);
+    /* Damaged files are refused before OIIO allocates anything (io_validate.h). */
+    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_READ)) return g;
     try {
         std::unique_ptr<ImageInput> in;
         header h;
@@ -407,6 +410,7 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_info: NULL argument");
     std::memset(out, 0, sizeof *out);
+    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
     try {
         std::unique_ptr<ImageInput> in;
         header h;
@@ -449,6 +453,7 @@ extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char 
                            "nprfx_io_read_attributes: NULL argument");
     *names = *values = nullptr;
     *count = 0;
+    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
     try {
         std::unique_ptr<ImageInput> in = ImageInput::open(path);
         if (!in) {
