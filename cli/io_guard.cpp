@@ -93,11 +93,11 @@ extern "C" int nprfx_io_deadline_passed(void)
     return read_deadline > 0 && nprfx_limits_now() > read_deadline;
 }
 
-extern "C" int nprfx_io_read_progress(void *user, float done)
+extern "C" bool nprfx_io_read_progress(void *user, float done)
 {
     (void)user;
     (void)done;
-    return nprfx_io_deadline_passed();
+    return nprfx_io_deadline_passed() != 0;
 }
 
 extern "C" nprfx_result nprfx_io_deadline_error(nprfx_context *ctx, const char *path)

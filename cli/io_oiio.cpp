@@ -376,15 +376,24 @@ extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprf
                     c1++;
                 float *dst = pixels + offset + c0;
                 bool ok;
+                /* The read deadline (NPRFX_READ_TIMEOUT) stops OIIO between strips of rows. */
                 if (!as_uint) {
-                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride);
+                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride,
+                                        OIIO::AutoStride, nprfx_io_read_progress, nullptr);
                 } else {
                     int n = c1 - c0;
                     ubuf.resize(npix * (size_t)n);
-                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::UINT, ubuf.data());
+                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::UINT, ubuf.data(),
+                                        OIIO::AutoStride, OIIO::AutoStride, OIIO::AutoStride,
+                                        nprfx_io_read_progress, nullptr);
                     for (size_t i = 0; ok && i < npix; i++)
                         for (int k = 0; k < n; k++)
                             dst[i * nch + k] = (float)ubuf[i * n + k];
+                }
+                if (nprfx_io_deadline_passed()) {
+                    oiio_error(in.get());
+                    nprfx_plate_free(out);
+                    return nprfx_io_deadline_error(ctx, path);
                 }
                 if (!ok) {
                     std::string e = oiio_error(in.get());

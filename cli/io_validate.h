@@ -9,6 +9,8 @@
 #ifndef NPRFX_CLI_IO_VALIDATE_H
 #define NPRFX_CLI_IO_VALIDATE_H
 
+#include <stdbool.h>
+
 #include "nprfx/nprfx.h"
 
 #ifdef __cplusplus
@@ -39,9 +41,9 @@ int nprfx_io_is_exr(const char *path);
 
 /* The read deadline of this thread, armed by nprfx_io_guard from NPRFX_READ_TIMEOUT: non-zero
  * once it has passed. nprfx_io_read_progress has OpenImageIO's ProgressCallback signature
- * (returns non-zero to stop a read_image). */
+ * (returns true to stop a read_image). */
 int nprfx_io_deadline_passed(void);
-int nprfx_io_read_progress(void *user, float done);
+bool nprfx_io_read_progress(void *user, float done);
 /* The message for a read stopped by the deadline, naming the file. */
 nprfx_result nprfx_io_deadline_error(nprfx_context *ctx, const char *path);
 
