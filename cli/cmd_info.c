@@ -104,11 +104,13 @@ static int info_file(nprfx_context *ctx, const char *path)
  *   preview IN OUT [--raw] [--ocio CFG] [--colorspace CS] [--display D] [--view V]
  *   convert IN OUT FROM TO [--ocio CFG]               convert the first 3 channels, write EXR
  *   channel IN NAME                                   print the channel's index (-1: absent)
- *   view IN FIRST COUNT                               print a plate view's shape, or "absent" */
+ *   view IN FIRST COUNT                               print a plate view's shape, or "absent"
+ *   damaged LIST                                      a verdict for each file (cli/io_check.c) */
 static int io_test(nprfx_context *ctx, int argc, char **argv)
 {
     if (argc < 3) return INFO_USAGE;
     const char *op = argv[1], *in = argv[2];
+    if (!strcmp(op, "damaged")) return nprfx_io_check_damaged(in);
     nprfx_plate plate;
     if (nprfx_io_read(ctx, in, &plate)) return INFO_FILE_ERROR;
     /* The whole plate as one view (may exceed NPRFX_MAX_CHANNELS, which the writer allows). */

@@ -9,6 +9,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "io.h"
+#include "io_limits.h"
 #include "seq.h"
 
 /* Exit status: 0 written, 1 render or write error, 2 usage error. */
@@ -188,6 +189,14 @@ int nprfx_cmd_synth(int argc, char **argv)
 
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return SYNTH_FAILED;
+    /* Refused before anything is allocated, with the size and the limit (NPRFX_READ_LIMIT). */
+    if (nprfx_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
+                                nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0),
+                                0)) {
+        fprintf(stderr, "%s\n", nprfx_cli_message(env.ctx));
+        nprfx_cli_env_free(&env);
+        return SYNTH_USAGE;
+    }
     nprfx_frame_list frames = {NULL, 0};
     nprfx_image im = {0}, packed = {0};
     const char *bnames[BLENDER_CHANNELS + 1];

@@ -13,6 +13,8 @@ int nprfx_cmd_list(int argc, char **argv);
 int nprfx_cmd_help(int argc, char **argv);
 int nprfx_cmd_run(int argc, char **argv);
 int nprfx_cmd_info(int argc, char **argv);
+/* nprfx info --io-test damaged LIST: one verdict a file (cli/io_check.c). */
+int nprfx_io_check_damaged(const char *list);
 int nprfx_cmd_diff(int argc, char **argv);
 int nprfx_cmd_synth(int argc, char **argv);
 int nprfx_cmd_bench(int argc, char **argv);

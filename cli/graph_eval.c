@@ -15,6 +15,7 @@
 #include "channels.h"
 #include "graph.h"
 #include "io.h"
+#include "io_limits.h"
 #include "nprfx/nprfx.h"
 #include "seq.h"
 #include "internal_graph.h"
@@ -477,6 +478,11 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     }
     nprfx_output_info oi;
     if ((r = nprfx_node_output_info(n->ctx, d, n->params, in_ch, &oi))) goto done;
+    char what[300]; /* a frame beyond NPRFX_READ_LIMIT is refused, not attempted */
+    snprintf(what, sizeof what, "node '%s': output frame", n->name);
+    if ((r = nprfx_image_limit_check(g->ctx, what, nprfx_rect_width(frame_rect),
+                                     nprfx_rect_height(frame_rect), oi.channels, 0)))
+        goto done;
     if ((r = nprfx_image_alloc(g->ctx, frame_rect, oi.channels, im))) goto done;
     nprfx_render_args a;
     memset(&a, 0, sizeof a);

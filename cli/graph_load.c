@@ -419,6 +419,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     }
     if (g->frames_text && (r = shot_range(g))) goto done;
     r = link_graph(g);
+    if (!r) r = internal_graph_check_limits(g);
 done:
     cJSON_Delete(root);
     if (r) {

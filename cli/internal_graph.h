@@ -88,6 +88,8 @@ nprfx_result internal_graph_names_init(nprfx_graph *g, int count);
 int internal_graph_names_add(nprfx_graph *g, int node);
 /* An error naming the nodes of a cycle, if the linked graph has one (graph_cycles.c). */
 nprfx_result internal_graph_check_cycles(nprfx_graph *g);
+/* Synth sizes and "format" against the image memory bound (graph_limits.c). */
+nprfx_result internal_graph_check_limits(nprfx_graph *g);
 /* The result cache (graph_cache.c): the entry of (node, frame), made the most recent, or NULL. */
 centry *internal_graph_cache_find(nprfx_graph *g, int node, int frame);
 /* Add a result (taking im and names), evicting unpinned old ones over the bounds; NULL: no memory.

@@ -4,6 +4,7 @@
  * (a C caller cannot unwind through it) and reports through nprfx_error, naming the file and,
  * where one is at fault, the channel. */
 #include "io.h"
+#include "io_validate.h"
 
 #include <atomic>
 #include <cerrno>
@@ -322,6 +323,8 @@ extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprf
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_read: NULL argument");
     std::memset(out, 0, sizeof *out);
+    /* Damaged files are refused before OIIO allocates anything (io_validate.h). */
+    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_READ)) return g;
     try {
         std::unique_ptr<ImageInput> in;
         header h;
@@ -373,15 +376,24 @@ extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprf
                     c1++;
                 float *dst = pixels + offset + c0;
                 bool ok;
+                /* The read deadline (NPRFX_READ_TIMEOUT) stops OIIO between strips of rows. */
                 if (!as_uint) {
-                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride);
+                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride,
+                                        OIIO::AutoStride, nprfx_io_read_progress, nullptr);
                 } else {
                     int n = c1 - c0;
                     ubuf.resize(npix * (size_t)n);
-                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::UINT, ubuf.data());
+                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::UINT, ubuf.data(),
+                                        OIIO::AutoStride, OIIO::AutoStride, OIIO::AutoStride,
+                                        nprfx_io_read_progress, nullptr);
                     for (size_t i = 0; ok && i < npix; i++)
                         for (int k = 0; k < n; k++)
                             dst[i * nch + k] = (float)ubuf[i * n + k];
+                }
+                if (nprfx_io_deadline_passed()) {
+                    oiio_error(in.get());
+                    nprfx_plate_free(out);
+                    return nprfx_io_deadline_error(ctx, path);
                 }
                 if (!ok) {
                     std::string e = oiio_error(in.get());
@@ -407,6 +419,7 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_info: NULL argument");
     std::memset(out, 0, sizeof *out);
+    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
     try {
         std::unique_ptr<ImageInput> in;
         header h;
@@ -449,6 +462,7 @@ extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char 
                            "nprfx_io_read_attributes: NULL argument");
     *names = *values = nullptr;
     *count = 0;
+    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
     try {
         std::unique_ptr<ImageInput> in = ImageInput::open(path);
         if (!in) {

@@ -1,0 +1,53 @@
+/* nprfx CLI — checks a file before OpenImageIO touches it (issue 15, damaged files).
+ *
+ * OpenImageIO trusts a header: a damaged EXR that declares a 2000000000x3 window, a chunk table
+ * larger than the file or chunks that inflate a thousandfold makes it allocate gigabytes, rebuild
+ * offset tables for seconds, or return garbage channel names as if the read had worked. The guard
+ * parses the header on its own (OpenEXRCore, which reports instead of printing), walks every chunk
+ * header against the file's size, and estimates what the read will allocate, so such a file is
+ * refused up front with a message naming the file and what is wrong (docs/design.md §4). */
+#ifndef NPRFX_CLI_IO_VALIDATE_H
+#define NPRFX_CLI_IO_VALIDATE_H
+
+#include <stdbool.h>
+
+#include "nprfx/nprfx.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum nprfx_io_guard_mode {
+    /* Header facts only (nprfx info, attributes): structure and names, no memory bound. */
+    NPRFX_GUARD_HEADER = 0,
+    /* A full read: also the decoded size against the memory bound (NPRFX_READ_LIMIT). */
+    NPRFX_GUARD_READ = 1
+} nprfx_io_guard_mode;
+
+/* The guard every io.h reader calls first. EXR files (by their magic number) go through
+ * nprfx_io_validate_exr; other formats have their header's size checked through OpenImageIO in
+ * NPRFX_GUARD_READ mode. A file that cannot be opened passes: the reader reports that itself.
+ * Also arms this thread's read deadline (nprfx_io_deadline_passed). */
+nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int mode);
+
+/* The EXR checks: header parse, parts, windows, channel names and count, tile sizes, chunk
+ * counts and every chunk's place against the file's size and a plausible compression ratio, and
+ * in NPRFX_GUARD_READ mode the decoded size. deadline: nprfx_limits_now() time after which the
+ * walk over the chunks gives up (0: none). */
+nprfx_result nprfx_io_validate_exr(nprfx_context *ctx, const char *path, int mode, double deadline);
+
+/* 1 when the file begins with the EXR magic number. */
+int nprfx_io_is_exr(const char *path);
+
+/* The read deadline of this thread, armed by nprfx_io_guard from NPRFX_READ_TIMEOUT: non-zero
+ * once it has passed. nprfx_io_read_progress has OpenImageIO's ProgressCallback signature
+ * (returns true to stop a read_image). */
+int nprfx_io_deadline_passed(void);
+bool nprfx_io_read_progress(void *user, float done);
+/* The message for a read stopped by the deadline, naming the file. */
+nprfx_result nprfx_io_deadline_error(nprfx_context *ctx, const char *path);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Frames larger than the image memory bound are refused up front, naming the size and the limit
+# (issue 15): nprfx synth --size, a graph's synth node and "format", with NPRFX_READ_LIMIT
+# followed. Each refusal must come fast and in little memory: nothing is allocated first.
+set -u
+NPRFX=$1
+WORK=$3
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK" || exit 1
+fail=0
+bad() {
+    echo "FAIL: $*"
+    fail=1
+}
+# expect_refused STATUS PATTERN CMD...: exit STATUS, stderr matching PATTERN, < 256 MiB.
+expect_refused() {
+    local want=$1 pattern=$2
+    shift 2
+    /usr/bin/time -f "%M" -o mem.txt "$@" >out.txt 2>err.txt
+    local rc=$?
+    [ "$rc" -eq "$want" ] || bad "$*: exit $rc, expected $want: $(cat err.txt)"
+    grep -qE -- "$pattern" err.txt || bad "$*: message: $(cat err.txt)"
+    local kib
+    kib=$(tail -1 mem.txt)
+    [ "$((kib / 1024))" -lt 256 ] || bad "$*: $((kib / 1024)) MiB before refusing"
+}
+expect_refused 2 "nprfx synth: --size 16384x16384 with 26 channels needs 26(\.0)? GiB, above the .* image memory limit \(NPRFX_READ_LIMIT\)" \
+    "$NPRFX" synth orbit --size 16384x16384 -o big.exr
+[ -e big.exr ] && bad "synth wrote big.exr"
+# The limit follows NPRFX_READ_LIMIT both ways.
+expect_refused 2 "--size 64x64 with 26 channels needs 416 KiB, above the 100 KiB image memory limit" \
+    env NPRFX_READ_LIMIT=100K "$NPRFX" synth orbit --size 64x64 -o small.exr
+NPRFX_READ_LIMIT=1M "$NPRFX" synth orbit --size 64x64 -o small.exr >/dev/null 2>err.txt || bad "64x64 under 1M: $(cat err.txt)"
+
+cat >synth.json <<'JSON'
+{"frames": "1", "nodes": {
+  "plate": {"node": "synth", "scene": "orbit", "size": "16384x16384"},
+  "out": {"node": "write", "inputs": {"image": "plate:R,G,B"}, "path": "out.####.exr"}}}
+JSON
+expect_refused 2 "synth.json: node 'plate': synth size 16384x16384 with 26 channels needs 26(\.0)? GiB, above the .* image memory limit" \
+    "$NPRFX" run synth.json
+cat >format.json <<'JSON'
+{"frames": "1", "format": "60000x60000", "nodes": {
+  "paper": {"node": "paper"},
+  "out": {"node": "write", "inputs": {"image": "paper"}, "path": "out.####.exr"}}}
+JSON
+expect_refused 2 "format.json: \"format\" 60000x60000 with 1 channel needs 13.4 GiB, above the" \
+    "$NPRFX" run format.json
+# A node's output frame is checked before it is allocated: paper at 2000x2000 under 20 MiB (the format alone fits).
+sed 's/60000x60000/2000x2000/' format.json >format2.json
+expect_refused 1 "node 'paper': output frame 2000x2000 with [0-9]+ channels? needs .*, above the 20 MiB image memory limit" \
+    env NPRFX_READ_LIMIT=20M "$NPRFX" run format2.json
+[ $fail -eq 0 ] && echo "limits: all checks passed"
+exit $fail
