@@ -1,11 +1,15 @@
 /* nprfx CLI — shared helpers. */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli_util.h"
+#include "graph.h"
+#include "io_limits.h"
 
 int nprfx_cli_threads(int requested)
 {
@@ -77,9 +81,54 @@ const char *nprfx_cli_message(const nprfx_context *ctx)
     return buf;
 }
 
+double nprfx_cli_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 double nprfx_cli_peak_mib(void)
 {
     struct rusage ru;
     if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
     return (double)ru.ru_maxrss / 1024.0; /* Linux reports KiB */
+}
+
+int nprfx_cli_set_mem_limit(const char *prog, const char *cmd, const char *size)
+{
+    uint64_t bytes;
+    if (nprfx_parse_size(size, &bytes)) {
+        fprintf(stderr, "%s %s: --mem-limit '%s' is not a size (e.g. 8G, 512M, or 0 for none)\n",
+                prog, cmd, size);
+        return 1;
+    }
+    nprfx_mem_limit_set(bytes);
+    return 0;
+}
+
+void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
+                           const struct nprfx_graph_plan_info *plan)
+{
+    const nprfx_graph_node_stats *st;
+    int n = nprfx_graph_stats(g, &st);
+    int per = frames > 0 ? frames : 1;
+    fprintf(f, "stats: %d frame%s\n", frames, frames == 1 ? "" : "s");
+    fprintf(f, "  %-20s %-15s %7s %10s %12s %12s\n", "node", "type", "renders", "ms/frame",
+            "MiB/frame", "new MiB");
+    for (int i = 0; i < n; i++) {
+        if (!st[i].calls) continue; /* not on the way to a write */
+        fprintf(f, "  %-20s %-15s %7lld %10.2f %12.1f %12.1f\n", st[i].name, st[i].type,
+                st[i].calls, st[i].seconds * 1e3 / per, (double)st[i].bytes / per / 1048576.0,
+                (double)st[i].fresh_bytes / 1048576.0);
+    }
+    char peak[32], est[32], lim[32];
+    nprfx_format_bytes(peak, sizeof peak, nprfx_graph_mem_peak(g));
+    nprfx_format_bytes(est, sizeof est, plan ? plan->peak : 0);
+    if (!plan || plan->limit == UINT64_MAX)
+        snprintf(lim, sizeof lim, "none");
+    else
+        nprfx_format_bytes(lim, sizeof lim, plan->limit);
+    fprintf(f, "frames held at most %s (estimate %s, memory limit %s); peak resident %.0f MiB\n",
+            peak, est, lim, nprfx_cli_peak_mib());
 }

@@ -2,6 +2,8 @@
 #ifndef NPRFX_CLI_UTIL_H
 #define NPRFX_CLI_UTIL_H
 
+#include <stdio.h>
+
 #include "nprfx/nprfx.h"
 
 /* Threads from --threads (when > 0), else $NPRFX_THREADS, else all cores. */
@@ -25,7 +27,22 @@ void nprfx_cli_env_free(nprfx_cli_env *env);
 /* The last message raised through ctx, copied (valid until the next call from this thread). */
 const char *nprfx_cli_message(const nprfx_context *ctx);
 
+/* Monotonic clock in seconds. */
+double nprfx_cli_now(void);
+
 /* Peak resident memory of this process in MiB. */
 double nprfx_cli_peak_mib(void);
+
+/* --mem-limit SIZE of command `cmd`: set the process's memory limit (io_limits.h), or say why
+ * SIZE is not a size on stderr and return non-zero. */
+int nprfx_cli_set_mem_limit(const char *prog, const char *cmd, const char *size);
+
+struct nprfx_graph;
+struct nprfx_graph_plan_info;
+/* The --stats table of a graph after `frames` frames: per node its calls, ms per frame and
+ * bytes allocated per frame, then the graph's peak of frames held, the plan's estimate and the
+ * process's peak resident size. */
+void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
+                           const struct nprfx_graph_plan_info *plan);
 
 #endif

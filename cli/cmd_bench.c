@@ -13,25 +13,29 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: nprfx bench NODE [--size WxH] [--frames N] [--set PARAM=VALUE ...]\n"
-               "                  [--connect INPUT[=CHANNELS] ...] [--threads N] [--scene NAME]\n\n"
-               "Times NODE on synthetic plates (nprfx synth scenes, default orbit, 1920x1080,\n"
-               "10 frames after one warm-up frame). Required inputs are connected to the plate;\n"
-               "--connect adds an optional one (CHANNELS picks synth channels, e.g.\n"
-               "--connect alpha=diffuse). Reports ms per frame (mean and best), Mpixel/s and the\n"
-               "process's peak memory, and for nodes that count what they make (stipple: dots\n"
-               "drawn) that count per frame and per second. File I/O and plate synthesis are not\n"
-               "timed.\n\n"
-               "example:\n"
-               "  nprfx bench stipple --size 1920x1080 --connect uv=UV.U,UV.V --connect id=id \\\n"
-               "      --set mode=radius\n");
+    fprintf(f,
+            "usage: nprfx bench NODE [--size WxH] [--frames N] [--set PARAM=VALUE ...]\n"
+            "                  [--connect INPUT[=CHANNELS] ...] [--threads N] [--scene NAME]\n"
+            "                  [--mem-limit SIZE] [--no-pool]\n\n"
+            "Times NODE on synthetic plates (nprfx synth scenes, default orbit, 1920x1080,\n"
+            "10 frames after one warm-up frame). Required inputs are connected to the plate;\n"
+            "--connect adds an optional one (CHANNELS picks synth channels, e.g.\n"
+            "--connect alpha=diffuse). Reports ms per frame (mean and best), Mpixel/s and the\n"
+            "process's peak memory, and for nodes that count what they make (stipple: dots\n"
+            "drawn) that count per frame and per second. File I/O and plate synthesis are not\n"
+            "timed. Frames come from the runner's frame pool (--no-pool: calloc'd afresh, as\n"
+            "before); --mem-limit is as for nprfx run. 'nprfx bench-graph' times whole graphs.\n\n"
+            "example:\n"
+            "  nprfx bench stipple --size 1920x1080 --connect uv=UV.U,UV.V --connect id=id \\\n"
+            "      --set mode=radius\n");
 }
 
 int nprfx_cmd_bench(int argc, char **argv)
 {
     const char *node_id = NULL, *size = "1920x1080", *scene = "orbit";
     const char *sets[64], *connects[32];
-    int nsets = 0, nconn = 0, frames = 10, threads = 0;
+    int nsets = 0, nconn = 0, frames = 10, threads = 0, no_pool = 0;
+    const char *mem_limit = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has = i + 1 < argc;
@@ -50,6 +54,10 @@ int nprfx_cmd_bench(int argc, char **argv)
             sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--connect") && has && nconn < 32)
             connects[nconn++] = argv[++i];
+        else if (!strcmp(a, "--mem-limit") && has)
+            mem_limit = argv[++i];
+        else if (!strcmp(a, "--no-pool"))
+            no_pool = 1;
         else if (a[0] != '-' && !node_id)
             node_id = a;
         else {
@@ -98,11 +106,13 @@ int nprfx_cmd_bench(int argc, char **argv)
     }
     snprintf(json + len, sizeof json - (size_t)len, "}}}}");
 
+    if (mem_limit && nprfx_cli_set_mem_limit("nprfx", "bench", mem_limit)) return 2;
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return 1;
     int status = 0;
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL, NULL}; /* plates are big */
+    opt.no_pool = no_pool;
     if (nprfx_graph_parse(env.ctx, json, ".", &opt, &g)) {
         fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
         status = 2;
@@ -116,6 +126,12 @@ int nprfx_cmd_bench(int argc, char **argv)
             status = 2;
             goto done;
         }
+    }
+    nprfx_graph_plan_info plan;
+    if (nprfx_graph_plan(g, 1, &plan)) { /* a bench beyond --mem-limit fails before it starts */
+        fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
     }
     double total = 0, best = 1e30;
     long long items = 0;

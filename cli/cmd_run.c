@@ -28,7 +28,19 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "blend.opacity=0.5\n"
         "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
         "  --output-dir DIR    put relative write paths under DIR\n"
-        "  --cache-mb N        memory for cached node results (default 2048)\n"
+        "  --cache-mb N        memory for cached node results and idle frame buffers\n"
+        "                      (default 2048)\n"
+        "  --mem-limit SIZE    the most memory the graph's frames may take, e.g. 8G, 512M\n"
+        "                      (0: none; default $NPRFX_READ_LIMIT, else half the physical\n"
+        "                      memory). A graph whose estimated peak is above it fails before\n"
+        "                      the first frame, and every frame is checked before it is\n"
+        "                      allocated; the message names the node and the sizes. The same\n"
+        "                      limit refuses plates and synth sizes too large to hold\n"
+        "  --stats             after the run, print per node ms/frame and bytes allocated,\n"
+        "                      and the peak resident size\n"
+        "  --no-pool           no frame-buffer pool and no memory plan (every frame calloc'd\n"
+        "                      and freed; results kept until --cache-mb evicts them): the\n"
+        "                      pixels are the same, for checking that\n"
         "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
         "  --keep-going        render the remaining frames after a failed one, exit 1\n"
         "  --wait              when another run is writing one of the graph's sequences,\n"
@@ -65,7 +77,7 @@ static double now_seconds(void)
 typedef struct run_opts {
     const char *prog, *frames, *shot;
     const char *const *sets;
-    int nsets, keep_going, quiet, several, wait;
+    int nsets, keep_going, quiet, several, wait, stats;
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -139,6 +151,15 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
         status = 2;
         goto done;
     }
+    /* The memory plan's estimate, before anything is locked or rendered: a graph that cannot
+     * fit fails here with the node and the sizes, never in the OOM killer at frame 40. */
+    nprfx_graph_plan_info plan;
+    memset(&plan, 0, sizeof plan);
+    if (fl.count > 0 && nprfx_graph_plan(g, fl.frames[0], &plan)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
     if (lock_outputs(env.ctx, g, graph_path, ro, &locks)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
@@ -194,6 +215,7 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
         printf("wrote %d frame%s in %.1f s:\n%s", fl.count - failed,
                fl.count - failed == 1 ? "" : "s", now_seconds() - t0, buf);
     }
+    if (ro->stats) nprfx_cli_print_stats(stdout, g, fl.count, &plan);
 done:
     nprfx_output_locks_release(locks);
     nprfx_seq_frames_free(&fl);
@@ -212,7 +234,9 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
     int ngraphs = 0;
     const char *sets[256];
-    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0;
+    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
+    int no_pool = 0;
+    const char *mem_limit = NULL;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -234,6 +258,12 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
             cache_mb = atol(argv[++i]);
         else if (!strcmp(a, "--output-dir") && has)
             outdir = argv[++i];
+        else if (!strcmp(a, "--mem-limit") && has)
+            mem_limit = argv[++i];
+        else if (!strcmp(a, "--stats"))
+            stats = 1;
+        else if (!strcmp(a, "--no-pool"))
+            no_pool = 1;
         else if (!strcmp(a, "--keep-going"))
             keep_going = 1;
         else if (!strcmp(a, "--wait"))
@@ -256,12 +286,14 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
         return 2;
     }
     if (cache_mb < 16) cache_mb = 16;
+    if (mem_limit && nprfx_cli_set_mem_limit(prog, "run", mem_limit)) return 2;
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return 1;
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
     opt.progress = !quiet;
+    opt.no_pool = no_pool;
     int status = 0;
-    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait};
+    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait, stats};
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;

@@ -18,6 +18,7 @@ int nprfx_io_check_damaged(const char *list);
 int nprfx_cmd_diff(int argc, char **argv);
 int nprfx_cmd_synth(int argc, char **argv);
 int nprfx_cmd_bench(int argc, char **argv);
+int nprfx_cmd_bench_graph(int argc, char **argv);
 int nprfx_cmd_docs(int argc, char **argv);
 int nprfx_cmd_ivs(int argc, char **argv);
 int nprfx_cmd_measure(int argc, char **argv);

@@ -4,6 +4,7 @@
 #define NPRFX_CLI_GRAPH_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "nprfx/node.h"
 #include "seq.h"
@@ -44,7 +45,29 @@ typedef struct nprfx_graph_options {
     /* Non-zero: a temporal node whose render fetches many other frames (a recursion's warm-up)
      * reports them on stderr once it has taken a second, about once a second (appended). */
     int progress;
+    /* Non-zero: no frame-buffer pool and no memory plan: every frame is calloc'd and freed, and
+     * results stay in the cache until evicted (--no-pool; the pixels must not change). */
+    int no_pool;
 } nprfx_graph_options;
+
+/* What one node of a graph cost since it loaded (nprfx run --stats, bench-graph). */
+typedef struct nprfx_graph_node_stats {
+    const char *name, *type; /* type: the node's id, or "read", "synth", "write" */
+    int kind;                /* 0 processing node, 1 read, 2 synth, 3 write */
+    long long calls;         /* frames it rendered (a node re-rendered after eviction counts
+                                again) */
+    double seconds;          /* in its own render, read or write, not in nodes it fetched */
+    size_t bytes;            /* frames it allocated: outputs and channel scratch */
+    size_t fresh_bytes;      /* of those, the ones the pool had no buffer for */
+} nprfx_graph_node_stats;
+
+/* The graph's memory estimate for one frame (nprfx_graph_plan). */
+typedef struct nprfx_graph_plan_info {
+    uint64_t peak;         /* bytes the frames of one frame's evaluation need at the most */
+    uint64_t limit;        /* the memory limit (UINT64_MAX: none) */
+    int width, height;     /* the frame size the estimate is for */
+    const char *peak_node; /* the node whose output frame makes the peak */
+} nprfx_graph_plan_info;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
  * paths relative to the current directory (or output_dir). */
@@ -69,6 +92,10 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
 /* Evaluate every write node at `frame`; *written receives the number of files written. */
 nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written);
 
+/* As nprfx_graph_render_frame, but the write nodes only evaluate their inputs: nothing is
+ * written (bench-graph times the compute apart from the file I/O). */
+nprfx_result nprfx_graph_compute_frame(nprfx_graph *g, int frame);
+
 /* Describe the write nodes' outputs ("out/x.####.exr (preview out/x.####.png)"), one per line. */
 void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
 
@@ -92,6 +119,23 @@ int nprfx_graph_write_count(const nprfx_graph *g);
 /* Evaluate node `name` at `frame` without writing; the view stays valid until the next call
  * into the graph. */
 nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out);
+
+/* Estimate the memory that evaluating `frame` needs from the graph and the frame size alone
+ * (plates' headers, synth sizes, "format"; no pixel is read), as the memory plan runs it: each
+ * result freed after its last consumer, a temporal source's frames kept one frame longer.
+ * NPRFX_ERR_OUT_OF_MEMORY, naming the node and the sizes, when the peak is above the memory
+ * limit; any other problem (a missing file, a bad channel name) is left to the render, which
+ * reports it as it always has, and gives NPRFX_OK with out->peak 0. */
+nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out);
+
+/* Per-node costs since the graph loaded: *stats gets g's count entries (valid while g lives). */
+int nprfx_graph_stats(const nprfx_graph *g, const nprfx_graph_node_stats **stats);
+/* The most bytes the graph's frames held at once (cached, in use and idle in the pool). */
+size_t nprfx_graph_mem_peak(const nprfx_graph *g);
+
+/* Make every read node a synth node of `scene` at w x h, and every synth node and "format" that
+ * size (bench-graph: a graph timed without its plates). */
+nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const char *scene);
 
 /* Seconds spent inside node render functions since the last call (for bench); resets. */
 double nprfx_graph_take_render_seconds(nprfx_graph *g);

@@ -80,23 +80,36 @@ centry *internal_graph_cache_find(nprfx_graph *g, int node, int frame)
         if (e->node == node && e->frame == frame) {
             list_unlink(g, e);
             list_push_front(g, e);
+            e->gen = g->gen;
+            internal_graph_touch(g, e);
             return e;
         }
     return NULL;
 }
 
+void internal_graph_cache_drop(nprfx_graph *g, centry *e)
+{
+    list_unlink(g, e);
+    table_remove(g, e);
+    g->cache_bytes -= e->bytes;
+    g->cache_entries--;
+    internal_graph_centry_free(g, e);
+}
+
 void internal_graph_cache_evict(nprfx_graph *g)
 {
+    /* The byte bound covers the pool's idle buffers too, so that pooling keeps what --cache-mb
+     * promised; they go first, as they only save page faults while a result saves a render. */
+    size_t idle = nprfx_frame_pool_idle_bytes(g->pool);
+    if (idle && g->cache_bytes + idle > g->cache_limit)
+        nprfx_frame_pool_trim(
+            g->pool, g->cache_limit > g->cache_bytes ? g->cache_limit - g->cache_bytes : 0);
     /* Oldest first; the newest entry stays, as it is about to be used. */
     for (centry *e = g->tail, *prev; e && e != g->head; e = prev) {
         if (g->cache_bytes <= g->cache_limit && g->cache_entries <= g->cache_entry_limit) break;
         prev = e->prev;
         if (e->pins) continue;
-        list_unlink(g, e);
-        table_remove(g, e);
-        g->cache_bytes -= e->bytes;
-        g->cache_entries--;
-        internal_graph_centry_free(e);
+        internal_graph_cache_drop(g, e);
     }
 }
 
@@ -110,6 +123,9 @@ centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_i
     e->frame = frame;
     e->im = *im;
     e->names = names;
+    e->gen = g->gen;
+    internal_graph_touch(g, e);
+    e->uses = g->plan_ready && node >= 0 && node < g->count ? g->plan_uses[node] : 0;
     e->bytes = (size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
                (size_t)im->channels * sizeof(float);
     memset(im, 0, sizeof *im);
@@ -127,7 +143,7 @@ void internal_graph_cache_clear(nprfx_graph *g)
 {
     for (centry *e = g->head, *next; e; e = next) {
         next = e->next;
-        internal_graph_centry_free(e);
+        internal_graph_centry_free(g, e);
     }
     free(g->cache_slots);
     g->cache_slots = NULL;

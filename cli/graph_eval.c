@@ -157,6 +157,7 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     im->bounds = plate.bounds;
     *names = plate.names;
     internal_graph_variant_plate(g, im, *names);
+    internal_graph_frame_adopt(g, node, im);
     plate.pixels = NULL;
     plate.names = NULL;
     plate.nchannels = 0;
@@ -168,10 +169,13 @@ static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image 
 {
     gnode *n = &g->nodes[node];
     int nc = nprfx_synth_channel_count();
-    nprfx_result r = nprfx_image_alloc(g->ctx, nprfx_rect_make(0, 0, n->width, n->height), nc, im);
+    char what[300];
+    snprintf(what, sizeof what, "node '%s': synth frame", n->name);
+    nprfx_result r = internal_graph_frame_alloc(g, node, what,
+                                                nprfx_rect_make(0, 0, n->width, n->height), nc, im);
     if (r) return r;
     if ((r = nprfx_synth_render(n->ctx, n->scene, frame, im))) {
-        nprfx_image_free(im);
+        internal_graph_frame_release(g, im);
         return r;
     }
     *names = internal_graph_names_dup(nprfx_synth_channel_names(), nc);
@@ -250,9 +254,9 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
 }
 
 /* Pick the channels of entry e that input k of node n uses; the view shares e's pixels when
- * they are adjacent, else points into *scratch (malloc'd, caller frees). */
+ * they are adjacent, else is *scratch (a frame of the graph's, the caller releases it). */
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
-                                         nprfx_image *view, float **scratch)
+                                         nprfx_image *view, nprfx_image *scratch)
 {
     int nc = e->im.channels, idx[256], count = 0;
     nprfx_result r =
@@ -268,7 +272,10 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
         return NPRFX_OK;
     }
     nprfx_image tmp;
-    r = nprfx_image_alloc(g->ctx, e->im.bounds, count, &tmp);
+    char what[600];
+    snprintf(what, sizeof what, "node '%s': input '%s' (channels from '%s')", n->name,
+             n->kind == GK_NODE ? n->desc->inputs[k].name : "image", g->nodes[e->node].name);
+    r = internal_graph_frame_alloc(g, (int)(n - g->nodes), what, e->im.bounds, count, &tmp);
     if (r) return r;
     for (int y = tmp.bounds.y0; y < tmp.bounds.y1; y++)
         for (int x = tmp.bounds.x0; x < tmp.bounds.x1; x++) {
@@ -277,7 +284,7 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
             for (int c = 0; c < count; c++)
                 d[c] = s[idx[c]];
         }
-    *scratch = tmp.data;
+    *scratch = tmp;
     *view = tmp;
     return NPRFX_OK;
 }
@@ -287,7 +294,7 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
  * recursion can fetch any number of frames while the most recent ones stay valid. */
 typedef struct pin_slot {
     centry *e;
-    float *scratch;
+    nprfx_image scratch;
 } pin_slot;
 #define RING (NPRFX_FETCH_KEEP * 2)
 typedef struct render_frame {
@@ -325,20 +332,19 @@ static void warmup_progress(render_frame *rf, int fetched)
             rf->frame, rf->warm_first, rf->warm_last, k, total);
 }
 
-static void slot_release(pin_slot *s)
+static void slot_release(nprfx_graph *g, pin_slot *s)
 {
     if (s->e) s->e->pins--;
-    free(s->scratch);
+    internal_graph_frame_release(g, &s->scratch);
     s->e = NULL;
-    s->scratch = NULL;
 }
 
 static void render_frame_release(render_frame *rf)
 {
     for (int i = 0; i < rf->nbase; i++)
-        slot_release(&rf->base[i]);
+        slot_release(rf->g, &rf->base[i]);
     for (int i = 0; i < RING; i++)
-        slot_release(&rf->ring[i]);
+        slot_release(rf->g, &rf->ring[i]);
     rf->nbase = 0;
     internal_graph_cache_evict(rf->g);
 }
@@ -352,7 +358,7 @@ static nprfx_result fetch_input(render_frame *rf, int k, int frame, int base, np
                            "node '%s': input '%s' is not connected", n->name,
                            k >= 0 && k < n->ninputs ? n->desc->inputs[k].name : "?");
     pin_slot *slot = base ? &rf->base[rf->nbase++] : &rf->ring[rf->nfetch++ % RING];
-    slot_release(slot);
+    slot_release(g, slot);
     centry *e;
     nprfx_result r = internal_graph_eval(g, n->inputs[k].src, frame, &e);
     if (r) return r;
@@ -478,12 +484,9 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     }
     nprfx_output_info oi;
     if ((r = nprfx_node_output_info(n->ctx, d, n->params, in_ch, &oi))) goto done;
-    char what[300]; /* a frame beyond NPRFX_READ_LIMIT is refused, not attempted */
+    char what[300]; /* a frame beyond the memory limit is refused, not attempted */
     snprintf(what, sizeof what, "node '%s': output frame", n->name);
-    if ((r = nprfx_image_limit_check(g->ctx, what, nprfx_rect_width(frame_rect),
-                                     nprfx_rect_height(frame_rect), oi.channels, 0)))
-        goto done;
-    if ((r = nprfx_image_alloc(g->ctx, frame_rect, oi.channels, im))) goto done;
+    if ((r = internal_graph_frame_alloc(g, node, what, frame_rect, oi.channels, im))) goto done;
     nprfx_render_args a;
     memset(&a, 0, sizeof a);
     a.size = sizeof a;
@@ -517,7 +520,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     g->render_seconds += internal_graph_now() - t0;
     if (!r && !(g->has_hook && g->hook.exports)) r = export_node(g, n, &a, frame);
     if (r) { /* the message went out through n->ctx, naming the node */
-        nprfx_image_free(im);
+        internal_graph_frame_release(g, im);
         goto done;
     }
     *names = internal_graph_names_dup(oi.names, oi.channels);
@@ -533,6 +536,10 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     memset(&im, 0, sizeof im);
     char **names = NULL;
     nprfx_result r;
+    /* The node's own time for --stats: evaluations nested in it (a temporal node's fetches of
+     * other frames) are counted in their own nodes. */
+    double saved_child = g->child_seconds, t0 = internal_graph_now();
+    g->child_seconds = 0;
     switch (g->nodes[node].kind) {
     case GK_READ:
         r = eval_read(g, node, frame, &im, &names);
@@ -547,10 +554,14 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
         r = nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "write nodes have no output");
         break;
     }
+    double el = internal_graph_now() - t0;
+    g->stats[node].seconds += el - g->child_seconds;
+    g->stats[node].calls++;
+    g->child_seconds = saved_child + el;
     if (r) return r;
     *out = internal_graph_cache_insert(g, node, frame, &im, names);
     if (!*out) {
-        nprfx_image_free(&im);
+        internal_graph_frame_release(g, &im);
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
     return NPRFX_OK;
@@ -603,6 +614,25 @@ static void unpin_to(eval_stacks *s, size_t base)
         s->pin[--s->npin]->pins--;
 }
 
+/* The memory plan: the node whose inputs these n entries are (one per connected input, possibly
+ * repeated) has rendered; each has one consumer less. An entry is looked at once, as the first
+ * one dropped may be further in the list. */
+static void consume_inputs(nprfx_graph *g, centry **in, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        centry *e = in[i];
+        if (!e) continue;
+        int times = 1;
+        for (size_t j = i + 1; j < n; j++)
+            if (in[j] == e) {
+                in[j] = NULL;
+                times++;
+            }
+        e->uses -= times - 1;
+        internal_graph_consumed(g, e);
+    }
+}
+
 static nprfx_result out_of_memory(nprfx_graph *g, int node)
 {
     return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory evaluating node '%s'",
@@ -648,7 +678,9 @@ nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **o
             continue;
         }
         r = eval_one(g, w->node, w->frame, &e);
+        size_t top = s.npin;
         unpin_to(&s, w->pin_base);
+        if (!r) consume_inputs(g, s.pin + w->pin_base, top - w->pin_base);
         s.nw--;
         if (!r && !push_pin(&s, e)) r = out_of_memory(g, node);
     }

@@ -27,6 +27,7 @@
 #include "nprfx/nprfx.h"
 #include "seq.h"
 #include "internal_graph.h"
+#include "io_limits.h"
 
 char *internal_graph_strdup(const char *s)
 {
@@ -354,6 +355,15 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         g->variant = opt->variant;
     if (opt && opt->size >= offsetof(nprfx_graph_options, progress) + sizeof opt->progress)
         g->progress = opt->progress;
+    if (opt && opt->size >= offsetof(nprfx_graph_options, no_pool) + sizeof opt->no_pool)
+        g->no_pool = opt->no_pool;
+    g->pool = nprfx_frame_pool_create(g->no_pool);
+    if (!g->pool) {
+        cJSON_Delete(root);
+        free(g->base_dir);
+        free(g);
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
     g->out_dir = opt && opt->output_dir ? internal_graph_strdup(opt->output_dir) : NULL;
     g->first_frame = 1;
     g->last_frame = 1;
@@ -395,6 +405,11 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         goto done;
     }
     if ((r = internal_graph_names_init(g, count))) goto done;
+    g->stats = calloc((size_t)(count ? count : 1), sizeof *g->stats);
+    if (!g->stats) {
+        r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        goto done;
+    }
     int i = 0;
     for (const cJSON *e = nodes->child; e; e = e->next, i++) {
         g->count = i + 1; /* what nprfx_graph_free releases */
@@ -420,6 +435,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     if (g->frames_text && (r = shot_range(g))) goto done;
     r = link_graph(g);
     if (!r) r = internal_graph_check_limits(g);
+    if (!r) r = nprfx_image_limit(ctx, &g->mem_limit);
 done:
     cJSON_Delete(root);
     if (r) {
@@ -472,6 +488,10 @@ void nprfx_graph_free(nprfx_graph *g)
 {
     if (!g) return;
     internal_graph_cache_clear(g);
+    nprfx_frame_pool_destroy(g->pool);
+    free(g->plan_uses);
+    free(g->plan_temporal);
+    free(g->stats);
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
@@ -524,6 +544,7 @@ nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment)
         return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "--set: the graph has no node '%s'",
                            name);
     gnode *n = &g->nodes[i];
+    g->plan_ready = 0; /* params decide which inputs are read at other frames */
     if (n->kind != GK_NODE) return set_io_field(g, n, key, eq + 1, NULL);
     int pi = nprfx_node_param_index(n->desc, key);
     if (pi < 0)
@@ -591,12 +612,12 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
     return NPRFX_OK;
 }
 
-void internal_graph_centry_free(centry *e)
+void internal_graph_centry_free(nprfx_graph *g, centry *e)
 {
     if (!e) return;
     for (int c = 0; e->names && c < e->im.channels; c++)
         free(e->names[c]);
     free(e->names);
-    nprfx_image_free(&e->im);
+    internal_graph_frame_release(g, &e->im);
     free(e);
 }

@@ -60,15 +60,22 @@ static nprfx_result check_not_input(nprfx_graph *g, const gnode *w, const char *
     return NPRFX_OK;
 }
 
-static nprfx_result write_node(nprfx_graph *g, int node, int frame)
+/* Write node `node` at frame; files == 0 only evaluates its input (bench-graph's compute time
+ * without the file I/O). */
+static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
 {
     gnode *n = &g->nodes[node];
     centry *e;
     nprfx_result r = internal_graph_eval(g, n->inputs[0].src, frame, &e);
     if (r) return r;
+    if (!files) {
+        internal_graph_consumed(g, e);
+        return NPRFX_OK;
+    }
+    double t0 = internal_graph_now(); /* --stats: the write's own time, not its input's */
     e->pins++;
-    nprfx_image view;
-    float *scratch = NULL;
+    nprfx_image view, scratch;
+    memset(&scratch, 0, sizeof scratch);
     r = internal_graph_select_input(g, n, 0, e, &view, &scratch);
     char **names = e->names;
     char **sel_names = NULL;
@@ -106,21 +113,39 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame)
         free(pscratch);
     }
     free(sel_names);
-    free(scratch);
+    internal_graph_frame_release(g, &scratch);
     e->pins--;
+    if (!r) internal_graph_consumed(g, e);
+    double el = internal_graph_now() - t0;
+    g->stats[node].seconds += el;
+    g->stats[node].calls++;
+    g->child_seconds += el;
+    return r;
+}
+
+static nprfx_result render_frame(nprfx_graph *g, int frame, int files, int *written)
+{
+    *written = 0;
+    nprfx_result r = internal_graph_plan_build(g);
+    internal_graph_frame_begin(g, frame);
+    for (int i = 0; !r && i < g->count; i++) {
+        if (g->nodes[i].kind != GK_WRITE) continue;
+        if (!(r = write_node(g, i, frame, files))) (*written)++;
+    }
+    /* What the next frame will not read goes now, not when the byte bound is reached. */
+    internal_graph_frame_sweep(g);
     return r;
 }
 
 nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written)
 {
-    *written = 0;
-    for (int i = 0; i < g->count; i++) {
-        if (g->nodes[i].kind != GK_WRITE) continue;
-        nprfx_result r = write_node(g, i, frame);
-        if (r) return r;
-        (*written)++;
-    }
-    return NPRFX_OK;
+    return render_frame(g, frame, 1, written);
+}
+
+nprfx_result nprfx_graph_compute_frame(nprfx_graph *g, int frame)
+{
+    int n;
+    return render_frame(g, frame, 0, &n);
 }
 
 void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n)
@@ -226,8 +251,13 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
     if (i < 0 || g->nodes[i].kind == GK_WRITE)
         return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to evaluate",
                            name);
+    /* The previous call's view is no longer promised: sweep as after a frame, then begin one. */
+    nprfx_result r = internal_graph_plan_build(g);
+    if (r) return r;
+    internal_graph_frame_sweep(g);
+    internal_graph_frame_begin(g, frame);
     centry *e;
-    nprfx_result r = internal_graph_eval(g, i, frame, &e);
+    r = internal_graph_eval(g, i, frame, &e);
     if (!r) *out = e->im;
     return r;
 }

@@ -4,6 +4,9 @@
 #ifndef NPRFX_CLI_INTERNAL_GRAPH_H
 #define NPRFX_CLI_INTERNAL_GRAPH_H
 
+#include <stdint.h>
+
+#include "frame_pool.h"
 #include "graph.h"
 #include "nprfx/nprfx.h"
 
@@ -38,6 +41,11 @@ typedef struct centry {
     char **names;
     size_t bytes;
     int pins;
+    /* The memory plan (graph_plan.c): consumers at this frame that have not yet used it; and
+     * the frame generation that last touched it (the sweep keeps a temporal source's entries
+     * touched by the last frame, the window its temporal readers work in). */
+    int uses;
+    unsigned gen;
     struct centry *prev, *next; /* most recent first */
     struct centry *hnext;       /* the next entry in the same hash slot */
 } centry;
@@ -71,6 +79,25 @@ struct nprfx_graph {
     int tile;
     double render_seconds;
     long long render_items; /* what nodes counted (nprfx_render_args.items) */
+    /* Memory (issue 16, graph_plan.c): frame buffers come from the pool and go back to it; the
+     * plan frees each result once its consumers at the frame have run, unless a temporal node
+     * reads its node at other frames. no_pool: neither (plain calloc/free and the cache alone,
+     * to check that pooling never changes a pixel). */
+    nprfx_frame_pool *pool;
+    int no_pool;
+    int plan_ready;
+    int *plan_uses;               /* per node: inputs reading it at the same frame */
+    unsigned char *plan_temporal; /* per node: some temporal node reads it at other frames */
+    unsigned gen;                 /* frames begun (nprfx_graph_render_frame, nprfx_graph_eval) */
+    /* The frame begun last and the one before (have_prev), and the offsets from it of the
+     * temporal sources' frames touched since: the window the sweep keeps, moved on by a step. */
+    int cur_frame, prev_frame, have_prev, win_lo, win_hi, have_win;
+    uint64_t mem_limit;            /* bytes the graph's frames may take (UINT64_MAX: none) */
+    size_t held_bytes;             /* frames handed out: cached results, outputs being rendered,
+                                      channel scratch; the pool's idle buffers come on top */
+    size_t mem_peak;               /* the most held_bytes + idle ever was */
+    double child_seconds;          /* evaluations nested in the one being timed (stats) */
+    nprfx_graph_node_stats *stats; /* per node */
     nprfx_render_hook hook;
     int has_hook;
     int variant;              /* nprfx_graph_variant */
@@ -90,6 +117,30 @@ int internal_graph_names_add(nprfx_graph *g, int node);
 nprfx_result internal_graph_check_cycles(nprfx_graph *g);
 /* Synth sizes and "format" against the image memory bound (graph_limits.c). */
 nprfx_result internal_graph_check_limits(nprfx_graph *g);
+/* The memory plan (graph_plan.c): the consumer counts and temporal sources, made once. */
+nprfx_result internal_graph_plan_build(nprfx_graph *g);
+/* A zeroed frame of bounds x channels for node (its output or a scratch), from the pool, after
+ * checking it against the memory limit (evicting unpinned cached results first when the limit
+ * would be passed); errors name `what` ("node 'x': output frame") and the sizes. */
+nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
+                                        nprfx_rect bounds, int channels, nprfx_image *im);
+/* Count a frame made elsewhere (a plate from the reader) as held. */
+void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im);
+/* Give a frame from internal_graph_frame_alloc (or adopted) back to the pool. */
+void internal_graph_frame_release(nprfx_graph *g, nprfx_image *im);
+/* One consumer at e's frame has used e: when none is left and no temporal node reads e's node
+ * at other frames, e leaves the cache now (unless pinned) instead of waiting for eviction. */
+void internal_graph_consumed(nprfx_graph *g, centry *e);
+/* Begin evaluating frame (after the previous frame's sweep). */
+void internal_graph_frame_begin(nprfx_graph *g, int frame);
+/* Entry e was found or made: a temporal source's frame widens the window. */
+void internal_graph_touch(nprfx_graph *g, centry *e);
+/* After a frame: drop every unpinned result but a temporal source's within the window the next
+ * frame is expected to read (the offsets touched in this one, moved on by the step between the
+ * last two frames, +1 at first). */
+void internal_graph_frame_sweep(nprfx_graph *g);
+/* Remove entry e (unpinned) from the cache and release its frame. */
+void internal_graph_cache_drop(nprfx_graph *g, centry *e);
 /* The result cache (graph_cache.c): the entry of (node, frame), made the most recent, or NULL. */
 centry *internal_graph_cache_find(nprfx_graph *g, int node, int frame);
 /* Add a result (taking im and names), evicting unpinned old ones over the bounds; NULL: no memory.
@@ -100,7 +151,7 @@ centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_i
 void internal_graph_cache_evict(nprfx_graph *g);
 /* Free every entry. */
 void internal_graph_cache_clear(nprfx_graph *g);
-void internal_graph_centry_free(centry *e);
+void internal_graph_centry_free(nprfx_graph *g, centry *e);
 /* Copies of n channel names (NULL names become "C"). */
 char **internal_graph_names_dup(const char *const *names, int n);
 /* pattern at frame, relative to dir unless absolute, into buf. */
@@ -119,9 +170,10 @@ nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const
                                            const char *const *names, int nc, int *idx,
                                            double *sign);
 /* The view of the channels of entry e that input k of node n uses: e's pixels when they are
- * adjacent, else *scratch (malloc'd, the caller frees). */
+ * adjacent, else *scratch (a frame from internal_graph_frame_alloc, the caller releases it with
+ * internal_graph_frame_release; left empty when not needed). */
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
-                                         nprfx_image *view, float **scratch);
+                                         nprfx_image *view, nprfx_image *scratch);
 /* NPRFX_VARIANT_SHOWER_DOOR: alter a plate just read (graph_variant.c). */
 void internal_graph_variant_plate(const nprfx_graph *g, nprfx_image *im, char **names);
 /* NPRFX_VARIANT_WHITE: the params node n renders frame with (its own, or *copy altered). */

@@ -12,20 +12,28 @@
 
 #define GIB ((uint64_t)1 << 30)
 
-/* 4 GiB holds a 4K frame with 100 float channels, far more than any plate seen; half the
- * physical memory keeps one image from pushing a small machine into swap. */
+/* Half the physical memory: room for the process's other memory and for the system, and on a
+ * farm node shared by two renders each stays clear of the OOM killer. A 4K frame of 56 float
+ * channels is 1.9 GiB, so a fixed few GiB would refuse production plates on big machines. */
 static uint64_t default_limit(void)
 {
     long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    uint64_t half = pages > 0 && page > 0 ? (uint64_t)pages * (uint64_t)page / 2 : 4 * GIB;
-    return half < 4 * GIB ? half : 4 * GIB;
+    return pages > 0 && page > 0 ? (uint64_t)pages * (uint64_t)page / 2 : 4 * GIB;
 }
 
-nprfx_result nprfx_image_limit(nprfx_context *ctx, uint64_t *bytes)
+/* --mem-limit, which overrides the environment: one limit per process (the runner's commands
+ * set it before anything is read). */
+static int have_override;
+static uint64_t override_bytes;
+
+void nprfx_mem_limit_set(uint64_t bytes)
 {
-    const char *e = getenv("NPRFX_READ_LIMIT");
-    *bytes = default_limit();
-    if (!e || !*e) return NPRFX_OK;
+    have_override = 1;
+    override_bytes = bytes;
+}
+
+nprfx_result nprfx_parse_size(const char *e, uint64_t *bytes)
+{
     char *end = NULL;
     double v = strtod(e, &end);
     double unit = 1;
@@ -51,11 +59,33 @@ nprfx_result nprfx_image_limit(nprfx_context *ctx, uint64_t *bytes)
         if (unit != 0 && (*end == 'b' || *end == 'B')) end++;
     }
     if (end == e || *end || unit == 0 || !(v >= 0) || !isfinite(v))
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "NPRFX_READ_LIMIT='%s' is not a size (e.g. 4G, 512M, or 0 for none)", e);
+        return NPRFX_ERR_INVALID_ARGUMENT;
     double b = v * unit;
     *bytes = b == 0 || b >= 18e18 ? UINT64_MAX : (uint64_t)b;
     return NPRFX_OK;
+}
+
+nprfx_result nprfx_image_limit(nprfx_context *ctx, uint64_t *bytes)
+{
+    if (have_override) {
+        *bytes = override_bytes;
+        return NPRFX_OK;
+    }
+    const char *e = getenv("NPRFX_READ_LIMIT");
+    *bytes = default_limit();
+    if (!e || !*e) return NPRFX_OK;
+    if (nprfx_parse_size(e, bytes))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "NPRFX_READ_LIMIT='%s' is not a size (e.g. 4G, 512M, or 0 for none)", e);
+    return NPRFX_OK;
+}
+
+const char *nprfx_mem_limit_origin(void)
+{
+    if (have_override) return "--mem-limit";
+    const char *e = getenv("NPRFX_READ_LIMIT");
+    if (e && *e) return "NPRFX_READ_LIMIT";
+    return "half the physical memory; --mem-limit or NPRFX_READ_LIMIT sets it";
 }
 
 nprfx_result nprfx_read_timeout(nprfx_context *ctx, double *seconds)
@@ -114,8 +144,7 @@ nprfx_result nprfx_image_limit_check(nprfx_context *ctx, const char *what, int64
     nprfx_format_bytes(needs, sizeof needs, need >= 1.8e19L ? UINT64_MAX : (uint64_t)need);
     nprfx_format_bytes(lim, sizeof lim, limit);
     return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY,
-                       "%s %lldx%lld with %lld channel%s needs %s, above the %s image memory "
-                       "limit (NPRFX_READ_LIMIT)",
+                       "%s %lldx%lld with %lld channel%s needs %s, above the %s memory limit (%s)",
                        what, (long long)w, (long long)h, (long long)channels,
-                       channels == 1 ? "" : "s", needs, lim);
+                       channels == 1 ? "" : "s", needs, lim, nprfx_mem_limit_origin());
 }

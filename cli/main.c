@@ -22,6 +22,8 @@ static const command commands[] = {
     {"measure", nprfx_cmd_measure,
      "measure a look over its shot: warp error along the motion, background, tone curve"},
     {"bench", nprfx_cmd_bench, "time a node: Mpixel/s, ms per frame, peak memory"},
+    {"bench-graph", nprfx_cmd_bench_graph,
+     "time a whole graph per frame on synthetic plates: compute and I/O apart, peak memory"},
     {"docs", nprfx_cmd_docs, "write the node reference (Markdown) generated from the descriptors"},
     {"host-project", nprfx_cmd_host_project,
      "write a graph as a Natron project, Natron script and Nuke script (OpenFX nodes)"},

@@ -1,0 +1,41 @@
+/* nprfx CLI — a pool of frame buffers for the runner (issue 16, docs/design.md §1 "Memory").
+ *
+ * A graph allocates the same frames every frame: each node's output has the same size and
+ * channels as at the frame before. Fresh frames above glibc's mmap threshold (32 MiB: one 1080p
+ * RGBA float frame) come straight from the kernel and go back to it when freed, so every frame
+ * paid its page faults again, inside the node's time. The pool keeps released buffers and hands
+ * them out again to a request of the same size, zeroed as nprfx_image_alloc's calloc would give
+ * them, so a node sees exactly what it saw before and outputs stay bit-identical. Idle buffers
+ * are bounded: the caller trims them (nprfx_frame_pool_trim) under its byte bounds.
+ *
+ * Not thread-safe: the runner allocates frames from its one evaluation thread. */
+#ifndef NPRFX_CLI_FRAME_POOL_H
+#define NPRFX_CLI_FRAME_POOL_H
+
+#include <stddef.h>
+
+#include "nprfx/nprfx.h"
+
+typedef struct nprfx_frame_pool nprfx_frame_pool;
+
+/* A pool; disabled != 0 makes it a pass-through (calloc and free, nothing kept): the runner's
+ * --no-pool, which must give the same pixels. NULL on no memory. */
+nprfx_frame_pool *nprfx_frame_pool_create(int disabled);
+/* Frees every idle buffer and the pool. Buffers still out must be released before. */
+void nprfx_frame_pool_destroy(nprfx_frame_pool *p);
+
+/* A zeroed image of bounds x channels, from an idle buffer of the same size when there is one.
+ * *reused (may be NULL) tells whether it was. */
+nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, nprfx_rect bounds,
+                                    int channels, nprfx_image *out, int *reused);
+/* Give im's pixels (from nprfx_frame_pool_alloc) back to the pool and reset im. */
+void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im);
+
+/* Bytes held idle in the pool. */
+size_t nprfx_frame_pool_idle_bytes(const nprfx_frame_pool *p);
+/* Free idle buffers, least recently released first, until at most max_idle bytes stay idle. */
+void nprfx_frame_pool_trim(nprfx_frame_pool *p, size_t max_idle);
+/* Bytes of fresh buffers allocated since the last call (what the pool did not save); resets. */
+size_t nprfx_frame_pool_take_fresh_bytes(nprfx_frame_pool *p);
+
+#endif
