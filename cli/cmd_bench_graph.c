@@ -12,6 +12,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "graph.h"
+#include "io_limits.h"
 
 static void usage(FILE *f)
 {
@@ -81,7 +82,14 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
         fprintf(stderr, "nprfx bench-graph: --size must be WxH, e.g. 1920x1080\n");
         return 2;
     }
-    if (mem_limit && nprfx_cli_set_mem_limit("nprfx", "bench-graph", mem_limit)) return 2;
+    uint64_t limit_bytes = 0;
+    if (mem_limit && nprfx_parse_size(mem_limit, &limit_bytes)) {
+        fprintf(stderr,
+                "nprfx bench-graph: --mem-limit '%s' is not a size (e.g. 8G, 512M, or 0 "
+                "for none)\n",
+                mem_limit);
+        return 2;
+    }
     nprfx_cli_env env;
     if (nprfx_cli_env_init(&env, threads)) return 1;
     int status = 0;
@@ -92,7 +100,9 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
     snprintf(shot, sizeof shot, "1-%d", frames);
     nprfx_graph_plan_info plan;
     memset(&plan, 0, sizeof plan);
+    /* The limit applies to the graph at --size, not at the size its file names. */
     if (nprfx_graph_load(env.ctx, path, &opt, &g) || nprfx_graph_set_shot(g, shot) ||
+        (mem_limit && (nprfx_mem_limit_set(limit_bytes), 0)) ||
         nprfx_graph_synthesize_reads(g, w, h, scene)) {
         fprintf(stderr, "nprfx bench-graph: %s\n", nprfx_cli_message(env.ctx));
         status = 2;

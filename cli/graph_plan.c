@@ -236,7 +236,8 @@ nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const ch
     }
     internal_graph_cache_clear(g);
     g->plan_ready = 0;
-    return internal_graph_check_limits(g);
+    nprfx_result r = nprfx_image_limit(g->ctx, &g->mem_limit);
+    return r ? r : internal_graph_check_limits(g);
 }
 
 /* ---------------------------------------------------------------- the estimate ---- */
@@ -299,6 +300,17 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
     return -1; /* processing nodes: by the caller, which has the inputs' shapes */
 }
 
+/* The bytes of the channels (idx, count of them) an input packs out of a source of nc channels,
+ * as internal_graph_select_input does: 0 when it reads them in place. */
+static uint64_t packed_bytes(const shape *src, const int *idx, int count)
+{
+    int contiguous = 1;
+    for (int c = 1; c < count; c++)
+        contiguous &= idx[c] == idx[0] + c;
+    if (contiguous && src->channels <= 2 * count) return 0;
+    return (uint64_t)src->w * (uint64_t)src->h * (uint64_t)count * sizeof(float);
+}
+
 static int node_shape(nprfx_graph *g, int i, const shape *shapes, shape *sh, uint64_t *scratch)
 {
     gnode *n = &g->nodes[i];
@@ -316,11 +328,7 @@ static int node_shape(nprfx_graph *g, int i, const shape *shapes, shape *sh, uin
                                           &count))
             return 1;
         in_ch[k] = count;
-        int contiguous = 1;
-        for (int c = 1; c < count; c++)
-            contiguous &= idx[c] == idx[0] + c;
-        if (!(contiguous && s->channels <= 2 * count)) /* packed: internal_graph_select_input */
-            *scratch += (uint64_t)s->w * (uint64_t)s->h * (uint64_t)count * sizeof(float);
+        *scratch += packed_bytes(s, idx, count);
         if ((d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) || have) continue;
         sh->w = s->w;
         sh->h = s->h;
@@ -345,14 +353,17 @@ typedef struct sim {
     shape *shapes;
     int *done, *uses;
     uint64_t live, peak;
-    int peak_node;
+    int peak_node, peak_w, peak_h, peak_channels; /* the frame that made the peak */
 } sim;
 
-static void sim_note(sim *s, uint64_t transient, int node)
+static void sim_note(sim *s, uint64_t transient, int node, int w, int h, int channels)
 {
     if (s->live + transient > s->peak) {
         s->peak = s->live + transient;
         s->peak_node = node;
+        s->peak_w = w;
+        s->peak_h = h;
+        s->peak_channels = channels;
     }
 }
 
@@ -406,9 +417,10 @@ static int sim_eval(sim *s, int root)
             rc = 1;
             break;
         }
-        uint64_t b = shape_bytes(&s->shapes[node]);
+        const shape *sh = &s->shapes[node];
+        uint64_t b = shape_bytes(sh);
         s->live += g->plan_temporal[node] ? 2 * b : b;
-        sim_note(s, scratch, node);
+        sim_note(s, scratch, node, sh->w, sh->h, sh->channels);
         s->done[node] = 1;
         for (int j = 0; j < n->ninputs; j++)
             if (n->inputs[j].src >= 0) sim_consume(s, n->inputs[j].src);
@@ -446,11 +458,11 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
             failed = 1;
             break;
         }
-        sim_note(&s, (uint64_t)sh->w * sh->h * (uint64_t)count * sizeof(float), i);
+        sim_note(&s, packed_bytes(sh, idx, count), i, sh->w, sh->h, count);
         sim_consume(&s, src);
     }
     if (!failed && s.peak_node >= 0) {
-        const shape *sh = &s.shapes[s.peak_node];
+        shape peak = {s.peak_w, s.peak_h, s.peak_channels, 1, NULL}, *sh = &peak;
         out->peak = s.peak;
         out->width = sh->w;
         out->height = sh->h;

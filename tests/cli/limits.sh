@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Frames larger than the image memory bound are refused up front, naming the size and the limit
-# (issue 15): nprfx synth --size, a graph's synth node and "format", with NPRFX_READ_LIMIT
-# followed. Each refusal must come fast and in little memory: nothing is allocated first.
+# Frames larger than the memory limit are refused up front, naming the size and the limit
+# (issues 15 and 16): nprfx synth --size, a graph's synth node and "format", a graph whose
+# planned peak is above it, with NPRFX_READ_LIMIT followed and --mem-limit overriding it. Each
+# refusal must come fast and in little memory: nothing is allocated first.
 set -u
 NPRFX=$1
 WORK=$3
@@ -25,11 +26,11 @@ expect_refused() {
     kib=$(tail -1 mem.txt)
     [ "$((kib / 1024))" -lt 256 ] || bad "$*: $((kib / 1024)) MiB before refusing"
 }
-expect_refused 2 "nprfx synth: --size 16384x16384 with 26 channels needs 26(\.0)? GiB, above the .* image memory limit \(NPRFX_READ_LIMIT\)" \
+expect_refused 2 "nprfx synth: --size 16384x16384 with 26 channels needs 26(\.0)? GiB, above the .* memory limit \(half the physical memory; --mem-limit or NPRFX_READ_LIMIT sets it\)" \
     "$NPRFX" synth orbit --size 16384x16384 -o big.exr
 [ -e big.exr ] && bad "synth wrote big.exr"
 # The limit follows NPRFX_READ_LIMIT both ways.
-expect_refused 2 "--size 64x64 with 26 channels needs 416 KiB, above the 100 KiB image memory limit" \
+expect_refused 2 "--size 64x64 with 26 channels needs 416 KiB, above the 100 KiB memory limit \(NPRFX_READ_LIMIT\)" \
     env NPRFX_READ_LIMIT=100K "$NPRFX" synth orbit --size 64x64 -o small.exr
 NPRFX_READ_LIMIT=1M "$NPRFX" synth orbit --size 64x64 -o small.exr >/dev/null 2>err.txt || bad "64x64 under 1M: $(cat err.txt)"
 
@@ -38,7 +39,7 @@ cat >synth.json <<'JSON'
   "plate": {"node": "synth", "scene": "orbit", "size": "16384x16384"},
   "out": {"node": "write", "inputs": {"image": "plate:R,G,B"}, "path": "out.####.exr"}}}
 JSON
-expect_refused 2 "synth.json: node 'plate': synth size 16384x16384 with 26 channels needs 26(\.0)? GiB, above the .* image memory limit" \
+expect_refused 2 "synth.json: node 'plate': synth size 16384x16384 with 26 channels needs 26(\.0)? GiB, above the .* memory limit" \
     "$NPRFX" run synth.json
 cat >format.json <<'JSON'
 {"frames": "1", "format": "60000x60000", "nodes": {
@@ -47,9 +48,21 @@ cat >format.json <<'JSON'
 JSON
 expect_refused 2 "format.json: \"format\" 60000x60000 with 1 channel needs 13.4 GiB, above the" \
     "$NPRFX" run format.json
-# A node's output frame is checked before it is allocated: paper at 2000x2000 under 20 MiB (the format alone fits).
+# A graph whose frames need more than the limit fails before its first frame (the plan's estimate,
+# issue 16), naming the node and the sizes: paper's 2000x2000 RGBA frame under 20 MiB (the format
+# alone fits). Nothing is written.
 sed 's/60000x60000/2000x2000/' format.json >format2.json
-expect_refused 1 "node 'paper': output frame 2000x2000 with [0-9]+ channels? needs .*, above the 20 MiB image memory limit" \
+expect_refused 2 "format2.json: frame 1 needs 61.0 MiB of frames at its peak, at node 'paper' \(its 2000x2000 frame with 4 channels, 61.0 MiB, joins the frames still held\): above the 20 MiB memory limit \(NPRFX_READ_LIMIT\); nothing was rendered" \
     env NPRFX_READ_LIMIT=20M "$NPRFX" run format2.json
+[ -e out.0001.exr ] && bad "format2.json wrote a frame above the limit"
+# --mem-limit overrides NPRFX_READ_LIMIT, both ways, and names itself.
+expect_refused 2 "at node 'paper' .* above the 20 MiB memory limit \(--mem-limit\); nothing was rendered" \
+    env NPRFX_READ_LIMIT=8G "$NPRFX" run format2.json --mem-limit 20M
+[ -e out.0001.exr ] && bad "format2.json wrote a frame above --mem-limit"
+NPRFX_READ_LIMIT=20M "$NPRFX" run format2.json --mem-limit 80M -q 2>err.txt || bad "--mem-limit 80M over NPRFX_READ_LIMIT=20M: $(cat err.txt)"
+[ -e out.0001.exr ] || bad "format2.json under --mem-limit 80M wrote nothing"
+expect_refused 2 "--mem-limit 'lots' is not a size" "$NPRFX" run format2.json --mem-limit lots
+expect_refused 2 "nprfx bench: node 'plate': synth size 64x64 with 26 channels needs 416 KiB, above the 100 KiB memory limit \(--mem-limit\)" \
+    "$NPRFX" bench blend --size 64x64 --frames 1 --mem-limit 100K
 [ $fail -eq 0 ] && echo "limits: all checks passed"
 exit $fail

@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# The runner's frame pool and memory plan (issue 16), on the six-node pipeline of
+# samples/graphs/bench_six.json at a small size:
+#   - pixels are bit-identical with and without the pool (--no-pool), at a memory limit just
+#     above the plan's estimate, with a cache so small that results are evicted and rendered
+#     again, and in reverse frame order;
+#   - the plan frees: the frames held at once stay near the estimate, below what the cache alone
+#     held, and the plate's buffers are reused instead of allocated every frame;
+#   - a graph needing more than --mem-limit fails before its first frame, naming the node and
+#     the sizes, writing nothing;
+#   - the forms of `run --stats` and `bench-graph`.
+#
+# usage: bash pool.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
+set -u
+NPRFX=$1; SRC=$2; W=$3
+rm -rf "$W"; mkdir -p "$W"; cd "$W" || exit 1
+passes=0; fails=0
+pass() { passes=$((passes+1)); }
+fail() { echo "FAIL: $*"; fails=$((fails+1)); }
+num='[0-9]+(\.[0-9]+)?'
+
+sed -e 's/1920x1080/160x90/' -e 's/"1-8"/"1-5"/' "$SRC/samples/graphs/bench_six.json" > six.json
+render() { # DIR OPTIONS...: render six.json under DIR with --stats into DIR.txt
+  local d=$1; shift
+  "$NPRFX" run six.json --threads 2 --output-dir "$d" --stats -q "$@" > "$d.txt" 2> "$d.err"
+  local rc=$?
+  [ $rc -eq 0 ] && pass || { fail "run $* exited $rc: $(cat "$d.err")"; }
+}
+same() { # DIR: every frame under DIR equals the pooled one, bit for bit
+  local n=0
+  for f in pool/out/bench_six/*.exr; do
+    n=$((n+1))
+    if "$NPRFX" diff "$f" "$1/${f#pool/}" --fail 0 --hardfail 0 --warn 0 >/dev/null 2>&1; then :
+    else fail "$1: $(basename "$f") differs from the pooled run"; return; fi
+  done
+  [ $n -eq 5 ] && pass || fail "the pooled run wrote $n frames, not 5"
+}
+held() { sed -n "s/^frames held at most \([0-9.]*\) \([KMG]\)iB.*/\1 \2/p" "$1.txt" | awk '{ print $1 * ($2 == "K" ? 1 / 1024 : $2 == "G" ? 1024 : 1) }'; }
+estimate() { sed -n "s/^frames held at most .*(estimate \([0-9.]*\) \([KMG]\)iB,.*/\1 \2/p" "$1.txt" | awk '{ print $1 * ($2 == "K" ? 1 / 1024 : $2 == "G" ? 1024 : 1) }'; }
+column() { awk -v n="$2" -v c="$3" '$1 == n { print $c }' "$1.txt"; } # DIR NODE COLUMN
+
+render pool
+render nopool --no-pool
+same nopool
+render reverse --frames 5-1
+same reverse
+render evict --cache-mb 16 --frames 3,1,5,2,4
+same evict
+
+# --- the plan frees and the pool reuses -------------------------------------------------------
+est=$(estimate pool); hp=$(held pool); hn=$(held nopool)
+[ -n "$est" ] && [ -n "$hp" ] && [ -n "$hn" ] || fail "no 'frames held' line: $(cat pool.txt)"
+# The estimate counts the frames the plan keeps; what was held is that, give or take a scratch.
+awk -v h="$hp" -v e="$est" 'BEGIN { exit !(h <= 1.25 * e && h >= 0.75 * e) }' && pass ||
+  fail "held $hp MiB with the pool, estimate $est MiB"
+# The cache alone keeps every frame's plate: five plates of 160x90x26 floats at least.
+awk -v p="$hp" -v n="$hn" 'BEGIN { exit !(n >= 5 * 1.42 && p < n / 2) }' && pass ||
+  fail "held $hp MiB with the pool, $hn MiB without: the plan did not free"
+# The plate (a temporal source, kept one frame) is allocated twice, then reused: 2 plates new
+# over 5 frames, against 5 without the pool.
+plate_new=$(column pool plate 6); nopool_new=$(column nopool plate 6)
+awk -v p="$plate_new" -v n="$nopool_new" 'BEGIN { exit !(p <= 2.5 * 1.43 && n >= 5 * 1.42) }' && pass ||
+  fail "plate: $plate_new MiB new with the pool, $nopool_new MiB without"
+
+# A limit just above the estimate fits, and changes no pixel.
+lim=$(awk -v e="$est" 'BEGIN { printf "%.0fK", e * 1024 * 1.02 + 64 }')
+render tight --mem-limit "$lim"
+same tight
+
+# --- above the limit: refused before the first frame ------------------------------------------
+below=$(awk -v e="$est" 'BEGIN { printf "%.0fK", e * 1024 * 0.8 }')
+/usr/bin/time -f "%M" -o mem.txt "$NPRFX" run six.json --output-dir over --mem-limit "$below" > over.txt 2> over.err
+rc=$?
+[ $rc -eq 2 ] && pass || fail "--mem-limit $below: exit $rc, want 2: $(cat over.err)"
+grep -qE "six.json: frame 1 needs $num [KM]iB of frames at its peak, at node '[a-z]+' \(its 160x90 frame with [0-9]+ channels?, $num [KM]iB, joins the frames still held\): above the $num [KM]iB memory limit \(--mem-limit\); nothing was rendered" over.err &&
+  pass || fail "--mem-limit $below: message: $(cat over.err)"
+[ ! -e over ] && pass || fail "a run above --mem-limit wrote $(find over -type f | head -3)"
+[ "$(( $(tail -1 mem.txt) / 1024 ))" -lt 256 ] && pass || fail "refusing took $(tail -1 mem.txt) KiB"
+# bench-graph and bench refuse the same way.
+"$NPRFX" bench-graph "$SRC/samples/graphs/bench_six.json" --size 160x90 --frames 2 --mem-limit "$below" > bg.txt 2>&1
+rc=$?
+[ $rc -eq 2 ] && grep -q "nothing was rendered" bg.txt && pass || fail "bench-graph --mem-limit $below: exit $rc: $(cat bg.txt)"
+
+# --- run --stats ----------------------------------------------------------------------------
+grep -qE '^stats: 5 frames$' pool.txt && pass || fail "no 'stats: 5 frames' line: $(cat pool.txt)"
+grep -qE '^  node +type +renders +ms/frame +MiB/frame +new MiB$' pool.txt && pass || fail "no stats header: $(cat pool.txt)"
+for n in plate:synth noise:coherent-noise grain:threshold-map pencil:blend strokes:gabor-splat hatch:threshold-map look:blend out:write; do
+  grep -qE "^  ${n%%:*} +${n#*:} +5 +$num +$num +$num$" pool.txt && pass || fail "no stats row for $n: $(cat pool.txt)"
+done
+grep -qE "^frames held at most $num [KMG]iB \(estimate $num [KMG]iB, memory limit $num [KMG]iB\); peak resident [0-9]+ MiB$" pool.txt &&
+  pass || fail "no memory line: $(cat pool.txt)"
+
+# --- bench-graph ----------------------------------------------------------------------------
+out=$("$NPRFX" bench-graph "$SRC/samples/graphs/bench_six.json" --size 160x90 --frames 3 --threads 1 2>&1)
+echo "$out" | grep -qE "bench_six.json 160x90, 3 frames, 1 thread: $num ms/frame, $num frames/s \(first frame $num ms\); compute $num ms, input $num ms, output 0\.0 ms per frame; peak memory [0-9]+ MiB$" &&
+  pass || fail "bench-graph form: $out"
+# --write times the files as output, and writes them; read nodes become synthetic plates.
+cat > reads.json <<'JSON'
+{"frames": "1-2", "nodes": {
+  "plate": {"node": "read", "path": "no/such/plate.####.exr"},
+  "grain": {"node": "threshold-map", "inputs": {"pattern": "plate:UV.U", "tone": "plate:diffuse"}, "params": {"mode": "builtin"}},
+  "out": {"node": "write", "inputs": {"image": "grain"}, "path": "w/grain.####.exr"}}}
+JSON
+out=$("$NPRFX" bench-graph reads.json --size 64x32 --frames 2 --write bgw --stats 2>&1)
+echo "$out" | grep -qE "output [0-9.]*[1-9][0-9.]* ms per frame" && [ -e bgw/w/grain.0002.exr ] && pass ||
+  fail "bench-graph --write: $out"
+echo "$out" | grep -qE '^  plate +synth +2 ' && pass || fail "bench-graph did not make the read a synth plate: $out"
+"$NPRFX" bench-graph reads.json --size big > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "WxH" bad.txt && pass || fail "--size big: $(cat bad.txt)"
+"$NPRFX" bench-graph > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "usage" bad.txt && pass || fail "no graph: $(cat bad.txt)"
+"$NPRFX" bench-graph reads.json --bogus > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "unexpected argument" bad.txt && pass || fail "--bogus: $(cat bad.txt)"
+
+echo "$passes passed, $fails failed"
+[ $fails -eq 0 ]
