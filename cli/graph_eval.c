@@ -554,6 +554,10 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
         r = nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "write nodes have no output");
         break;
     }
+    /* A plate keeps only what its readers take: a 26-channel plate of which a graph reads 11
+     * then holds 11 while a temporal reader's window keeps it. */
+    if (!r && (g->nodes[node].kind == GK_READ || g->nodes[node].kind == GK_SYNTH))
+        internal_graph_trim_plate(g, node, &im, &names);
     double el = internal_graph_now() - t0;
     g->stats[node].seconds += el - g->child_seconds;
     g->stats[node].calls++;

@@ -491,6 +491,8 @@ void nprfx_graph_free(nprfx_graph *g)
     nprfx_frame_pool_destroy(g->pool);
     free(g->plan_uses);
     free(g->plan_temporal);
+    free(g->plan_first);
+    free(g->plan_readers);
     free(g->stats);
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];

@@ -51,9 +51,17 @@ nprfx_result internal_graph_plan_build(nprfx_graph *g)
     if (g->plan_ready) return NPRFX_OK;
     free(g->plan_uses);
     free(g->plan_temporal);
-    g->plan_uses = calloc((size_t)(g->count ? g->count : 1), sizeof *g->plan_uses);
-    g->plan_temporal = calloc((size_t)(g->count ? g->count : 1), 1);
-    if (!g->plan_uses || !g->plan_temporal)
+    free(g->plan_first);
+    free(g->plan_readers);
+    size_t edges = 0;
+    for (int i = 0; i < g->count; i++)
+        edges += (size_t)g->nodes[i].ninputs;
+    size_t nodes = g->count > 0 ? (size_t)g->count : 1;
+    g->plan_uses = calloc(nodes, sizeof *g->plan_uses);
+    g->plan_temporal = calloc(nodes, 1);
+    g->plan_first = calloc(nodes + 1, sizeof *g->plan_first);
+    g->plan_readers = malloc((edges ? edges : 1) * sizeof *g->plan_readers);
+    if (!g->plan_uses || !g->plan_temporal || !g->plan_first || !g->plan_readers)
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory planning the graph");
     for (int i = 0; i < g->count; i++) {
         const gnode *n = &g->nodes[i];
@@ -64,8 +72,111 @@ nprfx_result internal_graph_plan_build(nprfx_graph *g)
             if (n->kind == GK_NODE && reads_other_frames(g, n, k)) g->plan_temporal[src] = 1;
         }
     }
+    /* readers by source, in graph order: counts, then starts, then fill */
+    for (int i = 0; i < g->count; i++)
+        g->plan_first[i + 1] = g->plan_first[i] + g->plan_uses[i];
+    int *fill = calloc(nodes, sizeof *fill);
+    if (!fill) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory planning");
+    for (int i = 0; i < g->count; i++)
+        for (int k = 0; k < g->nodes[i].ninputs; k++) {
+            int src = g->nodes[i].inputs[k].src;
+            if (src < 0) continue;
+            int at = g->plan_first[src] + fill[src]++;
+            g->plan_readers[at][0] = i;
+            g->plan_readers[at][1] = k;
+        }
+    free(fill);
     g->plan_ready = 1;
     return NPRFX_OK;
+}
+
+static size_t image_bytes(const nprfx_image *im);
+
+int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *names, int nc,
+                                  unsigned char *keep)
+{
+    if (!g->plan_ready || g->no_pool || g->external) return -1;
+    memset(keep, 0, (size_t)nc);
+    int kept = 0;
+    for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++) {
+        int idx[256], count = 0;
+        const gnode *reader = &g->nodes[g->plan_readers[r][0]];
+        if (internal_graph_input_channels(g, reader, g->plan_readers[r][1], names, nc, idx, &count))
+            return -1;
+        for (int c = 0; c < count; c++)
+            if (idx[c] >= 0 && idx[c] < nc && !keep[idx[c]]) {
+                keep[idx[c]] = 1;
+                kept++;
+            }
+    }
+    return kept;
+}
+
+void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names)
+{
+    int nc = im->channels;
+    unsigned char keep[1024]; /* wider plates stay whole */
+    if (nc > (int)sizeof keep) return;
+    int kept = internal_graph_plate_channels(g, node, (const char *const *)*names, nc, keep);
+    if (kept <= 0 || kept == nc) return;
+    /* Each reader must select the same channels from the trimmed plate as from the whole one (a
+     * suffix that was ambiguous could otherwise become unique); else the plate stays whole. */
+    int map[1024], n = 0;
+    char **sub = calloc((size_t)kept, sizeof *sub);
+    if (!sub) return;
+    for (int c = 0; c < nc; c++)
+        if (keep[c]) {
+            map[n] = c;
+            sub[n++] = (*names)[c];
+        }
+    for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++) {
+        int whole[256], part[256], cw = 0, cp = 0;
+        const gnode *reader = &g->nodes[g->plan_readers[r][0]];
+        int k = g->plan_readers[r][1];
+        if (internal_graph_input_channels(g, reader, k, (const char *const *)*names, nc, whole,
+                                          &cw) ||
+            internal_graph_input_channels(g, reader, k, (const char *const *)sub, kept, part,
+                                          &cp) ||
+            cw != cp) {
+            free(sub);
+            return;
+        }
+        for (int c = 0; c < cw; c++)
+            if (map[part[c]] != whole[c]) {
+                free(sub);
+                return;
+            }
+    }
+    char what[600];
+    snprintf(what, sizeof what, "node '%s': the %d channels its readers take", g->nodes[node].name,
+             kept);
+    nprfx_image t;
+    if (internal_graph_frame_alloc(g, node, what, im->bounds, kept, &t)) {
+        free(sub); /* whole, as before: the limit is checked again where it matters */
+        return;
+    }
+    for (int y = t.bounds.y0; y < t.bounds.y1; y++)
+        for (int x = t.bounds.x0; x < t.bounds.x1; x++) {
+            const float *s = nprfx_image_at(im, x, y);
+            float *d = nprfx_image_at(&t, x, y);
+            for (int c = 0; c < kept; c++)
+                d[c] = s[map[c]];
+        }
+    for (int c = 0; c < nc; c++)
+        if (!keep[c]) free((*names)[c]);
+    free(*names);
+    *names = sub;
+    /* A synth frame goes back to the pool: the next frame's synth takes it without faulting
+     * its pages in again. A reader's plate goes back to the system: the reader allocates its
+     * own, so idle in the pool it would only hold the memory the trim saves. */
+    if (g->nodes[node].kind == GK_SYNTH) {
+        internal_graph_frame_release(g, im);
+    } else {
+        size_t bytes = image_bytes(im);
+        g->held_bytes -= bytes < g->held_bytes ? bytes : g->held_bytes;
+        nprfx_image_free(im);
+    }
+    *im = t;
 }
 
 static size_t image_bytes(const nprfx_image *im)
@@ -261,8 +372,28 @@ static uint64_t shape_bytes(const shape *s)
     return (uint64_t)s->w * (uint64_t)s->h * (uint64_t)s->channels * sizeof(float);
 }
 
-/* The shape of node i at frame from its inputs' shapes (all known); non-zero when it cannot be
- * told without rendering (the render then reports whatever is wrong). */
+/* The shape of plate node i at frame; -1 for a processing node (node_shape); non-zero when it
+ * cannot be told without rendering (the render then reports whatever is wrong). */
+/* What internal_graph_trim_plate keeps of a plate's shape; *scratch gets the whole plate's
+ * bytes when it is trimmed (held until the trim is made). */
+static void trim_shape(nprfx_graph *g, int node, shape *sh, uint64_t *scratch)
+{
+    unsigned char keep[1024];
+    if (sh->channels > 1024) return;
+    int kept =
+        internal_graph_plate_channels(g, node, (const char *const *)sh->names, sh->channels, keep);
+    if (kept <= 0 || kept == sh->channels) return;
+    *scratch = shape_bytes(sh);
+    int n = 0;
+    for (int c = 0; c < sh->channels; c++) {
+        if (keep[c])
+            sh->names[n++] = sh->names[c];
+        else
+            free(sh->names[c]);
+    }
+    sh->channels = n;
+}
+
 static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scratch)
 {
     gnode *n = &g->nodes[i];
@@ -275,6 +406,7 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         sh->h = n->height;
         sh->channels = nc;
         sh->known = 1;
+        trim_shape(g, i, sh, scratch);
         return 0;
     }
     if (n->kind == GK_READ) {
@@ -295,6 +427,7 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         nprfx_file_info_free(&info);
         if (!sh->names) return 1;
         sh->known = 1;
+        trim_shape(g, i, sh, scratch);
         return 0;
     }
     return -1; /* processing nodes: by the caller, which has the inputs' shapes */
@@ -344,22 +477,28 @@ static int node_shape(nprfx_graph *g, int i, const shape *shapes, shape *sh, uin
     return 0;
 }
 
-/* The evaluation of one frame, run on shapes instead of pixels, in the order internal_graph_eval
- * takes (each write's input, depth first, input 0 first), freeing as the plan frees. A temporal
- * source's frame counts twice: the one before stays while its readers work. */
+/* Two frames of the evaluation, run on shapes instead of pixels, in the order internal_graph_eval
+ * takes (each write's input, depth first, input 0 first), holding and freeing as the plan does:
+ * a frame goes to the pool's idle list when its last reader has rendered, is taken from it by the
+ * next frame of the same size, and a temporal source's frame stays until the sweep after the next
+ * frame. The second frame is the steady state: the first frame's buffers wait idle in the pool. */
 typedef struct sim {
     nprfx_graph *g;
     int frame;
     shape *shapes;
+    uint64_t *scratch;    /* per node: input channels packed, or a whole plate before its trim */
+    uint64_t *cur, *prev; /* per node: bytes its result holds at this frame, the one before */
     int *done, *uses;
-    uint64_t live, peak;
+    uint64_t *idle; /* the pool's idle buffers, by size */
+    size_t nidle, capidle;
+    uint64_t live, idle_bytes, peak;
     int peak_node, peak_w, peak_h, peak_channels; /* the frame that made the peak */
 } sim;
 
-static void sim_note(sim *s, uint64_t transient, int node, int w, int h, int channels)
+static void sim_note(sim *s, int node, int w, int h, int channels)
 {
-    if (s->live + transient > s->peak) {
-        s->peak = s->live + transient;
+    if (s->live + s->idle_bytes > s->peak) {
+        s->peak = s->live + s->idle_bytes;
         s->peak_node = node;
         s->peak_w = w;
         s->peak_h = h;
@@ -367,9 +506,40 @@ static void sim_note(sim *s, uint64_t transient, int node, int w, int h, int cha
     }
 }
 
-static void sim_consume(sim *s, int src)
+/* A pooled allocation: an idle buffer of the size when there is one. */
+static void sim_alloc(sim *s, uint64_t bytes)
 {
-    if (--s->uses[src] == 0 && !s->g->plan_temporal[src]) s->live -= shape_bytes(&s->shapes[src]);
+    for (size_t i = 0; i < s->nidle; i++)
+        if (s->idle[i] == bytes) {
+            s->idle[i] = s->idle[--s->nidle];
+            s->idle_bytes -= bytes;
+            break;
+        }
+    s->live += bytes;
+}
+
+static int sim_release(sim *s, uint64_t bytes)
+{
+    if (!bytes) return 0;
+    s->live -= bytes;
+    if (s->nidle == s->capidle) {
+        size_t n = s->capidle ? 2 * s->capidle : 64;
+        uint64_t *grown = realloc(s->idle, n * sizeof *grown);
+        if (!grown) return 1;
+        s->idle = grown;
+        s->capidle = n;
+    }
+    s->idle[s->nidle++] = bytes;
+    s->idle_bytes += bytes;
+    return 0;
+}
+
+static int sim_consume(sim *s, int src)
+{
+    if (--s->uses[src] != 0 || s->g->plan_temporal[src]) return 0;
+    uint64_t b = s->cur[src];
+    s->cur[src] = 0;
+    return sim_release(s, b);
 }
 
 /* Evaluate node root (and what it needs) on shapes: non-zero when a shape cannot be told. */
@@ -410,23 +580,78 @@ static int sim_eval(sim *s, int root)
             continue;
         }
         top--;
-        uint64_t scratch = 0;
-        int k = shape_of(g, node, s->frame, &s->shapes[node], &scratch);
-        if (k < 0) k = node_shape(g, node, s->shapes, &s->shapes[node], &scratch);
-        if (k) {
-            rc = 1;
-            break;
+        shape *sh = &s->shapes[node];
+        if (!sh->known) {
+            int k = shape_of(g, node, s->frame, sh, &s->scratch[node]);
+            if (k < 0) k = node_shape(g, node, s->shapes, sh, &s->scratch[node]);
+            if (k) {
+                rc = 1;
+                break;
+            }
         }
-        const shape *sh = &s->shapes[node];
-        uint64_t b = shape_bytes(sh);
-        s->live += g->plan_temporal[node] ? 2 * b : b;
-        sim_note(s, scratch, node, sh->w, sh->h, sh->channels);
+        uint64_t b = shape_bytes(sh), extra = s->scratch[node];
+        int plate = n->kind == GK_READ || n->kind == GK_SYNTH;
+        if (plate && extra) { /* the whole plate, then its trim (internal_graph_trim_plate) */
+            if (n->kind == GK_SYNTH)
+                sim_alloc(s, extra);
+            else
+                s->live += extra;
+            sim_alloc(s, b);
+            sim_note(s, node, sh->w, sh->h, sh->channels);
+            if (n->kind == GK_SYNTH)
+                rc |= sim_release(s, extra);
+            else
+                s->live -= extra;
+        } else {
+            if (extra) sim_alloc(s, extra); /* the inputs' packed channels */
+            if (n->kind == GK_READ)
+                s->live += b;
+            else
+                sim_alloc(s, b);
+            sim_note(s, node, sh->w, sh->h, sh->channels);
+            if (extra) rc |= sim_release(s, extra);
+        }
+        s->cur[node] = b;
         s->done[node] = 1;
         for (int j = 0; j < n->ninputs; j++)
-            if (n->inputs[j].src >= 0) sim_consume(s, n->inputs[j].src);
+            if (n->inputs[j].src >= 0) rc |= sim_consume(s, n->inputs[j].src);
     }
     free(stack);
     return rc;
+}
+
+/* One frame of the simulation: every write's input, then the sweep. */
+static int sim_frame(sim *s)
+{
+    nprfx_graph *g = s->g;
+    memset(s->done, 0, (size_t)g->count * sizeof *s->done);
+    memcpy(s->uses, g->plan_uses, (size_t)g->count * sizeof *s->uses);
+    for (int i = 0; i < g->count; i++) {
+        const gnode *w = &g->nodes[i];
+        if (w->kind != GK_WRITE || w->inputs[0].src < 0) continue;
+        int src = w->inputs[0].src;
+        if (sim_eval(s, src)) return 1;
+        /* the write packs the channels it writes when they are not adjacent */
+        int idx[256], count = 0;
+        const shape *sh = &s->shapes[src];
+        if (internal_graph_input_channels(g, w, 0, (const char *const *)sh->names, sh->channels,
+                                          idx, &count))
+            return 1;
+        uint64_t pack = packed_bytes(sh, idx, count);
+        sim_alloc(s, pack);
+        sim_note(s, i, sh->w, sh->h, count);
+        if (sim_release(s, pack) || sim_consume(s, src)) return 1;
+    }
+    for (int i = 0; i < g->count; i++) { /* the sweep: a temporal source keeps this frame */
+        if (sim_release(s, s->prev[i])) return 1;
+        s->prev[i] = 0;
+        if (g->plan_temporal[i])
+            s->prev[i] = s->cur[i];
+        else if (sim_release(s, s->cur[i]))
+            return 1;
+        s->cur[i] = 0;
+    }
+    return 0;
 }
 
 nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out)
@@ -440,27 +665,16 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
     s.g = g;
     s.frame = frame;
     s.peak_node = -1;
-    s.shapes = calloc((size_t)(g->count ? g->count : 1), sizeof *s.shapes);
-    s.done = calloc((size_t)(g->count ? g->count : 1), sizeof *s.done);
-    s.uses = malloc((size_t)(g->count ? g->count : 1) * sizeof *s.uses);
-    int failed = !s.shapes || !s.done || !s.uses;
-    if (!failed) memcpy(s.uses, g->plan_uses, (size_t)g->count * sizeof *s.uses);
-    for (int i = 0; !failed && i < g->count; i++) {
-        const gnode *w = &g->nodes[i];
-        if (w->kind != GK_WRITE || w->inputs[0].src < 0) continue;
-        int src = w->inputs[0].src;
-        if ((failed = sim_eval(&s, src))) break;
-        /* the write packs the channels it writes when they are not adjacent */
-        int idx[256], count = 0;
-        const shape *sh = &s.shapes[src];
-        if (internal_graph_input_channels(g, w, 0, (const char *const *)sh->names, sh->channels,
-                                          idx, &count)) {
-            failed = 1;
-            break;
-        }
-        sim_note(&s, packed_bytes(sh, idx, count), i, sh->w, sh->h, count);
-        sim_consume(&s, src);
-    }
+    size_t nodes = g->count > 0 ? (size_t)g->count : 1;
+    s.shapes = calloc(nodes, sizeof *s.shapes);
+    s.scratch = calloc(nodes, sizeof *s.scratch);
+    s.cur = calloc(nodes, sizeof *s.cur);
+    s.prev = calloc(nodes, sizeof *s.prev);
+    s.done = calloc(nodes, sizeof *s.done);
+    s.uses = calloc(nodes, sizeof *s.uses);
+    int failed = !s.shapes || !s.scratch || !s.cur || !s.prev || !s.done || !s.uses;
+    for (int f = 0; f < 2 && !failed; f++)
+        failed = sim_frame(&s);
     if (!failed && s.peak_node >= 0) {
         shape peak = {s.peak_w, s.peak_h, s.peak_channels, 1, NULL}, *sh = &peak;
         out->peak = s.peak;
@@ -484,7 +698,11 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
     for (int i = 0; s.shapes && i < g->count; i++)
         shape_free(&s.shapes[i]);
     free(s.shapes);
+    free(s.scratch);
+    free(s.cur);
+    free(s.prev);
     free(s.done);
     free(s.uses);
+    free(s.idle);
     return r;
 }

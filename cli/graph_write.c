@@ -257,7 +257,13 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
     internal_graph_frame_sweep(g);
     internal_graph_frame_begin(g, frame);
     centry *e;
+    /* A plate asked for by name is whole: a trimmed one kept for a temporal reader goes. */
+    int plate = g->nodes[i].kind == GK_READ || g->nodes[i].kind == GK_SYNTH;
+    if (plate && (e = internal_graph_cache_find(g, i, frame)) && !e->pins)
+        internal_graph_cache_drop(g, e);
+    g->external = plate;
     r = internal_graph_eval(g, i, frame, &e);
+    g->external = 0;
     if (!r) *out = e->im;
     return r;
 }

@@ -88,7 +88,10 @@ struct nprfx_graph {
     int plan_ready;
     int *plan_uses;               /* per node: inputs reading it at the same frame */
     unsigned char *plan_temporal; /* per node: some temporal node reads it at other frames */
-    unsigned gen;                 /* frames begun (nprfx_graph_render_frame, nprfx_graph_eval) */
+    /* per node, its readers: (node, input) pairs plan_readers[plan_first[i] .. plan_first[i+1]) */
+    int *plan_first, (*plan_readers)[2];
+    int external; /* nprfx_graph_eval is evaluating a plate for its caller */
+    unsigned gen; /* frames begun (nprfx_graph_render_frame, nprfx_graph_eval) */
     /* The frame begun last and the one before (have_prev), and the offsets from it of the
      * temporal sources' frames touched since: the window the sweep keeps, moved on by a step. */
     int cur_frame, prev_frame, have_prev, win_lo, win_hi, have_win;
@@ -124,6 +127,15 @@ nprfx_result internal_graph_plan_build(nprfx_graph *g);
  * would be passed); errors name `what` ("node 'x': output frame") and the sizes. */
 nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
                                         nprfx_rect bounds, int channels, nprfx_image *im);
+/* The channels of a plate (a read or synth node's result, names/nc) that its readers take, by
+ * the selections they would make on it: keep[c] set for each, the count returned; -1 when a
+ * reader's selection fails (the reader reports it) or the plate is evaluated for the caller of
+ * nprfx_graph_eval, who sees all of it. Only a planned graph trims plates. */
+int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *names, int nc,
+                                  unsigned char *keep);
+/* Keep only the channels of plate node's result (im, names) that its readers take, when every
+ * reader then selects the very same channels (internal_graph_plate_channels). */
+void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names);
 /* Count a frame made elsewhere (a plate from the reader) as held. */
 void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im);
 /* Give a frame from internal_graph_frame_alloc (or adopted) back to the pool. */
