@@ -5,9 +5,10 @@
  *  - each result knows how many inputs read it at its frame (plan_uses); when the last of them
  *    has rendered, the result leaves the cache at once and its buffer goes back to the pool;
  *  - a node that some temporal node reads at other frames (what the node declares through
- *    nprfx_node_frames_needed) keeps its results past the frame; after each frame only those
- *    touched during it stay (the frames its temporal readers' window is working in), and the
- *    cache's byte bound still caps them;
+ *    nprfx_node_frames_needed) keeps its results past the frame: after each frame those inside
+ *    the window of offsets touched during it, moved on by the step to the next frame, stay, and
+ *    the cache's byte bound still caps them;
+ *  - a plate keeps only the channels its readers select;
  *  - every frame buffer comes from the frame pool (frame_pool.h) and goes back to it, so a frame
  *    of the same size is not faulted in again;
  *  - every allocation is checked against the memory limit (io_limits.h) before it is made, and
