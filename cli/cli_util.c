@@ -122,13 +122,16 @@ void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
                 st[i].calls, st[i].seconds * 1e3 / per, (double)st[i].bytes / per / 1048576.0,
                 (double)st[i].fresh_bytes / 1048576.0);
     }
-    char peak[32], est[32], lim[32];
+    char peak[32], est[32], need[32], lim[32];
     nprfx_format_bytes(peak, sizeof peak, nprfx_graph_mem_peak(g));
     nprfx_format_bytes(est, sizeof est, plan ? plan->peak : 0);
+    nprfx_format_bytes(need, sizeof need, plan ? plan->need : 0);
     if (!plan || plan->limit == UINT64_MAX)
         snprintf(lim, sizeof lim, "none");
     else
         nprfx_format_bytes(lim, sizeof lim, plan->limit);
-    fprintf(f, "frames held at most %s (estimate %s, memory limit %s); peak resident %.0f MiB\n",
-            peak, est, lim, nprfx_cli_peak_mib());
+    fprintf(f,
+            "frames held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
+            "resident %.0f MiB\n",
+            peak, est, need, lim, nprfx_cli_peak_mib());
 }

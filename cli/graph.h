@@ -63,7 +63,8 @@ typedef struct nprfx_graph_node_stats {
 
 /* The graph's memory estimate for one frame (nprfx_graph_plan). */
 typedef struct nprfx_graph_plan_info {
-    uint64_t peak;         /* bytes the frames of one frame's evaluation need at the most */
+    uint64_t peak;         /* bytes of frames held at the most, the pool's idle ones included */
+    uint64_t need;         /* of those, the most in use at once: what must fit the limit */
     uint64_t limit;        /* the memory limit (UINT64_MAX: none) */
     int width, height;     /* the frame size the estimate is for */
     const char *peak_node; /* the node whose output frame makes the peak */
@@ -122,9 +123,10 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
 
 /* Estimate the memory that evaluating `frame` needs from the graph and the frame size alone
  * (plates' headers, synth sizes, "format"; no pixel is read), as the memory plan runs it: each
- * result freed after its last consumer, a temporal source's frames kept one frame longer.
- * NPRFX_ERR_OUT_OF_MEMORY, naming the node and the sizes, when the peak is above the memory
- * limit; any other problem (a missing file, a bad channel name) is left to the render, which
+ * result freed after its last consumer, a temporal source's frames kept one frame longer, freed
+ * buffers idle in the pool until reused. NPRFX_ERR_OUT_OF_MEMORY, naming the node and the sizes,
+ * when the frames in use at once (need; idle buffers are given up under the limit) exceed the
+ * memory limit; any other problem (a missing file, a bad channel name) is left to the render, which
  * reports it as it always has, and gives NPRFX_OK with out->peak 0. */
 nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out);
 

@@ -492,14 +492,17 @@ typedef struct sim {
     int *done, *uses;
     uint64_t *idle; /* the pool's idle buffers, by size */
     size_t nidle, capidle;
-    uint64_t live, idle_bytes, peak;
-    int peak_node, peak_w, peak_h, peak_channels; /* the frame that made the peak */
+    uint64_t live, idle_bytes, peak, need; /* peak: with the pool's idle buffers; need: without */
+    int peak_node, peak_w, peak_h, peak_channels; /* the frame that made the need's peak */
 } sim;
 
 static void sim_note(sim *s, int node, int w, int h, int channels)
 {
-    if (s->live + s->idle_bytes > s->peak) {
-        s->peak = s->live + s->idle_bytes;
+    if (s->live + s->idle_bytes > s->peak) s->peak = s->live + s->idle_bytes;
+    /* Idle buffers only save page faults: under the limit the render gives them up
+     * (make_room), so only the frames in use decide whether the graph fits. */
+    if (s->live > s->need) {
+        s->need = s->live;
         s->peak_node = node;
         s->peak_w = w;
         s->peak_h = h;
@@ -679,12 +682,13 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
     if (!failed && s.peak_node >= 0) {
         shape peak = {s.peak_w, s.peak_h, s.peak_channels, 1, NULL}, *sh = &peak;
         out->peak = s.peak;
+        out->need = s.need;
         out->width = sh->w;
         out->height = sh->h;
         out->peak_node = g->nodes[s.peak_node].name;
-        if (g->mem_limit != UINT64_MAX && s.peak > g->mem_limit) {
+        if (g->mem_limit != UINT64_MAX && s.need > g->mem_limit) {
             char need[32], lim[32], one[32];
-            nprfx_format_bytes(need, sizeof need, s.peak);
+            nprfx_format_bytes(need, sizeof need, s.need);
             nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
             nprfx_format_bytes(one, sizeof one, shape_bytes(sh));
             r = nprfx_error(

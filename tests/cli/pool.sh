@@ -37,6 +37,7 @@ same() { # DIR: every frame under DIR equals the pooled one, bit for bit
 }
 held() { sed -n "s/^frames held at most \([0-9.]*\) \([KMG]\)iB.*/\1 \2/p" "$1.txt" | awk '{ print $1 * ($2 == "K" ? 1 / 1024 : $2 == "G" ? 1024 : 1) }'; }
 estimate() { sed -n "s/^frames held at most .*(estimate \([0-9.]*\) \([KMG]\)iB,.*/\1 \2/p" "$1.txt" | awk '{ print $1 * ($2 == "K" ? 1 / 1024 : $2 == "G" ? 1024 : 1) }'; }
+need() { sed -n "s/^frames held at most .*, \([0-9.]*\) \([KMG]\)iB in use at once;.*/\1 \2/p" "$1.txt" | awk '{ print $1 * ($2 == "K" ? 1 / 1024 : $2 == "G" ? 1024 : 1) }'; }
 column() { awk -v n="$2" -v c="$3" '$1 == n { print $c }' "$1.txt"; } # DIR NODE COLUMN
 
 render pool
@@ -62,13 +63,18 @@ plate_new=$(column pool plate 6); nopool_new=$(column nopool plate 6)
 awk -v p="$plate_new" -v n="$nopool_new" 'BEGIN { exit !(p <= 2.5 * 1.43 && n >= 5 * 1.42) }' && pass ||
   fail "plate: $plate_new MiB new with the pool, $nopool_new MiB without"
 
-# A limit just above the estimate fits, and changes no pixel.
-lim=$(awk -v e="$est" 'BEGIN { printf "%.0fK", e * 1024 * 1.02 + 64 }')
+# A limit just above the frames in use at once fits (the pool gives up its idle buffers), and
+# changes no pixel; the frames held then stay under it.
+nd=$(need pool)
+awk -v n="$nd" -v e="$est" 'BEGIN { exit !(n > 0 && n <= e) }' && pass || fail "in use at once $nd MiB, estimate $est MiB"
+lim=$(awk -v e="$nd" 'BEGIN { printf "%.0fK", e * 1024 * 1.02 + 64 }')
 render tight --mem-limit "$lim"
 same tight
+ht=$(held tight)
+awk -v h="$ht" -v l="${lim%K}" 'BEGIN { exit !(h * 1024 <= l) }' && pass || fail "held $ht MiB under --mem-limit $lim"
 
 # --- above the limit: refused before the first frame ------------------------------------------
-below=$(awk -v e="$est" 'BEGIN { printf "%.0fK", e * 1024 * 0.8 }')
+below=$(awk -v e="$nd" 'BEGIN { printf "%.0fK", e * 1024 * 0.8 }')
 /usr/bin/time -f "%M" -o mem.txt "$NPRFX" run six.json --output-dir over --mem-limit "$below" > over.txt 2> over.err
 rc=$?
 [ $rc -eq 2 ] && pass || fail "--mem-limit $below: exit $rc, want 2: $(cat over.err)"
@@ -87,7 +93,7 @@ grep -qE '^  node +type +renders +ms/frame +MiB/frame +new MiB$' pool.txt && pas
 for n in plate:synth noise:coherent-noise grain:threshold-map pencil:blend strokes:gabor-splat hatch:threshold-map look:blend out:write; do
   grep -qE "^  ${n%%:*} +${n#*:} +5 +$num +$num +$num$" pool.txt && pass || fail "no stats row for $n: $(cat pool.txt)"
 done
-grep -qE "^frames held at most $num [KMG]iB \(estimate $num [KMG]iB, memory limit $num [KMG]iB\); peak resident [0-9]+ MiB$" pool.txt &&
+grep -qE "^frames held at most $num [KMG]iB \(estimate $num [KMG]iB, $num [KMG]iB in use at once; memory limit $num [KMG]iB\); peak resident [0-9]+ MiB$" pool.txt &&
   pass || fail "no memory line: $(cat pool.txt)"
 
 # --- bench-graph ----------------------------------------------------------------------------
