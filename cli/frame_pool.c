@@ -9,11 +9,13 @@
 typedef struct idle_buf {
     float *data;
     size_t floats;
+    unsigned epoch;        /* the frame it was released in */
     struct idle_buf *next; /* most recently released first */
 } idle_buf;
 
 struct nprfx_frame_pool {
     int disabled;
+    unsigned epoch;
     idle_buf *idle;
     size_t idle_bytes, fresh_bytes;
 };
@@ -74,6 +76,7 @@ void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im)
     }
     b->data = im->data;
     b->floats = floats;
+    b->epoch = p->epoch;
     b->next = p->idle;
     p->idle = b;
     p->idle_bytes += floats * sizeof(float);
@@ -98,6 +101,22 @@ void nprfx_frame_pool_trim(nprfx_frame_pool *p, size_t max_idle)
         free(b->data);
         free(b);
     }
+}
+
+void nprfx_frame_pool_age(nprfx_frame_pool *p)
+{
+    for (idle_buf **link = &p->idle; *link;) {
+        idle_buf *b = *link;
+        if (b->epoch == p->epoch) {
+            link = &b->next;
+            continue;
+        }
+        *link = b->next;
+        p->idle_bytes -= b->floats * sizeof(float);
+        free(b->data);
+        free(b);
+    }
+    p->epoch++;
 }
 
 size_t nprfx_frame_pool_take_fresh_bytes(nprfx_frame_pool *p)

@@ -35,6 +35,9 @@ void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im);
 size_t nprfx_frame_pool_idle_bytes(const nprfx_frame_pool *p);
 /* Free idle buffers, least recently released first, until at most max_idle bytes stay idle. */
 void nprfx_frame_pool_trim(nprfx_frame_pool *p, size_t max_idle);
+/* A frame has ended: free the idle buffers that waited through it without being taken (released
+ * before it began), so that buffers of a size the graph no longer makes do not stay. */
+void nprfx_frame_pool_age(nprfx_frame_pool *p);
 /* Bytes of fresh buffers allocated since the last call (what the pool did not save); resets. */
 size_t nprfx_frame_pool_take_fresh_bytes(nprfx_frame_pool *p);
 

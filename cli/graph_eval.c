@@ -556,14 +556,17 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     }
     /* A plate keeps only what its readers take: a 26-channel plate of which a graph reads 11
      * then holds 11 while a temporal reader's window keeps it. */
+    int from_reader = 0;
     if (!r && (g->nodes[node].kind == GK_READ || g->nodes[node].kind == GK_SYNTH))
-        internal_graph_trim_plate(g, node, &im, &names);
+        from_reader =
+            !internal_graph_trim_plate(g, node, &im, &names) && g->nodes[node].kind == GK_READ;
     double el = internal_graph_now() - t0;
     g->stats[node].seconds += el - g->child_seconds;
     g->stats[node].calls++;
     g->child_seconds = saved_child + el;
     if (r) return r;
     *out = internal_graph_cache_insert(g, node, frame, &im, names);
+    if (*out) (*out)->from_reader = from_reader;
     if (!*out) {
         internal_graph_frame_release(g, &im);
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");

@@ -620,6 +620,12 @@ void internal_graph_centry_free(nprfx_graph *g, centry *e)
     for (int c = 0; e->names && c < e->im.channels; c++)
         free(e->names[c]);
     free(e->names);
-    internal_graph_frame_release(g, &e->im);
+    if (e->from_reader) { /* the reader never takes a buffer from the pool */
+        size_t bytes = e->bytes < g->held_bytes ? e->bytes : g->held_bytes;
+        g->held_bytes -= bytes;
+        nprfx_image_free(&e->im);
+    } else {
+        internal_graph_frame_release(g, &e->im);
+    }
     free(e);
 }

@@ -113,18 +113,18 @@ int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *n
     return kept;
 }
 
-void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names)
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names)
 {
     int nc = im->channels;
     unsigned char keep[1024]; /* wider plates stay whole */
-    if (nc > (int)sizeof keep) return;
+    if (nc > (int)sizeof keep) return 0;
     int kept = internal_graph_plate_channels(g, node, (const char *const *)*names, nc, keep);
-    if (kept <= 0 || kept == nc) return;
+    if (kept <= 0 || kept == nc) return 0;
     /* Each reader must select the same channels from the trimmed plate as from the whole one (a
      * suffix that was ambiguous could otherwise become unique); else the plate stays whole. */
     int map[1024], n = 0;
     char **sub = calloc((size_t)kept, sizeof *sub);
-    if (!sub) return;
+    if (!sub) return 0;
     for (int c = 0; c < nc; c++)
         if (keep[c]) {
             map[n] = c;
@@ -140,12 +140,12 @@ void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char *
                                           &cp) ||
             cw != cp) {
             free(sub);
-            return;
+            return 0;
         }
         for (int c = 0; c < cw; c++)
             if (map[part[c]] != whole[c]) {
                 free(sub);
-                return;
+                return 0;
             }
     }
     char what[600];
@@ -154,7 +154,7 @@ void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char *
     nprfx_image t;
     if (internal_graph_frame_alloc(g, node, what, im->bounds, kept, &t)) {
         free(sub); /* whole, as before: the limit is checked again where it matters */
-        return;
+        return 0;
     }
     for (int y = t.bounds.y0; y < t.bounds.y1; y++)
         for (int x = t.bounds.x0; x < t.bounds.x1; x++) {
@@ -178,6 +178,7 @@ void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char *
         nprfx_image_free(im);
     }
     *im = t;
+    return 1;
 }
 
 static size_t image_bytes(const nprfx_image *im)
@@ -299,6 +300,7 @@ void internal_graph_frame_sweep(nprfx_graph *g)
         if (e->pins || (g->plan_temporal[e->node] && off >= lo && off <= hi)) continue;
         internal_graph_cache_drop(g, e);
     }
+    nprfx_frame_pool_age(g->pool);
     internal_graph_cache_evict(g); /* the pool's idle buffers under the byte bound */
 }
 

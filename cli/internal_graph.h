@@ -46,6 +46,7 @@ typedef struct centry {
      * touched by the last frame, the window its temporal readers work in). */
     int uses;
     unsigned gen;
+    int from_reader; /* im is the reader's own buffer: back to the system, not to the pool */
     struct centry *prev, *next; /* most recent first */
     struct centry *hnext;       /* the next entry in the same hash slot */
 } centry;
@@ -134,8 +135,8 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
 int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *names, int nc,
                                   unsigned char *keep);
 /* Keep only the channels of plate node's result (im, names) that its readers take, when every
- * reader then selects the very same channels (internal_graph_plate_channels). */
-void internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names);
+ * reader then selects the very same channels (internal_graph_plate_channels); whether it did. */
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names);
 /* Count a frame made elsewhere (a plate from the reader) as held. */
 void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im);
 /* Give a frame from internal_graph_frame_alloc (or adopted) back to the pool. */
