@@ -33,7 +33,7 @@ static void usage(FILE *f)
         "(output), and the process's peak memory. --stats adds the per-node table of\n"
         "nprfx run --stats; --mem-limit and --no-pool are as for nprfx run.\n\n"
         "example:\n"
-        "  nprfx bench-graph samples/graphs/bench_six.json --size 3840x2160 --threads 2\n");
+        "  nprfx bench-graph samples/bench/bench_six.json --size 3840x2160 --threads 2\n");
 }
 
 int nprfx_cmd_bench_graph(int argc, char **argv)

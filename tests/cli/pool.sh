@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The runner's frame pool and memory plan (issue 16), on the six-node pipeline of
-# samples/graphs/bench_six.json at a small size:
+# samples/bench/bench_six.json at a small size:
 #   - pixels are bit-identical with and without the pool (--no-pool), at a memory limit just
 #     above the plan's estimate, with a cache so small that results are evicted and rendered
 #     again, and in reverse frame order;
@@ -19,7 +19,7 @@ pass() { passes=$((passes+1)); }
 fail() { echo "FAIL: $*"; fails=$((fails+1)); }
 num='[0-9]+(\.[0-9]+)?'
 
-sed -e 's/1920x1080/160x90/' -e 's/"1-8"/"1-5"/' "$SRC/samples/graphs/bench_six.json" > six.json
+sed -e 's/1920x1080/160x90/' -e 's/"1-8"/"1-5"/' "$SRC/samples/bench/bench_six.json" > six.json
 render() { # DIR OPTIONS...: render six.json under DIR with --stats into DIR.txt
   local d=$1; shift
   "$NPRFX" run six.json --threads 2 --output-dir "$d" --stats -q "$@" > "$d.txt" 2> "$d.err"
@@ -101,7 +101,7 @@ grep -qE "six.json: frame 1 needs $num [KM]iB of frames at its peak, at node '[a
 [ ! -e over ] && pass || fail "a run above --mem-limit wrote $(find over -type f | head -3)"
 [ "$(( $(tail -1 mem.txt) / 1024 ))" -lt 256 ] && pass || fail "refusing took $(tail -1 mem.txt) KiB"
 # bench-graph and bench refuse the same way.
-"$NPRFX" bench-graph "$SRC/samples/graphs/bench_six.json" --size 160x90 --frames 2 --mem-limit "$below" > bg.txt 2>&1
+"$NPRFX" bench-graph "$SRC/samples/bench/bench_six.json" --size 160x90 --frames 2 --mem-limit "$below" > bg.txt 2>&1
 rc=$?
 [ $rc -eq 2 ] && grep -q "nothing was rendered" bg.txt && pass || fail "bench-graph --mem-limit $below: exit $rc: $(cat bg.txt)"
 
@@ -115,7 +115,7 @@ grep -qE "^frames held at most $num [KMG]iB \(estimate $num [KMG]iB, $num [KMG]i
   pass || fail "no memory line: $(cat pool.txt)"
 
 # --- bench-graph ----------------------------------------------------------------------------
-out=$("$NPRFX" bench-graph "$SRC/samples/graphs/bench_six.json" --size 160x90 --frames 3 --threads 1 2>&1)
+out=$("$NPRFX" bench-graph "$SRC/samples/bench/bench_six.json" --size 160x90 --frames 3 --threads 1 2>&1)
 echo "$out" | grep -qE "bench_six.json 160x90, 3 frames, 1 thread: $num ms/frame, $num frames/s \(first frame $num ms\); compute $num ms, input $num ms, output 0\.0 ms per frame; peak memory [0-9]+ MiB$" &&
   pass || fail "bench-graph form: $out"
 # --write times the files as output, and writes them; read nodes become synthetic plates.
