@@ -41,6 +41,10 @@ typedef struct nprfx_graph_options {
     const char *output_dir;        /* prefix for relative write paths (NULL: current directory) */
     const nprfx_render_hook *hook; /* NULL: call the node's render function */
     int variant;                   /* nprfx_graph_variant (appended: read when size covers it) */
+    /* Appended: what a user should know but that is no error, e.g. which part of a multi-part
+     * file a read took and which parts it left out; once per read node (NULL: silent). */
+    void (*notice)(void *user, const char *message);
+    void *notice_user;
 } nprfx_graph_options;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
