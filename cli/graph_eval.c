@@ -118,32 +118,38 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
     return NPRFX_OK;
 }
 
-/* The channels the graph names on read node `node`: every reference's selection and the vectors
- * convention's channels, which pick the part of a multi-part file when none is given. */
-static nprfx_result gather_wants(nprfx_graph *g, int node)
+static int push_want(gnode *n, char *sel)
 {
-    gnode *n = &g->nodes[node];
-    n->wants_known = 1;
-    int cap = 0;
-    for (int i = 0; i < g->count; i++)
-        for (int k = 0; k < g->nodes[i].ninputs; k++) {
-            const gref *ref = &g->nodes[i].inputs[k];
-            if (ref->src != node || !ref->sel) continue;
-            if (n->nwants == cap) {
-                cap = cap ? cap * 2 : 8;
-                char **w = realloc(n->wants, (size_t)cap * sizeof *w);
-                if (!w) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-                n->wants = w;
-            }
-            n->wants[n->nwants++] = ref->sel;
+    if ((n->nwants & (n->nwants - 1)) == 0) { /* 0, 1, 2, 4, ...: grow to the next power */
+        char **w = realloc(n->wants, (size_t)(n->nwants ? 2 * n->nwants : 1) * sizeof *w);
+        if (!w) return 0;
+        n->wants = w;
+    }
+    n->wants[n->nwants++] = sel;
+    return 1;
+}
+
+/* The channels the graph names on each read node: every reference's selection and the vectors
+ * convention's channels, which pick the part of a multi-part file when none is given. One pass
+ * over all references, at the first read. */
+static nprfx_result gather_wants(nprfx_graph *g)
+{
+    for (int i = 0; i < g->count; i++) {
+        gnode *n = &g->nodes[i];
+        n->wants_known = 1;
+        for (int k = 0; k < n->ninputs; k++) {
+            const gref *ref = &n->inputs[k];
+            if (ref->src < 0 || !ref->sel || g->nodes[ref->src].kind != GK_READ) continue;
+            if (!push_want(&g->nodes[ref->src], ref->sel))
+                return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         }
-    for (size_t i = 0; n->vectors && i < sizeof vec_conventions / sizeof vec_conventions[0]; i++)
-        if (!strcmp(n->vectors, vec_conventions[i].name)) {
-            char **w = realloc(n->wants, (size_t)(n->nwants + 1) * sizeof *w);
-            if (!w) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-            n->wants = w;
-            n->wants[n->nwants++] = (char *)vec_conventions[i].layer;
-        }
+        for (size_t v = 0; n->kind == GK_READ && n->vectors &&
+                           v < sizeof vec_conventions / sizeof vec_conventions[0];
+             v++)
+            if (!strcmp(n->vectors, vec_conventions[v].name) &&
+                !push_want(n, (char *)vec_conventions[v].layer))
+                return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
     return NPRFX_OK;
 }
 
@@ -155,7 +161,7 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
     nprfx_plate plate;
     memset(&plate, 0, sizeof plate);
-    nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g, node);
+    nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
     nprfx_read_options ro = {sizeof ro, n->part, n->read_view, (const char *const *)n->wants,
                              n->nwants};

@@ -33,7 +33,7 @@ typedef struct gnode {
     int half, raw, width, height;
     int noted; /* read: its note on parts and views was given (once per run) */
     /* read: the channels the graph asks of it by name (references' selections, the vectors
-     * convention), gathered at its first read; they pick the default part. */
+     * convention), gathered for all reads at the first one; they pick the default part. */
     char **wants;
     int nwants, wants_known;
 } gnode;
