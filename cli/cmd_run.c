@@ -38,7 +38,9 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
         "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
         "  read:  {\"node\": \"read\", \"path\": \"plates/shot.####.exr\", \"colorspace\": "
-        "\"linear\", \"vectors\": \"blender\"}\n"
+        "\"linear\", \"vectors\": \"blender\",\n"
+        "         \"part\": \"rgba\", \"view\": \"left\"}  (part, view: of multi-part and stereo "
+        "EXRs)\n"
         "  synth: {\"node\": \"synth\", \"scene\": \"orbit\", \"size\": \"256x256\"}\n"
         "  write: {\"node\": \"write\", \"inputs\": {\"image\": REF}, \"path\": "
         "\"out/x.####.exr\", \"preview\": \"out/x.####.png\"}\n"
@@ -83,6 +85,14 @@ static void lock_notice(void *user, const char *message)
 {
     const run_opts *ro = user;
     if (!ro->quiet) fprintf(stderr, "%s run: %s\n", ro->prog, message);
+}
+
+/* A read's note on the parts and views it took: warnings always, notes unless --quiet. */
+static void graph_notice(void *user, const char *message)
+{
+    const run_opts *ro = user;
+    if (!ro->quiet || !strncmp(message, "warning", 7))
+        fprintf(stderr, "%s run: %s\n", ro->prog, message);
 }
 
 /* Lock every sequence g writes before its first frame (output_lock.h). */
@@ -262,6 +272,8 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     opt.progress = !quiet;
     int status = 0;
     run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait};
+    opt.notice = graph_notice;
+    opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;

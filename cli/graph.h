@@ -44,6 +44,10 @@ typedef struct nprfx_graph_options {
     /* Non-zero: a temporal node whose render fetches many other frames (a recursion's warm-up)
      * reports them on stderr once it has taken a second, about once a second (appended). */
     int progress;
+    /* Appended: what a user should know but that is no error, e.g. which part of a multi-part
+     * file a read took and which parts it left out; once per read node (NULL: silent). */
+    void (*notice)(void *user, const char *message);
+    void *notice_user;
 } nprfx_graph_options;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write

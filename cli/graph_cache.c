@@ -101,7 +101,7 @@ void internal_graph_cache_evict(nprfx_graph *g)
 }
 
 centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_image *im,
-                                    char **names)
+                                    char **names, gmeta *meta)
 {
     if (!table_fit(g)) return NULL;
     centry *e = calloc(1, sizeof *e);
@@ -110,6 +110,8 @@ centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_i
     e->frame = frame;
     e->im = *im;
     e->names = names;
+    e->meta = *meta;
+    memset(meta, 0, sizeof *meta);
     e->bytes = (size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
                (size_t)im->channels * sizeof(float);
     memset(im, 0, sizeof *im);

@@ -4,7 +4,8 @@
  *
  * A graph is {"frames": "1-24", "nodes": {NAME: {...}, ...}}. Processing nodes are
  * {"node": ID, "inputs": {INPUT: REF}, "params": {PARAM: VALUE}}; the built-in I/O nodes are
- * read {"node": "read", "path": SEQ, "colorspace": CS, "vectors": CONVENTION},
+ * read {"node": "read", "path": SEQ, "colorspace": CS, "vectors": CONVENTION, "part": PART,
+ * "view": VIEW},
  * synth {"node": "synth", "scene": NAME, "size": "WxH"} and
  * write {"node": "write", "inputs": {"image": REF}, "path": SEQ, "preview": SEQ}.
  * A REF is "name" or "name:channels" (see channels.h).
@@ -122,6 +123,8 @@ static const io_field io_fields[] = {
     {"compression", offsetof(gnode, compression), 0, KB(GK_WRITE)},
     {"display", offsetof(gnode, display), 0, KB(GK_WRITE)},
     {"view", offsetof(gnode, view), 0, KB(GK_WRITE)},
+    {"part", offsetof(gnode, part), 0, KB(GK_READ)},
+    {"view", offsetof(gnode, read_view), 0, KB(GK_READ)},
     {"half", offsetof(gnode, half), 1, KB(GK_WRITE)},
     {"raw", offsetof(gnode, raw), 1, KB(GK_WRITE)},
     {"scene", offsetof(gnode, scene), 0, KB(GK_SYNTH)},
@@ -354,6 +357,10 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         g->variant = opt->variant;
     if (opt && opt->size >= offsetof(nprfx_graph_options, progress) + sizeof opt->progress)
         g->progress = opt->progress;
+    if (opt && opt->size >= offsetof(nprfx_graph_options, notice_user) + sizeof opt->notice_user) {
+        g->notice = opt->notice;
+        g->notice_user = opt->notice_user;
+    }
     g->out_dir = opt && opt->output_dir ? internal_graph_strdup(opt->output_dir) : NULL;
     g->first_frame = 1;
     g->last_frame = 1;
@@ -496,6 +503,9 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->scene);
         free(n->display);
         free(n->view);
+        free(n->part);
+        free(n->read_view);
+        free(n->wants); /* the strings belong to references and tables */
     }
     free(g->nodes);
     free(g->name_slots);
@@ -597,6 +607,7 @@ void internal_graph_centry_free(centry *e)
     for (int c = 0; e->names && c < e->im.channels; c++)
         free(e->names[c]);
     free(e->names);
+    free(e->meta.types);
     nprfx_image_free(&e->im);
     free(e);
 }
