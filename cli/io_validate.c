@@ -353,6 +353,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
     nprfx_result r = nprfx_image_limit(ctx, &limit);
     if (r) return r;
     int64_t total_channels = 0, x0 = 0, y0 = 0, x1 = 0, y1 = 0, uint_scratch = 0;
+    int seen = 0; /* pixel parts whose windows are in x0..y1 (deep parts are not) */
     uint64_t tile_row = 0; /* the largest row of tiles the reader decodes at once, in bytes */
     uint64_t table_bytes = 0;
     for (int p = 0; p < nparts; p++) {
@@ -361,10 +362,9 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         if ((rv = exr_get_storage(f, p, &st)) != EXR_ERR_SUCCESS)
             return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' is damaged: part %d: %s", path, p,
                                exr_why(rv));
-        if (st == EXR_STORAGE_DEEP_SCANLINE || st == EXR_STORAGE_DEEP_TILED)
-            return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
-                               "'%s' subimage %d holds deep pixels, which nprfx cannot read", path,
-                               p);
+        /* Deep parts are never decoded: the reader skips them, or refuses a read that needs
+         * one with a message that says how to flatten it, and `info` shows them. */
+        if (st == EXR_STORAGE_DEEP_SCANLINE || st == EXR_STORAGE_DEEP_TILED) continue;
         if (st != EXR_STORAGE_SCANLINE && st != EXR_STORAGE_TILED)
             return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' is damaged: part %d has no known storage",
                                path, p);
@@ -454,10 +454,11 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
                                    path, p, tw, th, (long long)w, (long long)h);
             if (row > (double)tile_row) tile_row = (uint64_t)row;
         }
-        if (p == 0 || dw.min.x < x0) x0 = dw.min.x;
-        if (p == 0 || dw.min.y < y0) y0 = dw.min.y;
-        if (p == 0 || (int64_t)dw.max.x + 1 > x1) x1 = (int64_t)dw.max.x + 1;
-        if (p == 0 || (int64_t)dw.max.y + 1 > y1) y1 = (int64_t)dw.max.y + 1;
+        if (!seen || dw.min.x < x0) x0 = dw.min.x;
+        if (!seen || dw.min.y < y0) y0 = dw.min.y;
+        if (!seen || (int64_t)dw.max.x + 1 > x1) x1 = (int64_t)dw.max.x + 1;
+        if (!seen || (int64_t)dw.max.y + 1 > y1) y1 = (int64_t)dw.max.y + 1;
+        seen = 1;
         /* UINT channels are read into a scratch buffer of their own before the cast. */
         if ((int64_t)nuint * w * h > uint_scratch) uint_scratch = (int64_t)nuint * w * h;
     }
@@ -482,6 +483,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
             (rv = exr_get_data_window(f, p, &dw)) != EXR_ERR_SUCCESS)
             return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' is damaged: part %d: %s", path, p,
                                exr_why(rv));
+        if (st == EXR_STORAGE_DEEP_SCANLINE || st == EXR_STORAGE_DEEP_TILED) continue;
         wk.part = p;
         wk.ratio = mode == NPRFX_GUARD_READ ? max_ratio(comp) : 0.0;
         r = st == EXR_STORAGE_TILED ? walk_tiles(&wk) : walk_scanlines(&wk, &dw);
