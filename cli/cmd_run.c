@@ -34,7 +34,9 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  --wait              when another run is writing one of the graph's sequences,\n"
         "                      wait for it to finish (default: fail at once, naming it)\n"
         "%s"
-        "  --quiet             no progress output\n\n"
+        "  --quiet             no progress output\n"
+        "  --check             check the graphs (JSON, nodes, params, references, cycles,\n"
+        "                      frames, sizes) and list what they would write; render nothing\n\n"
         "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
         "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
         "  read:  {\"node\": \"read\", \"path\": \"plates/shot.####.exr\", \"colorspace\": "
@@ -67,7 +69,7 @@ static double now_seconds(void)
 typedef struct run_opts {
     const char *prog, *frames, *shot;
     const char *const *sets;
-    int nsets, keep_going, quiet, several, wait;
+    int nsets, keep_going, quiet, several, wait, check;
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -149,6 +151,14 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
         status = 2;
         goto done;
     }
+    if (ro->check) {
+        /* --check: everything a render would refuse up front, and nothing read or written. */
+        char buf[4096];
+        nprfx_graph_describe_outputs(g, buf, sizeof buf);
+        printf("%s: ok: %d frame%s would write:\n%s", graph_path, fl.count,
+               fl.count == 1 ? "" : "s", buf);
+        goto done;
+    }
     if (lock_outputs(env.ctx, g, graph_path, ro, &locks)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
         status = 2;
@@ -222,7 +232,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
     int ngraphs = 0;
     const char *sets[256];
-    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0;
+    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, check = 0;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -248,6 +258,8 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
             keep_going = 1;
         else if (!strcmp(a, "--wait"))
             wait = 1;
+        else if (!strcmp(a, "--check"))
+            check = 1;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = 1;
         else if (a[0] != '-' && ngraphs < 64)
@@ -271,7 +283,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
     opt.progress = !quiet;
     int status = 0;
-    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait};
+    run_opts ro = {prog, frames, shot, sets, nsets, keep_going, quiet, ngraphs > 1, wait, check};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

@@ -371,7 +371,20 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         goto done;
     }
     for (const cJSON *e = root->child; e; e = e->next) {
+        if (!strcmp(e->string, "nodes") && e != nodes) {
+            r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry 'nodes' is given twice");
+            goto done;
+        }
         if (!strcmp(e->string, "nodes") || !strcmp(e->string, "comment")) continue;
+        /* A key given twice is ambiguous (JSON leaves it to the reader): refuse it rather than
+         * take one silently. */
+        if ((!strcmp(e->string, "frames") && g->frames_text) ||
+            (!strcmp(e->string, "ocio") && g->ocio) ||
+            (!strcmp(e->string, "format") && g->fmt_text)) {
+            r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry '%s' is given twice",
+                            e->string);
+            goto done;
+        }
         if (!strcmp(e->string, "frames") && cJSON_IsString(e))
             g->frames_text = internal_graph_strdup(e->valuestring);
         else if (!strcmp(e->string, "frames") && cJSON_IsNumber(e)) {
