@@ -174,6 +174,16 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
                        n->name, key, kind_names[n->kind]);
 }
 
+/* The earlier entry of e's object with e's key, or NULL. JSON leaves a key given twice to the
+ * reader; a graph refuses it rather than keep one silently. Callers stop at the first unknown
+ * key, so the scan stays within the few keys a node, its inputs or its params can have. */
+static const cJSON *earlier_same_key(const cJSON *first, const cJSON *e)
+{
+    for (const cJSON *c = first; c && c != e; c = c->next)
+        if (c->string && e->string && !strcmp(c->string, e->string)) return c;
+    return NULL;
+}
+
 static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
 {
     if (!cJSON_IsObject(j))
@@ -215,6 +225,9 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
     n->half = 0;
     for (const cJSON *e = j->child; e; e = e->next) {
         nprfx_result r = NPRFX_OK;
+        if (earlier_same_key(j->child, e))
+            return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': entry '%s' is given twice",
+                               n->name, e->string);
         if (!strcmp(e->string, "node") || !strcmp(e->string, "comment")) continue;
         if (!strcmp(e->string, "inputs")) {
             if (!cJSON_IsObject(e))
@@ -222,6 +235,10 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
                                    "node '%s': \"inputs\" must be an object", n->name);
             for (const cJSON *in = e->child; in; in = in->next) {
                 int idx = -1;
+                if (earlier_same_key(e->child, in))
+                    return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                                       "node '%s': input '%s' is given twice", n->name,
+                                       in->string);
                 if (n->kind == GK_NODE)
                     idx = nprfx_node_input_index(n->desc, in->string);
                 else if (n->kind == GK_WRITE && !strcmp(in->string, "image"))
@@ -243,6 +260,10 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
                 return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
                                    "node '%s': \"params\" must be an object", n->name);
             for (const cJSON *pv = e->child; pv; pv = pv->next) {
+                if (earlier_same_key(e->child, pv))
+                    return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                                       "node '%s': param '%s' is given twice", n->name,
+                                       pv->string);
                 int pi = nprfx_node_param_index(n->desc, pv->string);
                 if (pi < 0)
                     return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_PARAM,

@@ -38,5 +38,8 @@ check dup.json 2 "top-level entry 'frames' is given twice"
 printf '{"nodes": {}, "nodes": {}}' >dup2.json
 check dup2.json 2 "top-level entry 'nodes' is given twice"
 
+printf '{"nodes": {"p": {"node": "synth", "scene": "orbit", "size": "8x8"}, "m": {"node": "morphology", "inputs": {"image": "p"}, "params": {"radius": 1, "radius": 2}}, "w": {"node": "write", "inputs": {"image": "m"}, "path": "x.exr"}}}' >dup3.json
+check dup3.json 2 "node 'm': param 'radius' is given twice"
+
 echo "$n graphs checked, $fails failures"
 [ $fails -eq 0 ]
