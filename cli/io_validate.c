@@ -6,6 +6,7 @@
 #define _DEFAULT_SOURCE
 #include "io_validate.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -420,6 +421,39 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
                                    "'%s' is damaged: part %d, channel '%s' has sampling %d,%d",
                                    path, p, e->name.str, e->x_sampling, e->y_sampling);
             if (e->pixel_type == EXR_PIXEL_UINT) nuint++;
+        }
+        /* Every chunk is stored in the file, so a part cannot decode to more than the file's
+         * bytes times its compression's largest ratio. Checked in header mode too: opening a part
+         * makes OpenEXR allocate its decoder for the declared window (2 GB for a one-byte flip
+         * that widened a 6 KB file to 16 million pixels), before any pixel is read. */
+        {
+            exr_compression_t comp = EXR_COMPRESSION_NONE;
+            exr_message[0] = 0;
+            if ((rv = exr_get_compression(f, p, &comp)) != EXR_ERR_SUCCESS)
+                return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' is damaged: part %d: %s", path, p,
+                                   exr_why(rv));
+            double decoded = 0.0;
+            for (int c = 0; c < ch->num_channels; c++) {
+                const exr_attr_chlist_entry_t *e = &ch->entries[c];
+                double bytes = e->pixel_type == EXR_PIXEL_HALF ? 2.0 : 4.0;
+                decoded += bytes * ceil((double)w / e->x_sampling) *
+                           ceil((double)h / e->y_sampling);
+            }
+            double most = max_ratio(comp) * (double)file_size + 65536.0;
+            /* A read that would pass the memory limit is worded by the limit check below, which
+             * says which bound to raise (NPRFX_READ_LIMIT). */
+            double plate = (double)w * (double)h * (double)ch->num_channels * 4.0;
+            int over_limit = mode == NPRFX_GUARD_READ && plate > (double)limit;
+            if (decoded > most && !over_limit) {
+                char need[32], have[32];
+                nprfx_format_bytes(need, sizeof need, (uint64_t)decoded);
+                nprfx_format_bytes(have, sizeof have, file_size);
+                return nprfx_error(ctx, NPRFX_ERR_IO,
+                                   "'%s' is damaged: part %d declares a %lldx%lld data window of "
+                                   "%d channels (%s of pixels), more than a file of %s can hold",
+                                   path, p, (long long)w, (long long)h, ch->num_channels, need,
+                                   have);
+            }
         }
         total_channels += ch->num_channels;
         if (total_channels > MAX_TOTAL_CHANNELS)
