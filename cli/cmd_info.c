@@ -17,7 +17,10 @@ static void usage(FILE *f)
     fprintf(f, "usage: nprfx info FILE...\n\n"
                "Print each image's format, size, data and display windows, subimages,\n"
                "compression and channels grouped by layer with their pixel types, e.g.\n"
-               "  ViewLayer.Vector: X Y Z W (half)\n\n"
+               "  ViewLayer.Vector: X Y Z W (half)\n"
+               "The first lines describe what a read node takes by default; then the views of a\n"
+               "stereo file, tiles, MIP levels, pixel aspect and deep data, and each part of a\n"
+               "multi-part file with its windows and channels.\n\n"
                "Exit status: 0 all files read, 2 usage error, 4 a file could not be read.\n");
 }
 
@@ -49,34 +52,78 @@ static void print_rect(const char *label, nprfx_rect r)
 
 /* Channels grouped by layer in order of first appearance; a layer's channels need not be
  * adjacent in the file (multi-part files can split a layer). */
-static void print_channels(const nprfx_file_info *fi)
+static void print_channels(char **names, char **types, int n, const char *indent)
 {
-    char *done = calloc((size_t)fi->nchannels + 1, 1);
+    char *done = calloc((size_t)n + 1, 1);
     if (!done) return;
-    for (int i = 0; i < fi->nchannels; i++) {
+    for (int i = 0; i < n; i++) {
         if (done[i]) continue;
-        size_t ll = layer_len(fi->names[i]);
+        size_t ll = layer_len(names[i]);
         int uniform = 1;
-        for (int j = i; j < fi->nchannels; j++)
-            if (!done[j] && same_layer(fi->names[i], fi->names[j]) &&
-                strcmp(fi->types[i], fi->types[j]))
+        for (int j = i; j < n; j++)
+            if (!done[j] && same_layer(names[i], names[j]) && strcmp(types[i], types[j]))
                 uniform = 0;
-        printf("    ");
-        if (ll) printf("%.*s:", (int)ll, fi->names[i]);
-        for (int j = i; j < fi->nchannels; j++) {
-            if (done[j] || !same_layer(fi->names[i], fi->names[j])) continue;
+        printf("%s", indent);
+        if (ll) printf("%.*s:", (int)ll, names[i]);
+        for (int j = i; j < n; j++) {
+            if (done[j] || !same_layer(names[i], names[j])) continue;
             done[j] = 1;
-            const char *short_name = fi->names[j] + (ll ? ll + 1 : 0);
+            const char *short_name = names[j] + (ll ? ll + 1 : 0);
             if (j != i || ll) printf(" ");
             if (uniform)
                 printf("%s", short_name);
             else
-                printf("%s:%s", short_name, fi->types[j]);
+                printf("%s:%s", short_name, types[j]);
         }
-        if (uniform) printf(" (%s)", fi->types[i]);
+        if (uniform) printf(" (%s)", types[i]);
         printf("\n");
     }
     free(done);
+}
+
+/* A part's layout beyond its channels: tiles, MIP levels, pixel aspect, deep data. */
+static void print_layout(const nprfx_part_info *p, const char *sep)
+{
+    if (p->tile_w > 0) printf("%stiled %dx%d", sep, p->tile_w, p->tile_h), sep = ", ";
+    if (p->miplevels > 1)
+        printf("%s%d MIP levels (reads take level 0)", sep, p->miplevels), sep = ", ";
+    if (p->pixel_aspect != 1.0f) printf("%spixel aspect %g", sep, p->pixel_aspect), sep = ", ";
+    if (p->deep) printf("%sdeep (reads refuse it: flatten it first)", sep);
+}
+
+/* Views, and every part of a multi-part file with what a read without "part" takes; a single
+ * part's layout on one line. */
+static void print_parts(const nprfx_file_info *fi)
+{
+    if (fi->nviews > 0) {
+        printf("    views:");
+        for (int v = 0; v < fi->nviews; v++)
+            printf("%s %s%s", v ? "," : "", fi->views[v], v == 0 ? " (default)" : "");
+        printf("\n");
+    }
+    if (fi->nparts == 1) {
+        const nprfx_part_info *p = &fi->parts[0];
+        if (p->tile_w > 0 || p->miplevels > 1 || p->pixel_aspect != 1.0f || p->deep) {
+            printf("    layout: ");
+            print_layout(p, "");
+            printf("\n");
+        }
+        return;
+    }
+    for (int i = 0; i < fi->nparts; i++) {
+        const nprfx_part_info *p = &fi->parts[i];
+        printf("    part %d", p->index);
+        if (p->name[0]) printf(" '%s'", p->name);
+        if (p->view[0]) printf(", view %s", p->view);
+        print_rect(": data window", p->bounds);
+        print_rect(", display window", p->display);
+        print_layout(p, ", ");
+        printf(", %s\n", p->used ? "read by default"
+                         : p->view[0] && fi->nviews && strcmp(p->view, fi->views[0])
+                             ? "read with \"view\" or \"part\""
+                             : "read with \"part\"");
+        print_channels(p->names, p->types, p->nchannels, "        ");
+    }
 }
 
 static int info_file(nprfx_context *ctx, const char *path)
@@ -91,7 +138,8 @@ static int info_file(nprfx_context *ctx, const char *path)
     print_rect("    data window", fi.bounds);
     print_rect(", display window", fi.display);
     printf("\n");
-    print_channels(&fi);
+    print_channels(fi.names, fi.types, fi.nchannels, "    ");
+    print_parts(&fi);
     nprfx_file_info_free(&fi);
     return INFO_OK;
 }

@@ -45,8 +45,13 @@ typedef struct nprfx_graph_options {
     /* Non-zero: a temporal node whose render fetches many other frames (a recursion's warm-up)
      * reports them on stderr once it has taken a second, about once a second (appended). */
     int progress;
-    /* Non-zero: no frame-buffer pool and no memory plan: every frame is calloc'd and freed, and
-     * results stay in the cache until evicted (--no-pool; the pixels must not change). */
+    /* Appended: what a user should know but that is no error, e.g. which part of a multi-part
+     * file a read took and which parts it left out; once per read node (NULL: silent). */
+    void (*notice)(void *user, const char *message);
+    void *notice_user;
+    /* Appended. Non-zero: no frame-buffer pool and no memory plan: every frame is calloc'd and
+     * freed, and results stay in the cache until evicted (--no-pool; the pixels must not
+     * change). */
     int no_pool;
 } nprfx_graph_options;
 

@@ -114,7 +114,7 @@ void internal_graph_cache_evict(nprfx_graph *g)
 }
 
 centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_image *im,
-                                    char **names)
+                                    char **names, gmeta *meta)
 {
     if (!table_fit(g)) return NULL;
     centry *e = calloc(1, sizeof *e);
@@ -123,6 +123,8 @@ centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_i
     e->frame = frame;
     e->im = *im;
     e->names = names;
+    e->meta = *meta;
+    memset(meta, 0, sizeof *meta);
     e->gen = g->gen;
     internal_graph_touch(g, e);
     e->uses = g->plan_ready && node >= 0 && node < g->count ? g->plan_uses[node] : 0;

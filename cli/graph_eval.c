@@ -119,15 +119,61 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
     return NPRFX_OK;
 }
 
-static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
+static int push_want(gnode *n, char *sel)
+{
+    if ((n->nwants & (n->nwants - 1)) == 0) { /* 0, 1, 2, 4, ...: grow to the next power */
+        char **w = realloc(n->wants, (size_t)(n->nwants ? 2 * n->nwants : 1) * sizeof *w);
+        if (!w) return 0;
+        n->wants = w;
+    }
+    n->wants[n->nwants++] = sel;
+    return 1;
+}
+
+/* The channels the graph names on each read node: every reference's selection and the vectors
+ * convention's channels, which pick the part of a multi-part file when none is given. One pass
+ * over all references, at the first read. */
+static nprfx_result gather_wants(nprfx_graph *g)
+{
+    for (int i = 0; i < g->count; i++) {
+        gnode *n = &g->nodes[i];
+        n->wants_known = 1;
+        for (int k = 0; k < n->ninputs; k++) {
+            const gref *ref = &n->inputs[k];
+            if (ref->src < 0 || !ref->sel || g->nodes[ref->src].kind != GK_READ) continue;
+            if (!push_want(&g->nodes[ref->src], ref->sel))
+                return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        }
+        for (size_t v = 0; n->kind == GK_READ && n->vectors &&
+                           v < sizeof vec_conventions / sizeof vec_conventions[0];
+             v++)
+            if (!strcmp(n->vectors, vec_conventions[v].name) &&
+                !push_want(n, (char *)vec_conventions[v].layer))
+                return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    return NPRFX_OK;
+}
+
+static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
+                              gmeta *meta)
 {
     gnode *n = &g->nodes[node];
     char file[4096];
     internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
     nprfx_plate plate;
     memset(&plate, 0, sizeof plate);
-    nprfx_result r = nprfx_io_read(n->ctx, file, &plate);
+    nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
+    nprfx_read_options ro = {sizeof ro, n->part, n->read_view, (const char *const *)n->wants,
+                             n->nwants};
+    if ((r = nprfx_io_read_ex(n->ctx, file, &ro, &plate))) return r;
+    if (plate.note && !n->noted && g->notice) {
+        char msg[4600];
+        snprintf(msg, sizeof msg, "%s: read '%s': %s", plate.note_is_warning ? "warning" : "note",
+                 n->name, plate.note);
+        g->notice(g->notice_user, msg);
+    }
+    n->noted = 1;
     if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, &plate))) {
         nprfx_plate_free(&plate);
         return r;
@@ -157,6 +203,17 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     im->bounds = plate.bounds;
     *names = plate.names;
     internal_graph_variant_plate(g, im, *names);
+    meta->display = plate.display;
+    meta->pixel_aspect = plate.pixel_aspect;
+    /* The appended motion channels are floats of their own. */
+    unsigned char *types = realloc(plate.types, (size_t)plate.nchannels);
+    if (types) {
+        for (int c = 0; c < plate.nchannels; c++)
+            if (c >= plate.nchannels - (n->vectors && strcmp(n->vectors, "none") ? 4 : 0))
+                types[c] = NPRFX_PIXEL_FLOAT;
+        meta->types = types;
+        plate.types = NULL;
+    }
     internal_graph_frame_adopt(g, node, im);
     plate.pixels = NULL;
     plate.names = NULL;
@@ -165,7 +222,8 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     return NPRFX_OK;
 }
 
-static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
+static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
+                               gmeta *meta)
 {
     gnode *n = &g->nodes[node];
     int nc = nprfx_synth_channel_count();
@@ -181,6 +239,8 @@ static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image 
     *names = internal_graph_names_dup(nprfx_synth_channel_names(), nc);
     if (!*names) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     internal_graph_variant_plate(g, im, *names);
+    meta->display = im->bounds;
+    meta->pixel_aspect = 1.0f;
     return NPRFX_OK;
 }
 
@@ -424,7 +484,8 @@ static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_arg
     return NPRFX_OK;
 }
 
-static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names)
+static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
+                              gmeta *meta)
 {
     gnode *n = &g->nodes[node];
     const nprfx_node_desc *d = n->desc;
@@ -449,6 +510,22 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             frame_rect = inputs[k].bounds;
             have_rect = 1;
             first_input = k;
+            /* The output lies on its first aligned input's frame: same data window, display
+             * window and pixel aspect, which a write puts back. */
+            meta->display = rf.base[rf.nbase - 1].e->meta.display;
+            meta->pixel_aspect = rf.base[rf.nbase - 1].e->meta.pixel_aspect;
+        } else if (nprfx_rect_width(frame_rect) == nprfx_rect_width(inputs[k].bounds) &&
+                   nprfx_rect_height(frame_rect) == nprfx_rect_height(inputs[k].bounds) &&
+                   !nprfx_rect_equal(frame_rect, inputs[k].bounds)) {
+            r = nprfx_error(g->ctx, NPRFX_ERR_SIZE_MISMATCH,
+                            "node '%s': input '%s' has data window %dx%d%+d%+d but input '%s' has "
+                            "%dx%d%+d%+d at frame %d",
+                            n->name, d->inputs[k].name, nprfx_rect_width(inputs[k].bounds),
+                            nprfx_rect_height(inputs[k].bounds), inputs[k].bounds.x0,
+                            inputs[k].bounds.y0, d->inputs[first_input].name,
+                            nprfx_rect_width(frame_rect), nprfx_rect_height(frame_rect),
+                            frame_rect.x0, frame_rect.y0, frame);
+            goto done;
         } else if (!nprfx_rect_equal(frame_rect, inputs[k].bounds)) {
             /* Name what differs: equal sizes at other origins would otherwise read "is 200x150
              * but ... is 200x150". Data windows are written as oiiotool does, WxH+X+Y. */
@@ -481,6 +558,8 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             goto done;
         }
         frame_rect = nprfx_rect_make(0, 0, w, h);
+        meta->display = frame_rect;
+        meta->pixel_aspect = 1.0f;
     }
     nprfx_output_info oi;
     if ((r = nprfx_node_output_info(n->ctx, d, n->params, in_ch, &oi))) goto done;
@@ -535,6 +614,8 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     nprfx_image im;
     memset(&im, 0, sizeof im);
     char **names = NULL;
+    gmeta meta;
+    memset(&meta, 0, sizeof meta);
     nprfx_result r;
     /* The node's own time for --stats: evaluations nested in it (a temporal node's fetches of
      * other frames) are counted in their own nodes. */
@@ -542,33 +623,45 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     g->child_seconds = 0;
     switch (g->nodes[node].kind) {
     case GK_READ:
-        r = eval_read(g, node, frame, &im, &names);
+        r = eval_read(g, node, frame, &im, &names, &meta);
         break;
     case GK_SYNTH:
-        r = eval_synth(g, node, frame, &im, &names);
+        r = eval_synth(g, node, frame, &im, &names, &meta);
         break;
     case GK_NODE:
-        r = eval_node(g, node, frame, &im, &names);
+        r = eval_node(g, node, frame, &im, &names, &meta);
         break;
     default:
         r = nprfx_error(g->ctx, NPRFX_ERR_INTERNAL, "write nodes have no output");
         break;
     }
     /* A plate keeps only what its readers take: a 26-channel plate of which a graph reads 11
-     * then holds 11 while a temporal reader's window keeps it. */
+     * then holds 11 while a temporal reader's window keeps it (its channel types with it). */
     int from_reader = 0;
     if (!r && (g->nodes[node].kind == GK_READ || g->nodes[node].kind == GK_SYNTH))
-        from_reader =
-            !internal_graph_trim_plate(g, node, &im, &names) && g->nodes[node].kind == GK_READ;
+        from_reader = !internal_graph_trim_plate(g, node, &im, &names, &meta) &&
+                      g->nodes[node].kind == GK_READ;
     double el = internal_graph_now() - t0;
     g->stats[node].seconds += el - g->child_seconds;
     g->stats[node].calls++;
     g->child_seconds = saved_child + el;
-    if (r) return r;
-    *out = internal_graph_cache_insert(g, node, frame, &im, names);
+    if (r) {
+        free(meta.types);
+        return r;
+    }
+    *out = internal_graph_cache_insert(g, node, frame, &im, names, &meta);
     if (*out) (*out)->from_reader = from_reader;
     if (!*out) {
-        internal_graph_frame_release(g, &im);
+        free(meta.types);
+        if (from_reader) { /* the reader's own buffer, never the pool's */
+            size_t bytes = (size_t)nprfx_rect_width(im.bounds) *
+                           (size_t)nprfx_rect_height(im.bounds) * (size_t)im.channels *
+                           sizeof(float);
+            g->held_bytes -= bytes < g->held_bytes ? bytes : g->held_bytes;
+            nprfx_image_free(&im);
+        } else {
+            internal_graph_frame_release(g, &im);
+        }
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
     return NPRFX_OK;

@@ -4,7 +4,8 @@
  *
  * A graph is {"frames": "1-24", "nodes": {NAME: {...}, ...}}. Processing nodes are
  * {"node": ID, "inputs": {INPUT: REF}, "params": {PARAM: VALUE}}; the built-in I/O nodes are
- * read {"node": "read", "path": SEQ, "colorspace": CS, "vectors": CONVENTION},
+ * read {"node": "read", "path": SEQ, "colorspace": CS, "vectors": CONVENTION, "part": PART,
+ * "view": VIEW},
  * synth {"node": "synth", "scene": NAME, "size": "WxH"} and
  * write {"node": "write", "inputs": {"image": REF}, "path": SEQ, "preview": SEQ}.
  * A REF is "name" or "name:channels" (see channels.h).
@@ -123,6 +124,8 @@ static const io_field io_fields[] = {
     {"compression", offsetof(gnode, compression), 0, KB(GK_WRITE)},
     {"display", offsetof(gnode, display), 0, KB(GK_WRITE)},
     {"view", offsetof(gnode, view), 0, KB(GK_WRITE)},
+    {"part", offsetof(gnode, part), 0, KB(GK_READ)},
+    {"view", offsetof(gnode, read_view), 0, KB(GK_READ)},
     {"half", offsetof(gnode, half), 1, KB(GK_WRITE)},
     {"raw", offsetof(gnode, raw), 1, KB(GK_WRITE)},
     {"scene", offsetof(gnode, scene), 0, KB(GK_SYNTH)},
@@ -172,6 +175,16 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
                        n->name, key, kind_names[n->kind]);
 }
 
+/* The earlier entry of e's object with e's key, or NULL. JSON leaves a key given twice to the
+ * reader; a graph refuses it rather than keep one silently. Callers stop at the first unknown
+ * key, so the scan stays within the few keys a node, its inputs or its params can have. */
+static const cJSON *earlier_same_key(const cJSON *first, const cJSON *e)
+{
+    for (const cJSON *c = first; c && c != e; c = c->next)
+        if (c->string && e->string && !strcmp(c->string, e->string)) return c;
+    return NULL;
+}
+
 static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
 {
     if (!cJSON_IsObject(j))
@@ -213,6 +226,9 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
     n->half = 0;
     for (const cJSON *e = j->child; e; e = e->next) {
         nprfx_result r = NPRFX_OK;
+        if (earlier_same_key(j->child, e))
+            return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': entry '%s' is given twice",
+                               n->name, e->string);
         if (!strcmp(e->string, "node") || !strcmp(e->string, "comment")) continue;
         if (!strcmp(e->string, "inputs")) {
             if (!cJSON_IsObject(e))
@@ -220,6 +236,10 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
                                    "node '%s': \"inputs\" must be an object", n->name);
             for (const cJSON *in = e->child; in; in = in->next) {
                 int idx = -1;
+                if (earlier_same_key(e->child, in))
+                    return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                                       "node '%s': input '%s' is given twice", n->name,
+                                       in->string);
                 if (n->kind == GK_NODE)
                     idx = nprfx_node_input_index(n->desc, in->string);
                 else if (n->kind == GK_WRITE && !strcmp(in->string, "image"))
@@ -241,6 +261,10 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
                 return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
                                    "node '%s': \"params\" must be an object", n->name);
             for (const cJSON *pv = e->child; pv; pv = pv->next) {
+                if (earlier_same_key(e->child, pv))
+                    return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                                       "node '%s': param '%s' is given twice", n->name,
+                                       pv->string);
                 int pi = nprfx_node_param_index(n->desc, pv->string);
                 if (pi < 0)
                     return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_PARAM,
@@ -355,6 +379,10 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         g->variant = opt->variant;
     if (opt && opt->size >= offsetof(nprfx_graph_options, progress) + sizeof opt->progress)
         g->progress = opt->progress;
+    if (opt && opt->size >= offsetof(nprfx_graph_options, notice_user) + sizeof opt->notice_user) {
+        g->notice = opt->notice;
+        g->notice_user = opt->notice_user;
+    }
     if (opt && opt->size >= offsetof(nprfx_graph_options, no_pool) + sizeof opt->no_pool)
         g->no_pool = opt->no_pool;
     g->pool = nprfx_frame_pool_create(g->no_pool);
@@ -374,7 +402,20 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         goto done;
     }
     for (const cJSON *e = root->child; e; e = e->next) {
+        if (!strcmp(e->string, "nodes") && e != nodes) {
+            r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry 'nodes' is given twice");
+            goto done;
+        }
         if (!strcmp(e->string, "nodes") || !strcmp(e->string, "comment")) continue;
+        /* A key given twice is ambiguous (JSON leaves it to the reader): refuse it rather than
+         * take one silently. */
+        if ((!strcmp(e->string, "frames") && g->frames_text) ||
+            (!strcmp(e->string, "ocio") && g->ocio) ||
+            (!strcmp(e->string, "format") && g->fmt_text)) {
+            r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry '%s' is given twice",
+                            e->string);
+            goto done;
+        }
         if (!strcmp(e->string, "frames") && cJSON_IsString(e))
             g->frames_text = internal_graph_strdup(e->valuestring);
         else if (!strcmp(e->string, "frames") && cJSON_IsNumber(e)) {
@@ -518,6 +559,9 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->scene);
         free(n->display);
         free(n->view);
+        free(n->part);
+        free(n->read_view);
+        free(n->wants); /* the strings belong to references and tables */
     }
     free(g->nodes);
     free(g->name_slots);
@@ -620,6 +664,7 @@ void internal_graph_centry_free(nprfx_graph *g, centry *e)
     for (int c = 0; e->names && c < e->im.channels; c++)
         free(e->names[c]);
     free(e->names);
+    free(e->meta.types);
     if (e->from_reader) { /* the reader never takes a buffer from the pool */
         size_t bytes = e->bytes < g->held_bytes ? e->bytes : g->held_bytes;
         g->held_bytes -= bytes;

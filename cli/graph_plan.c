@@ -113,7 +113,7 @@ int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *n
     return kept;
 }
 
-int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names)
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta)
 {
     int nc = im->channels;
     unsigned char keep[1024]; /* wider plates stay whole */
@@ -167,6 +167,11 @@ int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char **
         if (!keep[c]) free((*names)[c]);
     free(*names);
     *names = sub;
+    /* Whatever is kept per channel follows the same map, so a plate written as read still
+     * writes each channel with its file type (map[c] >= c: compacted in place). */
+    if (meta && meta->types)
+        for (int c = 0; c < kept; c++)
+            meta->types[c] = meta->types[map[c]];
     /* A synth frame goes back to the pool: the next frame's synth takes it without faulting
      * its pages in again. A reader's plate goes back to the system: the reader allocates its
      * own, so idle in the pool it would only hold the memory the trim saves. */

@@ -95,9 +95,24 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         internal_graph_resolve_path(g, g->out_dir, n->path, frame, path, sizeof path);
         r = check_not_input(g, n, path, frame);
     }
+    /* A plate as read keeps each channel's file type (uint ids stay uint, half stays half); a
+     * node's result is float, or half with "half". Windows and pixel aspect go back as read. */
+    unsigned char types[256];
+    int have_types = 0;
+    if (!r && e->meta.types) {
+        int idx[256], count = 0;
+        r = internal_graph_input_channels(g, n, 0, (const char *const *)e->names, e->im.channels,
+                                          idx, &count);
+        for (int c = 0; !r && c < count && c < 256; c++)
+            types[c] = e->meta.types[idx[c]];
+        have_types = !r;
+    }
     if (!r) {
         nprfx_write_options wo = {sizeof wo, n->compression ? n->compression : "zip", n->half};
-        r = nprfx_io_write(n->ctx, path, &view, (const char *const *)names, NULL, &wo);
+        wo.types = have_types ? types : NULL;
+        wo.pixel_aspect = e->meta.pixel_aspect;
+        const nprfx_rect *display = nprfx_rect_empty(e->meta.display) ? NULL : &e->meta.display;
+        r = nprfx_io_write(n->ctx, path, &view, (const char *const *)names, display, &wo);
     }
     if (!r && n->preview) {
         nprfx_image pv;

@@ -32,13 +32,28 @@ typedef struct gnode {
     /* read / write / synth */
     char *path, *preview, *colorspace, *vectors, *compression, *scene;
     char *display, *view;
+    char *part, *read_view; /* read: the file's part and view ("view" of a write is OCIO's) */
     int half, raw, width, height;
+    int noted; /* read: its note on parts and views was given (once per run) */
+    /* read: the channels the graph asks of it by name (references' selections, the vectors
+     * convention), gathered for all reads at the first one; they pick the default part. */
+    char **wants;
+    int nwants, wants_known;
 } gnode;
+
+/* What a result carries besides pixels: the display window and pixel aspect a write puts back,
+ * and, for a plate as read, each channel's file type (so a copy writes uint ids as uint). */
+typedef struct gmeta {
+    nprfx_rect display;
+    float pixel_aspect;
+    unsigned char *types; /* NULL: float results of a node */
+} gmeta;
 
 typedef struct centry {
     int node, frame;
     nprfx_image im;
     char **names;
+    gmeta meta;
     size_t bytes;
     int pins;
     /* The memory plan (graph_plan.c): consumers at this frame that have not yet used it; and
@@ -106,6 +121,8 @@ struct nprfx_graph {
     int has_hook;
     int variant;              /* nprfx_graph_variant */
     int progress;             /* nprfx_graph_options.progress */
+    void (*notice)(void *user, const char *message);
+    void *notice_user;
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
 };
 
@@ -134,9 +151,11 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
  * nprfx_graph_eval, who sees all of it. Only a planned graph trims plates. */
 int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *names, int nc,
                                   unsigned char *keep);
-/* Keep only the channels of plate node's result (im, names) that its readers take, when every
- * reader then selects the very same channels (internal_graph_plate_channels); whether it did. */
-int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names);
+/* Keep only the channels of plate node's result (im, names, and meta's per-channel types when it
+ * has them) that its readers take, when every reader then selects the very same channels
+ * (internal_graph_plate_channels); whether it did. */
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names,
+                              gmeta *meta);
 /* Count a frame made elsewhere (a plate from the reader) as held. */
 void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im);
 /* Give a frame from internal_graph_frame_alloc (or adopted) back to the pool. */
@@ -156,10 +175,10 @@ void internal_graph_frame_sweep(nprfx_graph *g);
 void internal_graph_cache_drop(nprfx_graph *g, centry *e);
 /* The result cache (graph_cache.c): the entry of (node, frame), made the most recent, or NULL. */
 centry *internal_graph_cache_find(nprfx_graph *g, int node, int frame);
-/* Add a result (taking im and names), evicting unpinned old ones over the bounds; NULL: no memory.
- */
+/* Add a result (taking im, names and meta's types), evicting unpinned old ones over the bounds;
+ * NULL: no memory. */
 centry *internal_graph_cache_insert(nprfx_graph *g, int node, int frame, nprfx_image *im,
-                                    char **names);
+                                    char **names, gmeta *meta);
 /* Evict unpinned entries, oldest first, until the cache is within its bounds. */
 void internal_graph_cache_evict(nprfx_graph *g);
 /* Free every entry. */

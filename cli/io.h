@@ -13,13 +13,27 @@
 extern "C" {
 #endif
 
-/* A decoded plate: every channel of every part of an image file, interleaved. */
+/* The pixel type a channel has in its file, so that a copy can write it back the same way. */
+typedef enum nprfx_pixel_type {
+    NPRFX_PIXEL_FLOAT = 0, /* float, or any non-EXR type (read as normalised float) */
+    NPRFX_PIXEL_HALF = 1,
+    NPRFX_PIXEL_UINT = 2 /* EXR uint (object ids): read as integers, exact up to 2^24 */
+} nprfx_pixel_type;
+
+/* A decoded plate: the channels of one part of an image file (or of several parts with the same
+ * data and display windows), interleaved. docs/design.md §2.3 says which parts a read takes. */
 typedef struct nprfx_plate {
     nprfx_rect bounds;  /* data window */
     nprfx_rect display; /* display window */
     int nchannels;
-    char **names;  /* nchannels full channel names ("ViewLayer.Vector.X") */
-    float *pixels; /* nchannels floats per pixel, rows of bounds' width, top row first */
+    char **names;         /* nchannels full channel names ("ViewLayer.Vector.X") */
+    float *pixels;        /* nchannels floats per pixel, rows of bounds' width, top row first */
+    unsigned char *types; /* nchannels nprfx_pixel_type */
+    float pixel_aspect;   /* the PixelAspectRatio attribute (1 when absent) */
+    /* What a user should know about the read (malloc'd, NULL when nothing): which parts and view
+     * were used and which parts were not, uint values beyond float's exact range. */
+    char *note;
+    int note_is_warning; /* 1: parts were left out or values were rounded */
 } nprfx_plate;
 
 void nprfx_plate_free(nprfx_plate *p);
@@ -28,18 +42,54 @@ nprfx_image nprfx_plate_view(const nprfx_plate *p, int first, int count);
 /* Index of a channel by exact name, or -1. */
 int nprfx_plate_channel(const nprfx_plate *p, const char *name);
 
-/* Read all channels (all parts/subimages of the same size are concatenated). */
+/* Which part and view of a file a read takes. */
+typedef struct nprfx_read_options {
+    size_t size;      /* sizeof(nprfx_read_options) */
+    const char *part; /* a part's name or index (NULL or "": the default, below) */
+    const char *view; /* a view of a multi-view file (NULL or "": the file's default view) */
+    /* Channel selections (channels.h syntax) the caller needs: without `part`, the read takes
+     * the first group of parts (same data and display window) of the view that holds them all. */
+    const char *const *want;
+    int nwant;
+} nprfx_read_options;
+
+/* Read a file's default part group: the first part of the default view and every other part
+ * of that view with the same data and display windows, concatenated (repeated channel names get
+ * the part's name as a prefix). Deep parts are refused; tiled and MIP-mapped parts are read at
+ * level 0. */
 nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *out);
+/* The same with a part, a view and the channels wanted (opt NULL: as nprfx_io_read). */
+nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path, const nprfx_read_options *opt,
+                              nprfx_plate *out);
+
+/* One part (subimage) of a file, for `nprfx info`. */
+typedef struct nprfx_part_info {
+    int index;
+    char name[128]; /* "" when unnamed */
+    char view[64];  /* the part's "view" attribute, "" when none */
+    nprfx_rect bounds, display;
+    int nchannels;
+    char **names, **types;
+    int deep;           /* 1: deep data (refused by reads) */
+    int tile_w, tile_h; /* 0: scanlines */
+    int miplevels;      /* 1: no MIP map */
+    float pixel_aspect; /* PixelAspectRatio */
+    int used;           /* 1: a read without "part" or "view" takes it */
+} nprfx_part_info;
 
 /* Header facts for `nprfx info`. */
 typedef struct nprfx_file_info {
     char format[32]; /* "openexr" */
     int subimages;
-    nprfx_rect bounds, display;
-    int nchannels;
-    char **names;         /* nchannels */
-    char **types;         /* nchannels: "half", "float", "uint8", ... */
-    char compression[32]; /* "" when not applicable */
+    nprfx_rect bounds, display; /* what a default read delivers */
+    int nchannels;              /* ditto */
+    char **names;               /* nchannels */
+    char **types;               /* nchannels: "half", "float", "uint8", ... */
+    char compression[32];       /* "" when not applicable */
+    int nparts;                 /* == subimages */
+    nprfx_part_info *parts;
+    int nviews; /* the multiView attribute, or the parts' views; views[0] is the default */
+    char **views;
 } nprfx_file_info;
 nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprfx_file_info *out);
 void nprfx_file_info_free(nprfx_file_info *info);
@@ -57,11 +107,15 @@ typedef struct nprfx_attribute {
 } nprfx_attribute;
 
 typedef struct nprfx_write_options {
-    size_t size;             /* sizeof(nprfx_write_options) */
-    const char *compression; /* EXR: "zip" (default), "piz", "none", "dwaa", ... */
-    int half;                /* 1: store EXR channels as half floats */
+    size_t size;                       /* sizeof(nprfx_write_options) */
+    const char *compression;           /* EXR: "zip" (default), "piz", "none", "dwaa", ... */
+    int half;                          /* 1: store EXR channels as half floats */
     const nprfx_attribute *attributes; /* extra header attributes (NULL: none) */
     int nattributes;
+    /* Appended: read when size covers them. */
+    const unsigned char *types; /* per channel nprfx_pixel_type (NULL: all float, or half);
+                                   with `half`, float channels become half, uint stays uint */
+    float pixel_aspect;         /* the PixelAspectRatio attribute (0: not written) */
 } nprfx_write_options;
 
 /* The header attributes of a file's first subimage whose names begin with `prefix`, as text

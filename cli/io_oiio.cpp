@@ -6,6 +6,11 @@
 #include "io.h"
 #include "io_validate.h"
 
+extern "C" {
+#include "channels.h"
+}
+
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -50,74 +55,61 @@ std::string oiio_error(const ImageOutput *out)
     return e.empty() ? std::string("unknown error") : e;
 }
 
-/* One subimage that takes part in a read: the specs of all parts whose data window matches the
- * first one's are concatenated; parts of another resolution (e.g. a proxy) are skipped. */
+/* ---- reading: parts and views ------------------------------------------------------------- */
+
+/* One part (subimage) of a file, as its header describes it. */
 struct part {
-    int index;
+    int index = 0;
     ImageSpec spec;
-    std::vector<std::string> names; /* final, file-unique channel names */
+    std::string name; /* oiio:subimagename, "" when unnamed */
+    std::string view; /* the part's "view" attribute (multi-part stereo), "" when none */
+    int miplevels = 1;
 };
 
 struct header {
     std::string format;
-    int subimages = 0;
     std::vector<part> parts;
+    std::vector<std::string> views; /* views[0] is the default view; empty: not multi-view */
 };
 
-bool same_window(const ImageSpec &a, const ImageSpec &b)
+/* A channel a read delivers: file channel c of part p under its final, plate-unique name. */
+struct chan {
+    const part *p;
+    int c;
+    std::string name;
+    unsigned char type; /* nprfx_pixel_type */
+};
+
+/* What a read takes: parts of one data and display window, one view, and what to tell. */
+struct choice {
+    std::vector<const part *> group;
+    std::vector<chan> chans;
+    std::string view;
+    std::string note;
+    bool warn = false;
+};
+
+/* An error found while choosing: raised by the caller (nprfx info reports a file it cannot read
+ * instead of failing). */
+struct failure {
+    nprfx_result code = NPRFX_OK;
+    std::string message;
+};
+
+std::string part_label(const part &p)
 {
-    return a.x == b.x && a.y == b.y && a.width == b.width && a.height == b.height;
+    std::string s = "part " + std::to_string(p.index);
+    if (!p.name.empty()) s += " '" + p.name + "'";
+    return s;
 }
 
-/* Open path and collect the parts a read will deliver, with unique channel names. Multi-part
- * EXRs often repeat bare names ("R" in every part); a repeated name gets its part's name as a
- * layer prefix so every channel stays addressable. */
-nprfx_result scan(nprfx_context *ctx, const char *path, std::unique_ptr<ImageInput> &in, header &h)
+/* oiiotool's geometry notation, WxH+X+Y, as nprfx info prints windows. */
+std::string rect_text(nprfx_rect r)
 {
-    in = ImageInput::open(path);
-    if (!in) {
-        std::string e = OIIO::geterror();
-        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path,
-                           e.empty() ? "unknown error" : e.c_str());
-    }
-    h.format = in->format_name();
-    std::set<std::string> used;
-    for (int s = 0; in->seek_subimage(s, 0); s++) {
-        h.subimages++;
-        ImageSpec spec = in->spec();
-        if (spec.deep)
-            return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
-                               "'%s' subimage %d holds deep pixels, which nprfx cannot read", path,
-                               s);
-        if (spec.depth > 1)
-            return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
-                               "'%s' subimage %d is a volume (depth %d), which nprfx cannot read",
-                               path, s, spec.depth);
-        if (!h.parts.empty() && !same_window(spec, h.parts[0].spec)) continue;
-        part p;
-        p.index = s;
-        std::string partname = spec.get_string_attribute("oiio:subimagename");
-        for (int c = 0; c < spec.nchannels; c++) {
-            std::string n = c < (int)spec.channelnames.size() ? spec.channelnames[c] : "";
-            if (n.empty()) n = "channel" + std::to_string(c);
-            if (used.count(n)) {
-                std::string prefixed =
-                    (partname.empty() ? "subimage" + std::to_string(s) : partname) + "." + n;
-                for (int k = 2; used.count(prefixed); k++)
-                    prefixed = (partname.empty() ? "subimage" + std::to_string(s) : partname) +
-                               "." + n + "." + std::to_string(k);
-                n = prefixed;
-            }
-            used.insert(n);
-            p.names.push_back(n);
-        }
-        p.spec = spec;
-        h.parts.push_back(std::move(p));
-    }
-    OIIO::geterror(); /* the failed seek past the last subimage leaves a message behind */
-    in->geterror();
-    if (h.parts.empty()) return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' holds no image", path);
-    return NPRFX_OK;
+    char buf[80];
+    std::snprintf(buf, sizeof buf, "%dx%d%+d%+d", nprfx_rect_width(r), nprfx_rect_height(r), r.x0,
+                  r.y0);
+    return buf;
 }
 
 nprfx_rect data_rect(const ImageSpec &s)
@@ -128,6 +120,279 @@ nprfx_rect data_rect(const ImageSpec &s)
 nprfx_rect display_rect(const ImageSpec &s)
 {
     return nprfx_rect_make(s.full_x, s.full_y, s.full_x + s.full_width, s.full_y + s.full_height);
+}
+
+bool same_windows(const ImageSpec &a, const ImageSpec &b)
+{
+    return nprfx_rect_equal(data_rect(a), data_rect(b)) &&
+           nprfx_rect_equal(display_rect(a), display_rect(b));
+}
+
+unsigned char pixel_type(const header &h, const ImageSpec &s, int c)
+{
+    if (h.format != "openexr") return NPRFX_PIXEL_FLOAT; /* other formats: normalised floats */
+    TypeDesc t = s.channelformat(c);
+    return t == TypeDesc::UINT   ? NPRFX_PIXEL_UINT
+           : t == TypeDesc::HALF ? NPRFX_PIXEL_HALF
+                                 : NPRFX_PIXEL_FLOAT;
+}
+
+/* Open path and describe every part: windows, name, view, MIP levels; and the file's views: the
+ * multiView attribute (OpenEXR's single-part stereo), else the parts' "view" attributes in file
+ * order. Nothing is refused here; what a read cannot take is refused when it is chosen. */
+nprfx_result scan(nprfx_context *ctx, const char *path, std::unique_ptr<ImageInput> &in, header &h)
+{
+    in = ImageInput::open(path);
+    if (!in) {
+        std::string e = OIIO::geterror();
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path,
+                           e.empty() ? "unknown error" : e.c_str());
+    }
+    h.format = in->format_name();
+    for (int s = 0; in->seek_subimage(s, 0); s++) {
+        part p;
+        p.index = s;
+        p.spec = in->spec();
+        p.name = p.spec.get_string_attribute("oiio:subimagename");
+        p.view = p.spec.get_string_attribute("view");
+        while (p.miplevels < 64 && in->seek_subimage(s, p.miplevels))
+            p.miplevels++;
+        h.parts.push_back(std::move(p));
+    }
+    OIIO::geterror(); /* the failed seeks past the last subimage and level leave messages */
+    in->geterror();
+    if (h.parts.empty()) return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' holds no image", path);
+    for (const part &p : h.parts) {
+        const OIIO::ParamValue *mv = p.spec.find_attribute("multiView");
+        if (!mv || mv->type().basetype != TypeDesc::STRING) continue;
+        const OIIO::ustring *u = static_cast<const OIIO::ustring *>(mv->data());
+        size_t n = (size_t)mv->type().numelements() * (size_t)mv->nvalues();
+        for (size_t i = 0; i < n; i++)
+            if (!u[i].empty()) h.views.push_back(u[i].string());
+        if (!h.views.empty()) break;
+    }
+    if (h.views.empty())
+        for (const part &p : h.parts)
+            if (!p.view.empty() &&
+                std::find(h.views.begin(), h.views.end(), p.view) == h.views.end())
+                h.views.push_back(p.view);
+    return NPRFX_OK;
+}
+
+std::vector<std::string> split_dots(const std::string &s)
+{
+    std::vector<std::string> v;
+    size_t b = 0;
+    for (size_t e; (e = s.find('.', b)) != std::string::npos; b = e + 1)
+        v.push_back(s.substr(b, e - b));
+    v.push_back(s.substr(b));
+    return v;
+}
+
+/* The view a channel belongs to, and its name without the view. A part's "view" attribute says
+ * it for all its channels. Otherwise the view is a component of the name: OpenEXR's multi-view
+ * rule puts it next to last ("diffuse.right.R"), Nuke writes it first ("right.diffuse.R"). A name
+ * with no view component belongs to the default view (OpenEXR: "R" is the default view's). The
+ * bare names of every view are then alike, so a graph's references work on any view. */
+std::string channel_view(const header &h, const part &p, const std::string &name, std::string &bare)
+{
+    bare = name;
+    std::vector<std::string> views = p.view.empty() ? h.views : std::vector<std::string>{p.view};
+    if (views.empty()) return "";
+    std::vector<std::string> c = split_dots(name);
+    auto is_view = [&](const std::string &s) {
+        return std::find(views.begin(), views.end(), s) != views.end();
+    };
+    size_t at = c.size();
+    if (c.size() >= 2 && is_view(c[c.size() - 2]))
+        at = c.size() - 2;
+    else if (c.size() >= 2 && is_view(c[0]))
+        at = 0;
+    if (at == c.size()) return p.view.empty() ? h.views[0] : p.view;
+    std::string view = c[at];
+    c.erase(c.begin() + (long)at);
+    bare.clear();
+    for (size_t i = 0; i < c.size(); i++)
+        bare += (i ? "." : "") + c[i];
+    return view;
+}
+
+/* The channels a group of parts delivers for a view, with plate-unique names: multi-part files
+ * often repeat bare names ("R" in every part), and a repeated name gets its part's name as a
+ * layer prefix so every channel stays addressable. */
+std::vector<chan> group_channels(const header &h, const std::vector<const part *> &group,
+                                 const std::string &view)
+{
+    std::vector<chan> out;
+    std::set<std::string> used;
+    for (const part *p : group) {
+        const ImageSpec &s = p->spec;
+        std::string prefix = p->name.empty() ? "subimage" + std::to_string(p->index) : p->name;
+        for (int c = 0; c < s.nchannels; c++) {
+            std::string raw = c < (int)s.channelnames.size() ? s.channelnames[c] : "";
+            if (raw.empty()) raw = "channel" + std::to_string(c);
+            std::string n;
+            std::string v = channel_view(h, *p, raw, n);
+            if (!view.empty() && !v.empty() && v != view) continue;
+            if (used.count(n)) {
+                std::string prefixed = prefix + "." + n;
+                for (int k = 2; used.count(prefixed); k++)
+                    prefixed = prefix + "." + n + "." + std::to_string(k);
+                n = prefixed;
+            }
+            used.insert(n);
+            out.push_back({p, c, n, pixel_type(h, s, c)});
+        }
+    }
+    return out;
+}
+
+bool holds_all(const std::vector<chan> &chans, const nprfx_read_options &o)
+{
+    std::vector<const char *> names;
+    for (const chan &c : chans)
+        names.push_back(c.name.c_str());
+    std::vector<int> idx(chans.size() + 256);
+    for (int i = 0; i < o.nwant; i++) {
+        char bad[256];
+        int amb = 0;
+        if (!o.want[i] || !*o.want[i]) continue;
+        if (nprfx_channels_select(names.data(), (int)names.size(), o.want[i], idx.data(),
+                                  (int)idx.size(), bad, sizeof bad, &amb) < 0)
+            return false;
+    }
+    return true;
+}
+
+failure refuse_part(const char *path, const part &p)
+{
+    if (p.spec.deep)
+        return {NPRFX_ERR_UNSUPPORTED,
+                "'" + std::string(path) + "' " + part_label(p) +
+                    " holds deep data (several samples per pixel), which nprfx cannot read: "
+                    "flatten it first, e.g. oiiotool '" +
+                    path + "' --flatten -o flat.exr"};
+    if (p.spec.depth > 1)
+        return {NPRFX_ERR_UNSUPPORTED, "'" + std::string(path) + "' " + part_label(p) +
+                                           " is a volume (depth " + std::to_string(p.spec.depth) +
+                                           "), which nprfx cannot read"};
+    return {};
+}
+
+std::string list_text(const std::vector<std::string> &v)
+{
+    std::string s;
+    for (const std::string &x : v)
+        s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
+
+/* Choose the parts and view a read takes (docs/design.md §2.3). */
+failure choose(const char *path, const header &h, const nprfx_read_options &o, choice &ch)
+{
+    const std::string file = "'" + std::string(path) + "'";
+    const std::string want_view = o.view && *o.view ? o.view : "";
+    if (!want_view.empty()) {
+        if (h.views.empty())
+            return {NPRFX_ERR_MISSING_INPUT,
+                    file + " has no view '" + want_view +
+                        "': it is not a multi-view file (no multiView attribute, no part with a "
+                        "view)"};
+        if (std::find(h.views.begin(), h.views.end(), want_view) == h.views.end())
+            return {NPRFX_ERR_MISSING_INPUT,
+                    file + " has no view '" + want_view + "' (views: " + list_text(h.views) + ")"};
+    }
+    ch.view = !want_view.empty() ? want_view : h.views.empty() ? "" : h.views[0];
+    if (o.part && *o.part) {
+        const part *found = nullptr;
+        for (const part &p : h.parts)
+            if (p.name == o.part) found = &p;
+        char *end = nullptr;
+        long i = std::strtol(o.part, &end, 10);
+        if (!found && end != o.part && !*end && i >= 0 && i < (long)h.parts.size())
+            found = &h.parts[(size_t)i];
+        if (!found) {
+            std::vector<std::string> labels;
+            for (const part &p : h.parts)
+                labels.push_back(p.name.empty() ? std::to_string(p.index)
+                                                : std::to_string(p.index) + " '" + p.name + "'");
+            return {NPRFX_ERR_MISSING_INPUT,
+                    file + " has no part '" + o.part +
+                        "' (parts, by index and name: " + list_text(labels) + ")"};
+        }
+        if (!found->view.empty()) {
+            if (!want_view.empty() && found->view != want_view)
+                return {NPRFX_ERR_MISSING_INPUT, file + " " + part_label(*found) + " is view '" +
+                                                     found->view + "', not view '" + want_view +
+                                                     "'"};
+            ch.view = found->view;
+        }
+        failure f = refuse_part(path, *found);
+        if (f.code) return f;
+        ch.group = {found};
+        ch.chans = group_channels(h, ch.group, ch.view);
+    } else {
+        /* Groups of same-window parts of the view, in file order: the first that holds every
+         * channel the caller wants, else the first. */
+        std::vector<std::vector<const part *>> groups;
+        const part *refused = nullptr;
+        for (const part &p : h.parts) {
+            if (!p.view.empty() && p.view != ch.view) continue;
+            if (refuse_part(path, p).code) {
+                if (!refused) refused = &p;
+                continue;
+            }
+            bool placed = false;
+            for (auto &g : groups)
+                if (same_windows(g[0]->spec, p.spec)) {
+                    g.push_back(&p);
+                    placed = true;
+                    break;
+                }
+            if (!placed) groups.push_back({&p});
+        }
+        if (groups.empty()) {
+            if (refused) return refuse_part(path, *refused);
+            return {NPRFX_ERR_MISSING_INPUT, file + " has no part of view '" + ch.view + "'"};
+        }
+        size_t pick = 0;
+        for (size_t g = 0; g < groups.size(); g++)
+            if (holds_all(group_channels(h, groups[g], ch.view), o)) {
+                pick = g;
+                break;
+            }
+        ch.group = groups[pick];
+        ch.chans = group_channels(h, ch.group, ch.view);
+    }
+    if (ch.chans.empty())
+        return {NPRFX_ERR_MISSING_INPUT, file + " " + part_label(*ch.group[0]) +
+                                             " has no channels of view '" + ch.view + "'"};
+    if (h.parts.size() > 1 || !h.views.empty()) {
+        std::string used, unused;
+        for (const part *p : ch.group)
+            used += (used.empty() ? "" : ", ") + part_label(*p);
+        for (const part &p : h.parts) {
+            if (std::find(ch.group.begin(), ch.group.end(), &p) != ch.group.end()) continue;
+            std::string why;
+            if (!p.view.empty() && p.view != ch.view)
+                why = "view '" + p.view + "'";
+            else if (p.spec.deep)
+                why = "deep";
+            else if (p.spec.depth > 1)
+                why = "volume";
+            else
+                why = "data window " + rect_text(data_rect(p.spec)) + ", display window " +
+                      rect_text(display_rect(p.spec));
+            /* Parts of other views, or left out by the caller's own choice, are no surprise. */
+            if (why.compare(0, 5, "view ") && !(o.part && *o.part)) ch.warn = true;
+            unused += (unused.empty() ? "" : ", ") + part_label(p) + " (" + why + ")";
+        }
+        ch.note = file + ": read " + used;
+        if (!ch.view.empty()) ch.note += ", view '" + ch.view + "'";
+        if (!unused.empty())
+            ch.note += "; not used: " + unused + (ch.warn ? " (set \"part\" to read another)" : "");
+    }
+    return {};
 }
 
 char *dup_cstr(const std::string &s)
@@ -314,104 +579,147 @@ uint8_t quantize(float v)
     return (uint8_t)std::lrintf(v * 255.0f);
 }
 
-} // namespace
-
 /* ---- reading ------------------------------------------------------------------------------ */
 
-extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *out)
+/* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
+nprfx_read_options read_options(const nprfx_read_options *opt)
+{
+    nprfx_read_options o;
+    std::memset(&o, 0, sizeof o);
+    o.size = sizeof o;
+    if (opt && opt->size >= sizeof(size_t))
+        std::memcpy(&o, opt, opt->size < sizeof o ? opt->size : sizeof o);
+    return o;
+}
+
+/* The largest integer float32 holds exactly, with every integer below it. */
+const uint32_t float_exact_max = 1u << 24;
+
+} // namespace
+
+extern "C" nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path,
+                                         const nprfx_read_options *opt, nprfx_plate *out)
 {
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_read: NULL argument");
     std::memset(out, 0, sizeof *out);
     /* Damaged files are refused before OIIO allocates anything (io_validate.h). */
     if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_READ)) return g;
+    const nprfx_read_options o = read_options(opt);
     try {
         std::unique_ptr<ImageInput> in;
         header h;
         nprfx_result r = scan(ctx, path, in, h);
         if (r) return r;
-        const ImageSpec &first = h.parts[0].spec;
+        choice ch;
+        failure f = choose(path, h, o, ch);
+        if (f.code) return nprfx_error(ctx, f.code, "%s", f.message.c_str());
+        const ImageSpec &first = ch.group[0]->spec;
+        const std::string where = part_label(*ch.group[0]) + " of '" + path + "'";
         std::vector<std::string> names;
-        for (const part &p : h.parts)
-            names.insert(names.end(), p.names.begin(), p.names.end());
+        for (const chan &c : ch.chans)
+            names.push_back(c.name);
         size_t nch = names.size();
         size_t npix = (size_t)first.width * (size_t)first.height;
-        if (nch == 0 || npix == 0)
-            return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' holds an empty image (%dx%d, %zu channels)",
-                               path, first.width, first.height, nch);
+        if (npix == 0)
+            return nprfx_error(ctx, NPRFX_ERR_IO, "%s holds an empty image (%dx%d, %zu channels)",
+                               where.c_str(), first.width, first.height, nch);
         if (npix > SIZE_MAX / sizeof(float) / nch)
-            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "'%s' is too large to read", path);
-        float *pixels = static_cast<float *>(std::malloc(npix * nch * sizeof(float)));
-        char **cnames = dup_names(names);
-        if (!pixels || !cnames) {
-            std::free(pixels);
-            if (cnames)
-                for (size_t i = 0; i < nch; i++)
-                    std::free(cnames[i]);
-            std::free(cnames);
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "%s is too large to read",
+                               where.c_str());
+        out->pixels = static_cast<float *>(std::malloc(npix * nch * sizeof(float)));
+        out->types = static_cast<unsigned char *>(std::malloc(nch));
+        out->names = dup_names(names);
+        out->nchannels = out->names ? (int)nch : 0;
+        if (!out->pixels || !out->names || !out->types) {
+            nprfx_plate_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY,
-                               "out of memory reading '%s' (%dx%d, %zu channels)", path,
+                               "out of memory reading %s (%dx%d, %zu channels)", where.c_str(),
                                first.width, first.height, nch);
         }
         out->bounds = data_rect(first);
         out->display = display_rect(first);
-        out->nchannels = (int)nch;
-        out->names = cnames;
-        out->pixels = pixels;
+        out->pixel_aspect = first.get_float_attribute("PixelAspectRatio", 1.0f);
+        for (size_t k = 0; k < nch; k++)
+            out->types[k] = ch.chans[k].type;
 
         const OIIO::stride_t xstride = (OIIO::stride_t)(nch * sizeof(float));
         const OIIO::stride_t ystride = xstride * first.width;
-        const bool exr = h.format == "openexr";
         std::vector<uint32_t> ubuf;
-        size_t offset = 0;
-        for (const part &p : h.parts) {
-            const ImageSpec &s = p.spec;
-            /* Runs of channels read in one call. EXR UINT channels (object ids) are read as
-             * integers and cast, since a float read would normalise them to [0,1]. */
-            for (int c0 = 0; c0 < s.nchannels;) {
-                bool as_uint = exr && s.channelformat(c0) == TypeDesc::UINT;
-                int c1 = c0 + 1;
-                while (c1 < s.nchannels &&
-                       (exr && s.channelformat(c1) == TypeDesc::UINT) == as_uint)
-                    c1++;
-                float *dst = pixels + offset + c0;
-                bool ok;
+        std::string rounded;
+        /* Runs of adjacent file channels of one part and kind, read in one call each. EXR UINT
+         * channels (object ids) are read as integers and cast, since a float read would
+         * normalise them to [0,1]. Tiled and MIP-mapped parts are read at level 0. */
+        for (size_t k0 = 0; k0 < nch;) {
+            const chan &a = ch.chans[k0];
+            const bool as_uint = a.type == NPRFX_PIXEL_UINT;
+            size_t k1 = k0 + 1;
+            while (k1 < nch && ch.chans[k1].p == a.p && ch.chans[k1].c == a.c + (int)(k1 - k0) &&
+                   (ch.chans[k1].type == NPRFX_PIXEL_UINT) == as_uint)
+                k1++;
+            const int c0 = a.c, c1 = a.c + (int)(k1 - k0), n = c1 - c0;
+            float *dst = out->pixels + k0;
+            bool ok;
+            if (!as_uint) {
                 /* The read deadline (NPRFX_READ_TIMEOUT) stops OIIO between strips of rows. */
-                if (!as_uint) {
-                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride,
-                                        OIIO::AutoStride, nprfx_io_read_progress, nullptr);
-                } else {
-                    int n = c1 - c0;
-                    ubuf.resize(npix * (size_t)n);
-                    ok = in->read_image(p.index, 0, c0, c1, TypeDesc::UINT, ubuf.data(),
-                                        OIIO::AutoStride, OIIO::AutoStride, OIIO::AutoStride,
-                                        nprfx_io_read_progress, nullptr);
-                    for (size_t i = 0; ok && i < npix; i++)
-                        for (int k = 0; k < n; k++)
-                            dst[i * nch + k] = (float)ubuf[i * n + k];
-                }
-                if (nprfx_io_deadline_passed()) {
-                    oiio_error(in.get());
-                    nprfx_plate_free(out);
-                    return nprfx_io_deadline_error(ctx, path);
-                }
-                if (!ok) {
-                    std::string e = oiio_error(in.get());
-                    nprfx_plate_free(out);
-                    return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read channels %s..%s of '%s': %s",
-                                       p.names[c0].c_str(), p.names[c1 - 1].c_str(), path,
-                                       e.c_str());
-                }
-                c0 = c1;
+                ok = in->read_image(a.p->index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride,
+                                    OIIO::AutoStride, nprfx_io_read_progress, nullptr);
+            } else {
+                ubuf.resize(npix * (size_t)n);
+                ok = in->read_image(a.p->index, 0, c0, c1, TypeDesc::UINT, ubuf.data(), OIIO::AutoStride,
+                                    OIIO::AutoStride, OIIO::AutoStride, nprfx_io_read_progress,
+                                    nullptr);
+                std::vector<uint32_t> umax((size_t)n, 0);
+                for (size_t i = 0; ok && i < npix; i++)
+                    for (int j = 0; j < n; j++) {
+                        uint32_t v = ubuf[i * n + j];
+                        dst[i * nch + j] = (float)v;
+                        if (v > umax[j]) umax[j] = v;
+                    }
+                for (int j = 0; ok && j < n; j++)
+                    if (umax[j] > float_exact_max)
+                        rounded += (rounded.empty() ? "" : ", ") + std::string("'") +
+                                   ch.chans[k0 + j].name + "' (up to " + std::to_string(umax[j]) +
+                                   ")";
             }
-            offset += (size_t)s.nchannels;
+            if (nprfx_io_deadline_passed()) {
+                oiio_error(in.get());
+                nprfx_plate_free(out);
+                return nprfx_io_deadline_error(ctx, path);
+            }
+            if (!ok) {
+                std::string e = oiio_error(in.get());
+                nprfx_plate_free(out);
+                return nprfx_error(ctx, NPRFX_ERR_IO,
+                                   "cannot read channels %s..%s of %s of '%s': %s",
+                                   ch.chans[k0].name.c_str(), ch.chans[k1 - 1].name.c_str(),
+                                   part_label(*a.p).c_str(), path, e.c_str());
+            }
+            k0 = k1;
         }
         in->close();
+        std::string note = ch.note;
+        if (!rounded.empty()) {
+            note += (note.empty() ? "'" + std::string(path) + "': " : "; ") + "uint channels " +
+                    rounded +
+                    " hold integers above 2^24 = 16777216, which float pixels cannot all hold: "
+                    "they are rounded to the nearest float (distinct ids may merge)";
+            ch.warn = true;
+        }
+        if (!note.empty()) {
+            out->note = dup_cstr(note);
+            out->note_is_warning = ch.warn;
+        }
         return NPRFX_OK;
     } catch (const std::exception &e) {
         nprfx_plate_free(out);
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
     }
+}
+
+extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *out)
+{
+    return nprfx_io_read_ex(ctx, path, nullptr, out);
 }
 
 extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprfx_file_info *out)
@@ -425,23 +733,68 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
         header h;
         nprfx_result r = scan(ctx, path, in, h);
         if (r) return r;
-        const ImageSpec &first = h.parts[0].spec;
+        /* What a default read takes; a file no read can take (deep only) is still described,
+         * from its first part. */
+        choice ch;
+        const nprfx_read_options o = read_options(nullptr);
+        if (choose(path, h, o, ch).code) {
+            ch.group = {&h.parts[0]};
+            ch.chans.clear();
+            for (int c = 0; c < h.parts[0].spec.nchannels; c++)
+                ch.chans.push_back({&h.parts[0], c,
+                                    c < (int)h.parts[0].spec.channelnames.size()
+                                        ? h.parts[0].spec.channelnames[c]
+                                        : "channel" + std::to_string(c),
+                                    0});
+            ch.group.clear();
+        }
+        const ImageSpec &first = ch.chans.empty() ? h.parts[0].spec : ch.chans[0].p->spec;
         std::vector<std::string> names, types;
-        for (const part &p : h.parts)
-            for (int c = 0; c < p.spec.nchannels; c++) {
-                names.push_back(p.names[c]);
-                types.push_back(p.spec.channelformat(c).c_str());
-            }
+        for (const chan &c : ch.chans) {
+            names.push_back(c.name);
+            types.push_back(c.p->spec.channelformat(c.c).c_str());
+        }
         copy_field(out->format, sizeof out->format, h.format);
         copy_field(out->compression, sizeof out->compression,
                    first.get_string_attribute("compression"));
-        out->subimages = h.subimages;
+        out->subimages = (int)h.parts.size();
         out->bounds = data_rect(first);
         out->display = display_rect(first);
         out->names = dup_names(names);
         out->types = dup_names(types);
         out->nchannels = (int)names.size();
-        if (!out->names || !out->types) {
+        out->views = dup_names(h.views);
+        out->nviews = out->views ? (int)h.views.size() : 0;
+        out->parts =
+            static_cast<nprfx_part_info *>(std::calloc(h.parts.size(), sizeof(nprfx_part_info)));
+        bool ok = out->names && out->types && out->views && out->parts;
+        for (size_t i = 0; ok && i < h.parts.size(); i++) {
+            const part &p = h.parts[i];
+            nprfx_part_info &pi = out->parts[i];
+            out->nparts = (int)i + 1;
+            pi.index = p.index;
+            copy_field(pi.name, sizeof pi.name, p.name);
+            copy_field(pi.view, sizeof pi.view, p.view);
+            pi.bounds = data_rect(p.spec);
+            pi.display = display_rect(p.spec);
+            pi.deep = p.spec.deep ? 1 : 0;
+            pi.tile_w = p.spec.tile_width;
+            pi.tile_h = p.spec.tile_height;
+            pi.miplevels = p.miplevels;
+            pi.pixel_aspect = p.spec.get_float_attribute("PixelAspectRatio", 1.0f);
+            pi.used = std::find(ch.group.begin(), ch.group.end(), &p) != ch.group.end();
+            std::vector<std::string> pn, pt;
+            for (int c = 0; c < p.spec.nchannels; c++) {
+                pn.push_back(c < (int)p.spec.channelnames.size() ? p.spec.channelnames[c]
+                                                                 : "channel" + std::to_string(c));
+                pt.push_back(p.spec.channelformat(c).c_str());
+            }
+            pi.names = dup_names(pn);
+            pi.types = dup_names(pt);
+            pi.nchannels = p.spec.nchannels;
+            ok = pi.names && pi.types;
+        }
+        if (!ok) {
             nprfx_file_info_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'", path);
         }
@@ -454,8 +807,8 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
 }
 
 extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char *path,
-                                                 const char *prefix, char ***names,
-                                                 char ***values, int *count)
+                                                 const char *prefix, char ***names, char ***values,
+                                                 int *count)
 {
     if (!path || !names || !values || !count)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
@@ -522,7 +875,7 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
             ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': empty image (%dx%d, %d channels)",
             path, nprfx_rect_width(im->bounds), nprfx_rect_height(im->bounds), im->channels);
     /* Read only the option fields the caller's struct has (size-versioned). */
-    nprfx_write_options o = {sizeof o, "zip", 0, nullptr, 0};
+    nprfx_write_options o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
     if (opt) {
         if (opt->size < offsetof(nprfx_write_options, compression) + sizeof(const char *) ||
             opt->size > sizeof o)
@@ -595,9 +948,52 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
                 spec.attribute(a.name, a.value);
             }
         }
-        return write_atomic(ctx, path, spec, TypeDesc::FLOAT, im->data,
-                            (OIIO::stride_t)(im->pixel_stride * (ptrdiff_t)sizeof(float)),
-                            (OIIO::stride_t)(im->row_stride * (ptrdiff_t)sizeof(float)));
+        if (o.pixel_aspect > 0.0f) spec.attribute("PixelAspectRatio", o.pixel_aspect);
+        bool mixed = false;
+        for (int c = 0; o.types && c < im->channels; c++)
+            mixed |= o.types[c] != NPRFX_PIXEL_FLOAT;
+        if (!mixed)
+            return write_atomic(ctx, path, spec, TypeDesc::FLOAT, im->data,
+                                (OIIO::stride_t)(im->pixel_stride * (ptrdiff_t)sizeof(float)),
+                                (OIIO::stride_t)(im->row_stride * (ptrdiff_t)sizeof(float)));
+        /* Channels of their own types (a copy keeps each channel's file type): the pixels go
+         * out in those native types, since OIIO would scale floats into the full uint range.
+         * uint takes the float's integer value; anything else in a uint channel is rounded. */
+        std::vector<TypeDesc> formats;
+        size_t bytes = 0;
+        for (int c = 0; c < im->channels; c++) {
+            TypeDesc t = o.types[c] == NPRFX_PIXEL_UINT             ? TypeDesc::UINT
+                         : o.types[c] == NPRFX_PIXEL_HALF || o.half ? TypeDesc::HALF
+                                                                    : TypeDesc::FLOAT;
+            formats.push_back(t);
+            bytes += t.size();
+        }
+        spec.set_format(TypeDesc::FLOAT); /* the header's default; channelformats rule */
+        spec.channelformats = formats;
+        std::vector<unsigned char> buf((size_t)w * (size_t)h * bytes);
+        unsigned char *q = buf.data();
+        for (int y = im->bounds.y0; y < im->bounds.y1; y++)
+            for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
+                const float *p = nprfx_image_at(im, x, y);
+                for (int c = 0; c < im->channels; c++) {
+                    float v = p[c];
+                    if (formats[c] == TypeDesc::UINT) {
+                        uint32_t u = !(v > 0.0f)          ? 0u
+                                     : v >= 4294967295.0f ? 4294967295u
+                                                          : (uint32_t)std::lrint(v);
+                        std::memcpy(q, &u, 4);
+                        q += 4;
+                    } else if (formats[c] == TypeDesc::HALF) {
+                        OIIO::convert_pixel_values(TypeDesc::FLOAT, &v, TypeDesc::HALF, q, 1);
+                        q += 2;
+                    } else {
+                        std::memcpy(q, &v, 4);
+                        q += 4;
+                    }
+                }
+            }
+        return write_atomic(ctx, path, spec, TypeDesc::UNKNOWN, buf.data(), OIIO::AutoStride,
+                            OIIO::AutoStride);
     } catch (const std::exception &e) {
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, e.what());
     }

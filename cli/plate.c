@@ -17,6 +17,8 @@ void nprfx_plate_free(nprfx_plate *p)
     if (!p) return;
     free_names(p->names, p->nchannels);
     free(p->pixels);
+    free(p->types);
+    free(p->note);
     memset(p, 0, sizeof *p);
 }
 
@@ -50,5 +52,11 @@ void nprfx_file_info_free(nprfx_file_info *info)
     if (!info) return;
     free_names(info->names, info->nchannels);
     free_names(info->types, info->nchannels);
+    for (int i = 0; info->parts && i < info->nparts; i++) {
+        free_names(info->parts[i].names, info->parts[i].nchannels);
+        free_names(info->parts[i].types, info->parts[i].nchannels);
+    }
+    free(info->parts);
+    free_names(info->views, info->nviews);
     memset(info, 0, sizeof *info);
 }

@@ -2,7 +2,7 @@
 # Damaged EXRs are refused quickly, in bounded memory, with a message naming the file, and never
 # read into garbage (issue 15). The corpus is generated here from valid EXRs the generator writes
 # itself (tests/data/make_damaged.c, plus a mipmapped one from oiiotool); the fuzzers' findings in
-# tests/data/regressions/ are replayed with it.
+# tests/data/regressions/read/ are replayed with it.
 #
 # Two passes:
 #   1. every file through `nprfx info --io-test damaged` (one process; a refusal takes about a
@@ -53,8 +53,8 @@ find corpus/damaged -type f -name '*.exr' | sort >>list.txt
 ndamaged=$(($(wc -l <list.txt) - nbases))
 [ "$ndamaged" -ge 1000 ] || bad "only $ndamaged damaged files were generated"
 # The fuzzers' findings: each must now be refused or read cleanly, like an "any" file.
-if [ -d "$SRC/tests/data/regressions" ]; then
-    find "$SRC/tests/data/regressions" -type f ! -name '*.md' | sort >>list.txt
+if [ -d "$SRC/tests/data/regressions/read" ]; then
+    find "$SRC/tests/data/regressions/read" -type f ! -name '*.md' | sort >>list.txt
 fi
 echo "corpus: $nbases valid bases, $ndamaged damaged files, $(($(wc -l <list.txt) - ndamaged - nbases)) regressions"
 

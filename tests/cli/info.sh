@@ -49,6 +49,26 @@ has "parts.exr: openexr 32x24, 3 channels, 2 subimages, compression zip"
 has "small.png: png 8x8, 3 channels, 1 subimage"
 has "R G B (uint8)"
 
+# Each part of a multi-part file, with what a read takes by default.
+has "part 0 'subimage00': data window 32x24+8+4, display window 64x48+0+0, read by default"
+has "part 1 'subimage01': data window 64x48+0+0, display window 64x48+0+0, read with \"part\""
+has "Z (float)"
+
+# Tiles and MIP levels, pixel aspect, deep data (described, though reads refuse it), stereo parts.
+oiiotool --pattern constant:color=1,0.5,0 32x16 3 -d half -otex tex.exr \
+    --pattern constant:color=1,2 8x8 2 --chnames R,Z -d float --deepen -o deep.exr --pop \
+    --pattern constant:color=1,2,3 8x8 3 --attrib PixelAspectRatio 2.0 -o aspect.exr --pop \
+    --pattern constant:color=1,2,3 8x8 3 --attrib view left --attrib oiio:subimagename L \
+    --pattern constant:color=4,5,6 8x8 3 --attrib view right --attrib oiio:subimagename R \
+    --siappend -o stereo.exr
+expect_rc 0 "$NPRFX" info tex.exr deep.exr aspect.exr stereo.exr
+has "layout: tiled 64x64, 6 MIP levels (reads take level 0)" # maketx tiles 64x64
+has "layout: deep (reads refuse it: flatten it first)"
+has "layout: pixel aspect 2"
+has "views: left (default), right"
+has "part 0 'L', view left: data window 8x8+0+0, display window 8x8+0+0, read by default"
+has "part 1 'R', view right: data window 8x8+0+0, display window 8x8+0+0, read with \"view\" or \"part\""
+
 # A layer whose channels have different types lists each channel's type.
 oiiotool --pattern constant:color=1,2 4x4 2 --chnames P.x,P.y -d float -d P.x=half -o mixed.exr
 expect_rc 0 "$NPRFX" info mixed.exr

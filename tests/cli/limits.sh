@@ -55,6 +55,14 @@ sed 's/60000x60000/2000x2000/' format.json >format2.json
 expect_refused 2 "format2.json: frame 1 needs 61.0 MiB of frames at its peak, at node 'paper' \(its 2000x2000 frame with 4 channels, 61.0 MiB, joins the frames still held\): above the 20 MiB memory limit \(NPRFX_READ_LIMIT\); nothing was rendered" \
     env NPRFX_READ_LIMIT=20M "$NPRFX" run format2.json
 [ -e out.0001.exr ] && bad "format2.json wrote a frame above the limit"
+# run --check refuses it too (the plan reads no pixel and allocates no frame), and passes it under
+# a limit it fits.
+expect_refused 2 "format2.json: frame 1 needs 61.0 MiB of frames at its peak, at node 'paper'" \
+    env NPRFX_READ_LIMIT=20M "$NPRFX" run --check format2.json
+NPRFX_READ_LIMIT=80M "$NPRFX" run --check format2.json >out.txt 2>err.txt ||
+    bad "run --check under 80M: $(cat err.txt)"
+grep -q "format2.json: ok: 1 frame would write" out.txt || bad "run --check: $(cat out.txt)"
+[ -e out.0001.exr ] && bad "run --check wrote a frame"
 # --mem-limit overrides NPRFX_READ_LIMIT, both ways, and names itself.
 expect_refused 2 "at node 'paper' .* above the 20 MiB memory limit \(--mem-limit\); nothing was rendered" \
     env NPRFX_READ_LIMIT=8G "$NPRFX" run format2.json --mem-limit 20M

@@ -1,0 +1,125 @@
+/* nprfx-make-exr OUTDIR: the valid EXR layouts oiiotool cannot write, made with the OpenEXR
+ * library itself (tests/data/make_valid.sh calls it; tests/cli/corpus_valid.sh reads them):
+ *   uint_mixed.exr   half, float and uint channels in one part, ids up to 2^24, at an origin
+ *   uint_big.exr     uint ids above 2^24, which float pixels cannot all hold
+ *   mv_exr.exr       single-part stereo (multiView left, right), OpenEXR names: diffuse.right.R
+ *   mv_nuke.exr      the same with Nuke's names: right.diffuse.R
+ * oiiotool scales the values it writes into uint channels and cannot write the multiView
+ * attribute (OIIO 2.4), hence this program. The values are simple functions of (x, y, channel)
+ * so a test can say what a reader must find. */
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfMultiView.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+
+#include <Imath/half.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+struct channel {
+    std::string name;
+    Imf::PixelType type;
+    double scale; /* value = scale * (x + 10 y) + offset (uint: rounded) */
+    double offset;
+};
+
+/* Write one scanline part with the given channels over data window (x0, y0, w, h) inside
+ * display window (0, 0, dw, dh). */
+void write_file(const std::string &path, int x0, int y0, int w, int h, int dw, int dh,
+                const std::vector<channel> &chans, const std::vector<std::string> &views)
+{
+    Imath::Box2i display(Imath::V2i(0, 0), Imath::V2i(dw - 1, dh - 1));
+    Imath::Box2i data(Imath::V2i(x0, y0), Imath::V2i(x0 + w - 1, y0 + h - 1));
+    Imf::Header header(display, data);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const channel &c : chans)
+        header.channels().insert(c.name, Imf::Channel(c.type));
+    if (!views.empty()) Imf::addMultiView(header, Imf::StringVector(views.begin(), views.end()));
+    std::vector<std::vector<char>> store(chans.size());
+    Imf::FrameBuffer fb;
+    for (size_t k = 0; k < chans.size(); k++) {
+        const channel &c = chans[k];
+        size_t bytes = c.type == Imf::HALF ? 2 : 4;
+        store[k].resize((size_t)w * h * bytes);
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++) {
+                double v = c.scale * (x + 10.0 * y) + c.offset;
+                char *p = &store[k][((size_t)y * w + x) * bytes];
+                if (c.type == Imf::UINT) {
+                    uint32_t u = (uint32_t)(v + 0.5);
+                    std::memcpy(p, &u, 4);
+                } else if (c.type == Imf::HALF) {
+                    half hv((float)v);
+                    std::memcpy(p, &hv, 2);
+                } else {
+                    float f = (float)v;
+                    std::memcpy(p, &f, 4);
+                }
+            }
+        /* The slice's base points at pixel (0, 0) of the data window's coordinates. */
+        char *base = store[k].data() - ((ptrdiff_t)y0 * w + x0) * (ptrdiff_t)bytes;
+        fb.insert(c.name, Imf::Slice(c.type, base, bytes, bytes * (size_t)w));
+    }
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: nprfx-make-exr OUTDIR\n");
+        return 2;
+    }
+    const std::string dir = argv[1];
+    try {
+        /* ids count down from 2^24 = 16777216, the largest uint float32 pixels hold with all
+         * the integers below it. */
+        write_file(dir + "/uint_mixed.exr", -3, 2, 16, 8, 12, 12,
+                   {{"R", Imf::HALF, 0.25, 0.5},
+                    {"G", Imf::FLOAT, 0.001, -0.3},
+                    {"B", Imf::HALF, -0.5, 2.0},
+                    {"id", Imf::UINT, -1021.0, 16777216.0}},
+                   {});
+        /* 16777217 (2^24 + 1) and up: rounded by a float read. */
+        write_file(dir + "/uint_big.exr", 0, 0, 4, 4, 4, 4,
+                   {{"R", Imf::FLOAT, 0.1, 0.0}, {"id", Imf::UINT, 2.0, 16777217.0}}, {});
+        /* Stereo in one part: the default view's channels bare, the other view's named. */
+        write_file(dir + "/mv_exr.exr", 0, 0, 8, 6, 8, 6,
+                   {{"R", Imf::FLOAT, 0.01, 0.1},
+                    {"G", Imf::FLOAT, 0.01, 0.2},
+                    {"B", Imf::FLOAT, 0.01, 0.3},
+                    {"diffuse.R", Imf::HALF, 0.01, 0.4},
+                    {"right.R", Imf::FLOAT, 0.02, 1.1},
+                    {"right.G", Imf::FLOAT, 0.02, 1.2},
+                    {"right.B", Imf::FLOAT, 0.02, 1.3},
+                    {"diffuse.right.R", Imf::HALF, 0.02, 1.4}},
+                   {"left", "right"});
+        write_file(dir + "/mv_nuke.exr", 0, 0, 8, 6, 8, 6,
+                   {{"R", Imf::FLOAT, 0.01, 0.1},
+                    {"G", Imf::FLOAT, 0.01, 0.2},
+                    {"B", Imf::FLOAT, 0.01, 0.3},
+                    {"diffuse.R", Imf::HALF, 0.01, 0.4},
+                    {"right.R", Imf::FLOAT, 0.02, 1.1},
+                    {"right.G", Imf::FLOAT, 0.02, 1.2},
+                    {"right.B", Imf::FLOAT, 0.02, 1.3},
+                    {"right.diffuse.R", Imf::HALF, 0.02, 1.4}},
+                   {"left", "right"});
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "nprfx-make-exr: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
