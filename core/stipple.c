@@ -123,11 +123,26 @@ typedef struct seq_version {
     struct seq_version *older; /* kept until destroy: renders may still read them */
 } seq_version;
 
+/* A tone-correction curve measured for the params that determine it (same_curve_params). */
+typedef struct seq_curve {
+    nprfx_stipple_params key;
+    float curve[NPRFX_STIPPLE_CURVE_SIZE];
+} seq_curve;
+
+/* Curves kept per sequence: a graph rarely has more stipple looks than this. */
+#define SEQ_CURVES 8
+
 struct nprfx_stipple_sequence {
     pthread_mutex_t lock;        /* held while a longer version is built */
     _Atomic(seq_version *) head; /* the longest version; read without the lock */
     float *pre;                  /* preloaded points (on the grid), or NULL */
     int pre_count;
+    atomic_int refs; /* nprfx_stipple_sequence_retain; the last destroy frees */
+    /* The tone-correction curves measured with this sequence, so that every instance sharing
+     * it measures each curve once. Its own lock: measuring renders, which take `lock`. */
+    pthread_mutex_t curve_lock;
+    seq_curve curves[SEQ_CURVES];
+    int num_curves, next_curve;
 };
 
 nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_sequence **out)
@@ -140,14 +155,27 @@ nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_seq
         free(s);
         return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "stipple: cannot create a mutex");
     }
+    if (pthread_mutex_init(&s->curve_lock, NULL) != 0) {
+        pthread_mutex_destroy(&s->lock);
+        free(s);
+        return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "stipple: cannot create a mutex");
+    }
     atomic_init(&s->head, NULL);
+    atomic_init(&s->refs, 1);
     *out = s;
     return NPRFX_OK;
 }
 
+nprfx_stipple_sequence *nprfx_stipple_sequence_retain(nprfx_stipple_sequence *s)
+{
+    if (s) atomic_fetch_add(&s->refs, 1);
+    return s;
+}
+
 void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *s)
 {
-    if (!s) return;
+    if (!s || atomic_fetch_sub(&s->refs, 1) != 1) return;
+    pthread_mutex_destroy(&s->curve_lock);
     seq_version *v = atomic_load(&s->head);
     while (v) {
         seq_version *older = v->older;
@@ -603,4 +631,55 @@ nprfx_result nprfx_stipple_tone_curve(nprfx_context *ctx, const nprfx_stipple_pa
         curve[k] = (float)(((i - 1) + f) / (levels - 1));
     }
     return NPRFX_OK;
+}
+
+/* ---- tone curves shared through the sequence ---- */
+
+/* Everything nprfx_stipple_tone_curve reads of its params: the mode, the dot sizes, the pens
+ * and the seed (which places the sequence); not the tile, aspect or colours it replaces. */
+static int same_curve_params(const nprfx_stipple_params *a, const nprfx_stipple_params *b)
+{
+    if (a->mode != b->mode || a->area != b->area || a->a0 != b->a0 ||
+        a->delta_min != b->delta_min || a->num_tones != b->num_tones || a->seed != b->seed)
+        return 0;
+    for (int i = 0; i < a->num_tones; i++)
+        if (a->tones[i] != b->tones[i]) return 0;
+    return 1;
+}
+
+nprfx_result nprfx_stipple_sequence_tone_curve(nprfx_context *ctx, nprfx_stipple_sequence *seq,
+                                               const nprfx_stipple_params *p, float *curve)
+{
+    if (!seq) return nprfx_stipple_tone_curve(ctx, p, curve);
+    if (!p || !curve)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: NULL params or curve");
+    nprfx_result r = NPRFX_OK;
+    pthread_mutex_lock(&seq->curve_lock);
+    int found = -1;
+    for (int i = 0; i < seq->num_curves && found < 0; i++)
+        if (same_curve_params(&seq->curves[i].key, p)) found = i;
+    if (found < 0) {
+        /* measured with this sequence, under the curve lock: an instance that wants the same
+         * curve meanwhile waits for it instead of measuring it again */
+        nprfx_stipple_params mp = *p;
+        mp.index = NULL;
+        mp.sequence = seq;
+        mp.count = NULL;
+        float c[NPRFX_STIPPLE_CURVE_SIZE];
+        r = nprfx_stipple_tone_curve(ctx, &mp, c);
+        if (r == NPRFX_OK) {
+            found = seq->next_curve;
+            seq->next_curve = (seq->next_curve + 1) % SEQ_CURVES;
+            if (seq->num_curves < SEQ_CURVES) seq->num_curves++;
+            seq->curves[found].key = *p;
+            seq->curves[found].key.sequence = NULL; /* the key's pointers are not kept */
+            seq->curves[found].key.index = NULL;
+            seq->curves[found].key.tone_curve = NULL;
+            seq->curves[found].key.count = NULL;
+            memcpy(seq->curves[found].curve, c, sizeof c);
+        }
+    }
+    if (r == NPRFX_OK) memcpy(curve, seq->curves[found].curve, sizeof seq->curves[found].curve);
+    pthread_mutex_unlock(&seq->curve_lock);
+    return r;
 }

@@ -1,8 +1,7 @@
 /* The stipple node over its render arguments: its bound params into core's (the pen tones
- * parsed), the per-instance cache (the dot sequence, the tone-correction curve of the last
- * params) in the instance slot, then nprfx_stipple_render or nprfx_stipple_collect. No file I/O:
+ * parsed), the per-instance cache (the dot sequence, which keeps the tone-correction curves)
+ * in the instance slot, then nprfx_stipple_render or nprfx_stipple_collect. No file I/O:
  * the caller's make_sequence brings a shipped sequence. See nprfx/stipple.h. */
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,15 +9,10 @@
 #include "nprfx/node.h"
 #include "nprfx/stipple.h"
 
-/* ---- the per-instance cache: the dot sequence, and the tone-correction curve of the last
- * params ---- */
+/* ---- the per-instance cache: the dot sequence (which keeps the tone-correction curves) ---- */
 
 typedef struct node_state {
-    nprfx_stipple_sequence *seq; /* grown on demand, thread-safe on its own */
-    pthread_mutex_t lock;        /* guards the curve */
-    int valid;
-    nprfx_stipple_params key; /* the params the curve was measured for */
-    float curve[NPRFX_STIPPLE_CURVE_SIZE];
+    nprfx_stipple_sequence *seq; /* grown on demand, thread-safe on its own; may be shared */
 } node_state;
 
 void nprfx_stipple_node_state_free(void *state)
@@ -26,7 +20,6 @@ void nprfx_stipple_node_state_free(void *state)
     node_state *s = state;
     if (!s) return;
     nprfx_stipple_sequence_destroy(s->seq);
-    pthread_mutex_destroy(&s->lock);
     free(s);
 }
 
@@ -51,7 +44,6 @@ static nprfx_result get_state(const nprfx_render_args *args,
             free(fresh);
             return r;
         }
-        pthread_mutex_init(&fresh->lock, NULL);
         void *expected = NULL;
         if (atomic_compare_exchange_strong(slot, &expected, fresh)) {
             s = fresh;
@@ -62,37 +54,6 @@ static nprfx_result get_state(const nprfx_render_args *args,
     }
     *out = s;
     return NPRFX_OK;
-}
-
-/* The curve depends on the mode and the dot sizes and pens, nothing else. */
-static int same_curve_params(const nprfx_stipple_params *a, const nprfx_stipple_params *b)
-{
-    if (a->mode != b->mode || a->area != b->area || a->a0 != b->a0 ||
-        a->delta_min != b->delta_min || a->num_tones != b->num_tones)
-        return 0;
-    for (int i = 0; i < a->num_tones; i++)
-        if (a->tones[i] != b->tones[i]) return 0;
-    return 1;
-}
-
-/* Fill curve for p, through the instance cache when there is one (computed under its lock). */
-static nprfx_result tone_curve(nprfx_context *ctx, node_state *s, const nprfx_stipple_params *p,
-                               float *curve)
-{
-    if (!s) return nprfx_stipple_tone_curve(ctx, p, curve);
-    nprfx_result r = NPRFX_OK;
-    pthread_mutex_lock(&s->lock);
-    if (!s->valid || !same_curve_params(&s->key, p)) {
-        s->valid = 0;
-        r = nprfx_stipple_tone_curve(ctx, p, s->curve);
-        if (r == NPRFX_OK) {
-            s->key = *p;
-            s->valid = 1;
-        }
-    }
-    if (r == NPRFX_OK) memcpy(curve, s->curve, sizeof s->curve);
-    pthread_mutex_unlock(&s->lock);
-    return r;
 }
 
 /* ---- node params to core params ---- */
@@ -126,7 +87,7 @@ static nprfx_result core_params(const nprfx_render_args *args, const nprfx_stipp
     if (r != NPRFX_OK) return r;
     p->sequence = s ? s->seq : NULL;
     if (np->tone_correction) {
-        r = tone_curve(args->ctx, s, p, curve);
+        r = nprfx_stipple_sequence_tone_curve(args->ctx, s ? s->seq : NULL, p, curve);
         p->tone_curve = curve;
     }
     return r;

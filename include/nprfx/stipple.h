@@ -163,12 +163,25 @@ NPRFX_API nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx,
 NPRFX_API nprfx_result nprfx_stipple_sequence_preload(nprfx_context *ctx,
                                                       nprfx_stipple_sequence *seq, const float *xy,
                                                       int n);
-/* Frees every version; no call may be using it. NULL is a no-op. */
+/* One more reference to seq (returned), for another owner: a process-wide cache handing one
+ * sequence to every node instance (plugins/support/data_files.h) builds it once. */
+NPRFX_API nprfx_stipple_sequence *nprfx_stipple_sequence_retain(nprfx_stipple_sequence *seq);
+/* Drops a reference (create gives the first); the last one frees every version, when no call
+ * may be using it. NULL is a no-op. */
 NPRFX_API void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *seq);
 /* An index holding at least min_count points (clamped to NPRFX_STIPPLE_MAX_SAMPLES), valid
  * until seq is destroyed. */
 NPRFX_API nprfx_result nprfx_stipple_sequence_index(nprfx_context *ctx, nprfx_stipple_sequence *seq,
                                                     int min_count, const nprfx_ivs_index **out);
+
+/* nprfx_stipple_tone_curve for p, measured once per sequence: every owner of seq that asks for
+ * the curve of the same mode, sizes, pens and seed gets the first measurement's floats (the
+ * measurement is deterministic, so this never changes a result). seq NULL: measured afresh.
+ * Thread-safe; a sequence keeps its last few curves. */
+NPRFX_API nprfx_result nprfx_stipple_sequence_tone_curve(nprfx_context *ctx,
+                                                         nprfx_stipple_sequence *seq,
+                                                         const nprfx_stipple_params *p,
+                                                         float *curve);
 
 /* ---- the stipple node (core/stipple_node.c; its descriptor is plugins/stipple.c) ---- */
 
@@ -206,7 +219,8 @@ struct nprfx_render_args; /* nprfx/node.h */
  * without a uv input in units of NPRFX_STIPPLE_PLANE_PIXELS * render scale, the dots drawn
  * counted into args->items. The instance state (args->state, NULL: none, each call then
  * generates what it needs) keeps the sequence, made by make_sequence (NULL: generated) on first
- * use, and the tone-correction curve of the last params; it never changes a result. Free it
+ * use; the tone-correction curves are kept by the sequence (shared with every instance that
+ * shares it); neither ever changes a result. Free it
  * with nprfx_stipple_node_state_free. Safe on several tiles of one instance at once. */
 NPRFX_API nprfx_result nprfx_stipple_node_render(const struct nprfx_render_args *args,
                                                  const nprfx_stipple_node_params *np,

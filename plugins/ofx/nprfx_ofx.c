@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "ofx_internal.h"
+#include "support/data_files.h"
 
 #if defined(__GNUC__)
 #define NPRFX_OFX_EXPORT __attribute__((visibility("default")))
@@ -912,7 +913,10 @@ static OfxStatus main_entry(int index, const char *action, const void *handle,
     OfxImageEffectHandle fx = (OfxImageEffectHandle)handle;
     if (!d || !action) return kOfxStatErrUnknown;
     if (!strcmp(action, kOfxActionLoad)) return load();
-    if (!strcmp(action, kOfxActionUnload)) return kOfxStatOK;
+    if (!strcmp(action, kOfxActionUnload)) {
+        nprfx_stipple_shipped_release(); /* the process-wide dot sequence; instances keep theirs */
+        return kOfxStatOK;
+    }
     if (!nprfx_ofx_g.prop || !nprfx_ofx_g.fx || !nprfx_ofx_g.param) return kOfxStatErrFatal;
     if (!strcmp(action, kOfxActionDescribe)) return describe(d, fx);
     if (!strcmp(action, kOfxImageEffectActionDescribeInContext))

@@ -1,11 +1,14 @@
 /* The data files nodes read, outside core: a file of the context's data directory found and read
  * whole with a size limit and errors that name it, and the stipple node's shipped dot sequence
- * (ivs.bin) read, decoded by core (nprfx_ivs_decode) and preloaded into a new sequence. */
+ * (ivs.bin) read, decoded by core (nprfx_ivs_decode) and preloaded into a sequence that the
+ * whole process shares. */
 #include <errno.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "support/data_files.h"
 
@@ -128,10 +131,55 @@ static nprfx_result preload_shipped(nprfx_context *ctx, nprfx_stipple_sequence *
     return r;
 }
 
-nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out)
+/* ---- one shipped sequence per file, for the whole process ----
+ *
+ * Every stipple instance (a graph's nodes, a host's instances, the tone-curve measurements) wants
+ * the same points. Decoding the file, indexing it and measuring a tone curve took ~0.3-0.8 s of
+ * each instance's first frame, so the sequence is made once per data file and shared: it is
+ * thread-safe and only ever grows by immutable versions (nprfx/stipple.h), and the curves it
+ * keeps are deterministic, so sharing never changes a pixel. The file is known by its path and
+ * what stat says of it, so a file rebuilt with `nprfx ivs` (or removed) is read again. This is
+ * the nodes' library, not core, which keeps no process-wide state. */
+
+typedef struct shared_seq {
+    char path[4096]; /* the data file's path, "" without a data directory */
+    int exists;
+    dev_t dev;
+    ino_t ino;
+    off_t size;
+    struct timespec mtime;
+    nprfx_stipple_sequence *seq; /* the registry's reference */
+    struct shared_seq *next;
+} shared_seq;
+
+static pthread_mutex_t shared_lock = PTHREAD_MUTEX_INITIALIZER;
+static shared_seq *shared_list;
+
+/* What identifies the file at `path` now. */
+static void file_key(const char *path, shared_seq *k)
 {
-    if (!out) return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: NULL output");
-    *out = NULL;
+    memset(k, 0, sizeof *k);
+    snprintf(k->path, sizeof k->path, "%s", path);
+    struct stat st;
+    if (*path && stat(path, &st) == 0) {
+        k->exists = 1;
+        k->dev = st.st_dev;
+        k->ino = st.st_ino;
+        k->size = st.st_size;
+        k->mtime = st.st_mtim;
+    }
+}
+
+static int same_file(const shared_seq *a, const shared_seq *b)
+{
+    return !strcmp(a->path, b->path) && a->exists == b->exists && a->dev == b->dev &&
+           a->ino == b->ino && a->size == b->size && a->mtime.tv_sec == b->mtime.tv_sec &&
+           a->mtime.tv_nsec == b->mtime.tv_nsec;
+}
+
+/* A new sequence preloaded from the file (when there is one). */
+static nprfx_result make_shipped(nprfx_context *ctx, nprfx_stipple_sequence **out)
+{
     nprfx_stipple_sequence *seq = NULL;
     nprfx_result r = nprfx_stipple_sequence_create(ctx, &seq);
     if (r == NPRFX_OK) r = preload_shipped(ctx, seq);
@@ -141,4 +189,58 @@ nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_se
     }
     *out = seq;
     return NPRFX_OK;
+}
+
+nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out)
+{
+    if (!out) return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: NULL output");
+    *out = NULL;
+    const char *dir = nprfx_context_data_dir(ctx);
+    char path[4096] = "";
+    if (dir && *dir) snprintf(path, sizeof path, "%s/" IVS_FILE_NAME, dir);
+    shared_seq *key = malloc(sizeof *key);
+    if (!key) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "stipple: out of memory");
+    file_key(path, key);
+    nprfx_result r = NPRFX_OK;
+    /* read under the lock: a second instance waits for the first one's file instead of
+     * reading it too */
+    pthread_mutex_lock(&shared_lock);
+    shared_seq **at = &shared_list;
+    while (*at && strcmp((*at)->path, key->path))
+        at = &(*at)->next;
+    if (*at && same_file(*at, key)) {
+        *out = nprfx_stipple_sequence_retain((*at)->seq);
+        free(key);
+    } else {
+        nprfx_stipple_sequence *seq = NULL;
+        r = make_shipped(ctx, &seq);
+        if (r == NPRFX_OK) {
+            if (*at) { /* the file changed: the old sequence lives on in its users */
+                shared_seq *old = *at;
+                *at = old->next;
+                nprfx_stipple_sequence_destroy(old->seq);
+                free(old);
+            }
+            key->seq = seq;
+            key->next = shared_list;
+            shared_list = key;
+            *out = nprfx_stipple_sequence_retain(seq);
+        } else {
+            free(key); /* a broken file is not kept: each use reports it */
+        }
+    }
+    pthread_mutex_unlock(&shared_lock);
+    return r;
+}
+
+void nprfx_stipple_shipped_release(void)
+{
+    pthread_mutex_lock(&shared_lock);
+    while (shared_list) {
+        shared_seq *s = shared_list;
+        shared_list = s->next;
+        nprfx_stipple_sequence_destroy(s->seq);
+        free(s);
+    }
+    pthread_mutex_unlock(&shared_lock);
 }

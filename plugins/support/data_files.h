@@ -29,13 +29,18 @@ nprfx_result nprfx_data_file_read(nprfx_context *ctx, const char *name, size_t m
                                   nprfx_data_file *out);
 void nprfx_data_file_free(nprfx_data_file *f);
 
-/* The stipple node's dot sequence: a new nprfx_stipple_sequence preloaded from the shipped
+/* The stipple node's dot sequence: an nprfx_stipple_sequence preloaded from the shipped
  * DATA_DIR/ivs.bin (written by `nprfx ivs`), which saves generating it (seconds per million
  * points) and keeps the dots the same whatever compiler built this. No data directory or no
  * file: an empty sequence, generated when used, with the same pixels. A file that is there but
  * unreadable, corrupt or of another seed is an error that names it and says to rebuild it with
  * `nprfx ivs` or remove it: a broken install should not pass silently. */
 nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out);
+/* The sequence above is made once per data file (its path and what stat says of it) and shared
+ * by every caller in the process, each getting a reference of its own: the file is read, indexed
+ * and each tone curve measured once, whatever the number of instances. This drops the process's
+ * own references (an OpenFX host unloading the plug-in); users keep theirs. */
+void nprfx_stipple_shipped_release(void);
 
 #ifdef __cplusplus
 }

@@ -116,7 +116,25 @@ static void test_shipped_sequence(void)
     CHECK_OK(nprfx_stipple_sequence_index(ctx, seq, 16, &index));
     if (index) nprfx_ivs_index_point(index, 12345, xy);
     CHECK(index && xy[0] == 0.25f && xy[1] == 0.75f);
+    /* the process shares one sequence per file: a second instance gets the same one, already
+     * indexed, and keeps it after the first lets go */
+    nprfx_stipple_sequence *seq2 = NULL;
+    CHECK_OK(nprfx_stipple_shipped_sequence(ctx, &seq2));
+    CHECK(seq2 == seq);
     nprfx_stipple_sequence_destroy(seq);
+    const nprfx_ivs_index *index2 = NULL;
+    CHECK_OK(nprfx_stipple_sequence_index(ctx, seq2, 16, &index2));
+    CHECK(index2 == index);
+    /* a file rebuilt (another size) is read again; the old sequence lives on in its users */
+    write_ivs(NPRFX_IVS_DEFAULT_SEED, n + 1);
+    CHECK_OK(nprfx_stipple_shipped_sequence(ctx, &seq));
+    CHECK(seq != seq2);
+    CHECK_OK(nprfx_stipple_sequence_index(ctx, seq2, 16, &index2));
+    if (index2) nprfx_ivs_index_point(index2, 12345, xy);
+    CHECK(index2 && xy[0] == 0.25f && xy[1] == 0.75f);
+    nprfx_stipple_sequence_destroy(seq2);
+    nprfx_stipple_sequence_destroy(seq);
+    nprfx_stipple_shipped_release();
 
     /* another seed, or a corrupt file: an error naming the file, with what to do */
     write_ivs(5, 100);

@@ -102,6 +102,23 @@ static void test_tone(void)
         mono &= curve0[k] >= curve0[k - 1];
     CHECK(mono && fabs(curve0[2] - 2.0 / (NPRFX_STIPPLE_CURVE_SIZE - 1)) < 0.01);
     nprfx_image_free(&tone);
+
+    /* curves kept by a sequence are the measurement's floats, per mode, sizes, pens and seed:
+     * the seed places the dots, so its curve differs, and asking for seed 0 again after seed 3
+     * gives seed 0's, not the last one measured */
+    nprfx_stipple_params p;
+    default_params(&p);
+    p.mode = NPRFX_STIPPLE_UNIFORM;
+    float c0[NPRFX_STIPPLE_CURVE_SIZE], c3[NPRFX_STIPPLE_CURVE_SIZE];
+    float k0[NPRFX_STIPPLE_CURVE_SIZE], k3[NPRFX_STIPPLE_CURVE_SIZE];
+    CHECK_OK(nprfx_stipple_sequence_tone_curve(ctx4, seq, &p, k0));
+    p.seed = 3;
+    CHECK_OK(nprfx_stipple_tone_curve(ctx4, &p, c3));
+    CHECK_OK(nprfx_stipple_sequence_tone_curve(ctx4, seq, &p, k3));
+    p.seed = 0;
+    CHECK_OK(nprfx_stipple_sequence_tone_curve(ctx4, seq, &p, c0));
+    CHECK(!memcmp(k0, curve0, sizeof k0) && !memcmp(c0, curve0, sizeof c0));
+    CHECK(!memcmp(k3, c3, sizeof k3) && memcmp(c3, curve0, sizeof c3) != 0);
 }
 
 /* ---- blue noise on screen ---- */
