@@ -13,21 +13,23 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: nprfx bench NODE [--size WxH] [--frames N] [--set PARAM=VALUE ...]\n"
-            "                  [--connect INPUT[=CHANNELS] ...] [--threads N] [--scene NAME]\n"
-            "                  [--mem-limit SIZE] [--no-pool]\n\n"
-            "Times NODE on synthetic plates (nprfx synth scenes, default orbit, 1920x1080,\n"
-            "10 frames after one warm-up frame). Required inputs are connected to the plate;\n"
-            "--connect adds an optional one (CHANNELS picks synth channels, e.g.\n"
-            "--connect alpha=diffuse). Reports ms per frame (mean and best), Mpixel/s and the\n"
-            "process's peak memory, and for nodes that count what they make (stipple: dots\n"
-            "drawn) that count per frame and per second. File I/O and plate synthesis are not\n"
-            "timed. Frames come from the runner's frame pool (--no-pool: calloc'd afresh, as\n"
-            "before); --mem-limit is as for nprfx run. 'nprfx bench-graph' times whole graphs.\n\n"
-            "example:\n"
-            "  nprfx bench stipple --size 1920x1080 --connect uv=UV.U,UV.V --connect id=id \\\n"
-            "      --set mode=radius\n");
+    fprintf(
+        f,
+        "usage: nprfx bench NODE [--size WxH] [--frames N] [--set PARAM=VALUE ...]\n"
+        "                  [--connect INPUT[=CHANNELS] ...] [--threads N] [--scene NAME]\n"
+        "                  [--mem-limit SIZE] [--no-pool]\n\n"
+        "Times NODE on synthetic plates (nprfx synth scenes, default orbit, 1920x1080,\n"
+        "10 frames after one warm-up frame). Required inputs are connected to the plate;\n"
+        "--connect adds an optional one (CHANNELS picks synth channels, e.g.\n"
+        "--connect alpha=diffuse). Reports ms per frame (mean and best, and the CPU time of all\n"
+        "threads: on a busy machine, the node's cost apart from waiting), Mpixel/s and the\n"
+        "process's peak memory, and for nodes that count what they make (stipple: dots\n"
+        "drawn) that count per frame and per second. File I/O and plate synthesis are not\n"
+        "timed. Frames come from the runner's frame pool (--no-pool: calloc'd afresh, as\n"
+        "before); --mem-limit is as for nprfx run. 'nprfx bench-graph' times whole graphs.\n\n"
+        "example:\n"
+        "  nprfx bench stipple --size 1920x1080 --connect uv=UV.U,UV.V --connect id=id \\\n"
+        "      --set mode=radius\n");
 }
 
 int nprfx_cmd_bench(int argc, char **argv)
@@ -133,11 +135,12 @@ int nprfx_cmd_bench(int argc, char **argv)
         status = 2;
         goto done;
     }
-    double total = 0, best = 1e30;
+    double total = 0, best = 1e30, cpu = 0;
     long long items = 0;
     nprfx_image out;
     for (int f = 0; f <= frames; f++) { /* frame 0 warms caches and page tables */
         nprfx_graph_take_render_seconds(g);
+        nprfx_graph_take_render_cpu_seconds(g);
         nprfx_graph_take_render_items(g);
         if (nprfx_graph_eval(g, "bench", 1 + f, &out)) {
             fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
@@ -145,6 +148,7 @@ int nprfx_cmd_bench(int argc, char **argv)
             goto done;
         }
         double s = nprfx_graph_take_render_seconds(g);
+        cpu += nprfx_graph_take_render_cpu_seconds(g) * (f > 0);
         long long n = nprfx_graph_take_render_items(g);
         if (f == 0) continue;
         items += n;
@@ -152,12 +156,13 @@ int nprfx_cmd_bench(int argc, char **argv)
         if (s < best) best = s;
     }
     double mean = total / frames;
-    printf("%s %dx%d, %d frame%s, %d thread%s: %.2f ms/frame (best %.2f), %.1f Mpixel/s, peak "
-           "memory %.0f MiB\n",
+    /* the CPU time over all threads: on a shared machine, the node's cost apart from waiting */
+    printf("%s %dx%d, %d frame%s, %d thread%s: %.2f ms/frame (best %.2f; CPU %.2f), %.1f "
+           "Mpixel/s, peak memory %.0f MiB\n",
            node_id, w, h, frames, frames == 1 ? "" : "s",
            nprfx_executor_workers(nprfx_context_executor(env.ctx)),
            nprfx_executor_workers(nprfx_context_executor(env.ctx)) == 1 ? "" : "s", mean * 1e3,
-           best * 1e3, (double)w * h / mean * 1e-6, nprfx_cli_peak_mib());
+           best * 1e3, cpu / frames * 1e3, (double)w * h / mean * 1e-6, nprfx_cli_peak_mib());
     if (d->item_name && items > 0) /* what the node counts: e.g. stipples drawn */
         printf("%s: %.0f %s/frame, %.2f M %s/s\n", node_id, (double)items / frames, d->item_name,
                (double)items / total * 1e-6, d->item_name);

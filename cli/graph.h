@@ -146,6 +146,9 @@ nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const ch
 
 /* Seconds spent inside node render functions since the last call (for bench); resets. */
 double nprfx_graph_take_render_seconds(nprfx_graph *g);
+/* The process's CPU seconds (all threads) over the same spans: on a loaded machine, what the
+ * renders cost rather than how long they waited for a core; resets. */
+double nprfx_graph_take_render_cpu_seconds(nprfx_graph *g);
 /* Items the nodes counted since the last call (nprfx_render_args.items; for bench); resets. */
 long long nprfx_graph_take_render_items(nprfx_graph *g);
 

@@ -585,7 +585,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     a.state = &n->state;
     a.items = &g->render_items;
     int tile = g->tile > 0 ? g->tile : 1 << 30;
-    double t0 = internal_graph_now();
+    double t0 = internal_graph_now(), c0 = internal_graph_cpu_now();
     warmup_range(g, n, a.params, frame, in_ch, &rf);
     rf.t0 = t0;
     for (int ty = frame_rect.y0; ty < frame_rect.y1 && !r; ty += tile)
@@ -597,6 +597,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
                             : nprfx_node_render(&a);
         }
     g->render_seconds += internal_graph_now() - t0;
+    g->render_cpu_seconds += internal_graph_cpu_now() - c0;
     if (!r && !(g->has_hook && g->hook.exports)) r = export_node(g, n, &a, frame);
     if (r) { /* the message went out through n->ctx, naming the node */
         internal_graph_frame_release(g, im);

@@ -240,6 +240,13 @@ long long nprfx_graph_take_render_items(nprfx_graph *g)
     return n;
 }
 
+double nprfx_graph_take_render_cpu_seconds(nprfx_graph *g)
+{
+    double s = g->render_cpu_seconds;
+    g->render_cpu_seconds = 0;
+    return s;
+}
+
 double nprfx_graph_take_render_seconds(nprfx_graph *g)
 {
     double s = g->render_seconds;

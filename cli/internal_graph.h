@@ -94,6 +94,7 @@ struct nprfx_graph {
     int fetch_depth; /* evaluations in progress, one per nested temporal fetch */
     int tile;
     double render_seconds;
+    double render_cpu_seconds; /* the process's CPU time (all threads) over the same spans */
     long long render_items; /* what nodes counted (nprfx_render_args.items) */
     /* Memory (issue 16, graph_plan.c): frame buffers come from the pool and go back to it; the
      * plan frees each result once its consumers at the frame have run, unless a temporal node
@@ -128,6 +129,8 @@ struct nprfx_graph {
 
 char *internal_graph_strdup(const char *s);
 double internal_graph_now(void);
+/* The process's CPU time in seconds, all threads (CLOCK_PROCESS_CPUTIME_ID). */
+double internal_graph_cpu_now(void);
 /* The index of the node called name, or -1 (graph_names.c). */
 int internal_graph_find_node(const nprfx_graph *g, const char *name);
 /* An empty name index with room for count nodes. */

@@ -78,6 +78,22 @@ typedef struct stlist {
     int failed;
 } stlist;
 
+/* Discs of one radius drawn from a table of exact stencils, one per centre phase (1/32 px; see
+ * core/stipple_disc.c). Stencils up to STENCIL_MAX pixels a side (radius ~3.2 px); larger dots
+ * are drawn exactly. */
+#define STENCIL_PHASES 32
+#define STENCIL_MAX 8
+typedef struct internal_stencils {
+    double r;
+    int lo, size; /* the stencil's pixels: offsets lo .. lo + size - 1 from the centre's pixel */
+    float *cov;   /* size^2 coverages per phase, phases row by row; NULL: not made */
+} internal_stencils;
+/* 1 when made; 0 when the radius is too large for a stencil (draw exactly); -1 out of memory. */
+int internal_stipple_stencils_init(internal_stencils *st, double r);
+void internal_stipple_stencils_free(internal_stencils *st);
+void internal_stipple_splat_stencil(float *t, nprfx_rect rect, const internal_stencils *st,
+                                    double cx, double cy, double tone);
+
 /* Per-worker memory, reused from tile to tile. */
 typedef struct scratch {
     pixdata d;
@@ -106,6 +122,7 @@ typedef struct sjob {
     int units_x;       /* render: units per row */
     int *row_start;    /* render: per unit, UNIT_ROWS + 1 offsets of its owner rows */
     scratch *scr;      /* one per worker */
+    internal_stencils stencils; /* render: uniform and multitone discs (cov NULL: none) */
     atomic_int error;
 } sjob;
 

@@ -361,7 +361,11 @@ static void render_tiles(void *user, int begin, int end, int worker)
                         if (q[i].x + rad < lx || q[i].x - rad > hx || q[i].y + rad < ly ||
                             q[i].y - rad > hy)
                             continue;
-                        internal_stipple_splat_disc(t, rows, q[i].x, q[i].y, rad, q[i].tone);
+                        if (j->stencils.cov && rad == j->stencils.r)
+                            internal_stipple_splat_stencil(t, rows, &j->stencils, q[i].x, q[i].y,
+                                                           q[i].tone);
+                        else
+                            internal_stipple_splat_disc(t, rows, q[i].x, q[i].y, rad, q[i].tone);
                     }
                 }
             }
@@ -475,6 +479,11 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
         r = atomic_load(&j.error);
     }
     if (r == NPRFX_OK && p->count) *p->count += count_in_window(&j, units, window);
+    /* uniform and multitone discs share one radius: drawn from stencils (all of them, so that
+     * the pixels never depend on the window or the tiles) */
+    if (r == NPRFX_OK && p->mode != NPRFX_STIPPLE_RADIUS &&
+        internal_stipple_stencils_init(&j.stencils, (double)j.radius) < 0)
+        r = NPRFX_ERR_OUT_OF_MEMORY;
     if (r == NPRFX_OK) {
         int tiles = ((nprfx_rect_height(window) + STRIPE_ROWS - 1) / STRIPE_ROWS) *
                     ((nprfx_rect_width(window) + TILE_COLS - 1) / TILE_COLS);
@@ -485,6 +494,7 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
         free(j.lists[u].s);
     free(j.lists);
     free(j.row_start);
+    internal_stipple_stencils_free(&j.stencils);
     job_free(&j);
     if (r == NPRFX_ERR_OUT_OF_MEMORY)
         return nprfx_error(ctx, r, "stipple: out of memory rendering %dx%d pixels",

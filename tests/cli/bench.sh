@@ -18,7 +18,7 @@ expect() { # STATUS TEXT CMD...
 }
 
 for m in uniform radius multitone; do
-  expect 0 "^stipple 160x90, 2 frames, 1 thread: [0-9.]+ ms/frame \(best [0-9.]+\), [0-9.]+ Mpixel/s, peak memory [0-9]+ MiB$" \
+  expect 0 "^stipple 160x90, 2 frames, 1 thread: [0-9.]+ ms/frame \(best [0-9.]+; CPU [0-9.]+\), [0-9.]+ Mpixel/s, peak memory [0-9]+ MiB$" \
     "$NPRFX" bench stipple --size 160x90 --frames 2 --threads 1 --connect uv=UV.U,UV.V --connect id=id --set mode=$m
   n=$(sed -n 's/^stipple: \([0-9]*\) stipples\/frame, [0-9.]* M stipples\/s$/\1/p' out.txt)
   [ -n "$n" ] && [ "$n" -gt 50 ] && pass || { fail "$m: no plausible 'stipples/frame' line"; cat out.txt; }
