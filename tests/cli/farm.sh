@@ -22,6 +22,8 @@ expect_rc() {
     [ "$rc" -eq "$want" ] || { cat last.out last.err >&2; fail "'$*' exited $rc, expected $want"; }
 }
 has() { grep -qF -- "$2" "$1" || { cat "$1" >&2; fail "$1 lacks: $2"; }; }
+# The lock test's flock(1) holder waits for this file: made on any exit, so it never outlives us.
+trap 'touch "$WORK/release" 2>/dev/null || true' EXIT
 
 # 48 frames of plates; a coherent-noise graph with no "frames" of its own, so the chunks must be
 # given the whole range as their shot (else each starts its noise at its first frame).
@@ -93,6 +95,28 @@ expect_rc 0 "$NPRFX" run noise.json --frames 26-30 "${sets[@]}" --output-dir alo
 rc=0
 "$NPRFX" diff "seq/$out_path" "alone/$out_path" --frames 26-30 --fail 0 --warn 0 -q >/dev/null || rc=$?
 [ "$rc" -eq 2 ] || fail "a chunk without --shot matched the sequential run (diff exited $rc)"
+
+# --- The locks: chunks share a sequence's lock; a plain run and a chunk exclude each other
+# (flock(1) holds the lock, shared then exclusive, until the file 'release' appears).
+lock="out/.it's a noise.####.exr.nprfx-lock"
+rm -f held release
+flock -s "$lock" sh -c 'touch held; until [ -e release ]; do sleep 0.05; done' &
+holder=$!
+until [ -e held ]; do sleep 0.05; done
+expect_rc 2 "$NPRFX" run noise.json --frames 3 "${sets[@]}" --shot 1-48 -q
+has last.err "is being written by another run"
+expect_rc 0 "$NPRFX" run noise.json --frames 3 "${sets[@]}" --shot 1-48 -q --shared-lock
+touch release
+wait $holder
+rm -f held release
+flock "$lock" sh -c 'touch held; until [ -e release ]; do sleep 0.05; done' &
+holder=$!
+until [ -e held ]; do sleep 0.05; done
+expect_rc 2 "$NPRFX" run noise.json --frames 3 "${sets[@]}" --shot 1-48 -q --shared-lock
+has last.err "is being written by another run"
+touch release
+wait $holder
+rm -f "$lock"
 
 # --- farm check: complete, then a frame deleted, one truncated, a killed chunk's temporary file.
 expect_rc 0 "$NPRFX" farm check noise.json --frames 1-48 --shot 1-48 "${sets[@]}"
