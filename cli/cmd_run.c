@@ -46,6 +46,9 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  --keep-going        render the remaining frames after a failed one, exit 1\n"
         "  --wait              when another run is writing one of the graph's sequences,\n"
         "                      wait for it to finish (default: fail at once, naming it)\n"
+        "  --shared-lock       share the sequences' locks with other --shared-lock runs, which\n"
+        "                      write other frames of them (nprfx farm's chunk tasks); a run\n"
+        "                      without it still excludes them all\n"
         "%s"
         "  --quiet             no progress output\n"
         "  --check             check the graphs (JSON, nodes, params, references, cycles,\n"
@@ -83,7 +86,7 @@ static double now_seconds(void)
 typedef struct run_opts {
     const char *prog, *frames, *shot;
     const char *const *sets;
-    int nsets, keep_going, quiet, several, wait, stats, check;
+    int nsets, keep_going, quiet, several, wait, stats, check, shared_lock;
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -119,8 +122,8 @@ static nprfx_result lock_outputs(nprfx_context *ctx, nprfx_graph *g, const char 
     int n;
     nprfx_result r = nprfx_graph_output_patterns(g, &paths, &n);
     if (r) return r;
-    r = nprfx_output_locks_take(ctx, (const char *const *)paths, n, graph_path, ro->wait,
-                                lock_notice, (void *)ro, locks);
+    r = (ro->shared_lock ? nprfx_output_locks_take_shared : nprfx_output_locks_take)(
+        ctx, (const char *const *)paths, n, graph_path, ro->wait, lock_notice, (void *)ro, locks);
     nprfx_graph_output_patterns_free(paths, n);
     return r;
 }
@@ -258,7 +261,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     int ngraphs = 0;
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
-    int no_pool = 0, check = 0;
+    int no_pool = 0, check = 0, shared_lock = 0;
     const char *mem_limit = NULL;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
@@ -293,6 +296,8 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
             wait = 1;
         else if (!strcmp(a, "--check"))
             check = 1;
+        else if (!strcmp(a, "--shared-lock"))
+            shared_lock = 1;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = 1;
         else if (a[0] != '-' && ngraphs < 64)
@@ -319,7 +324,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     opt.no_pool = no_pool;
     int status = 0;
     run_opts ro = {prog,  frames,      shot, sets,  nsets, keep_going,
-                   quiet, ngraphs > 1, wait, stats, check};
+                   quiet, ngraphs > 1, wait, stats, check, shared_lock};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

@@ -24,6 +24,7 @@ int nprfx_cmd_ivs(int argc, char **argv);
 int nprfx_cmd_measure(int argc, char **argv);
 int nprfx_cmd_host_project(int argc, char **argv);
 int nprfx_cmd_pam(int argc, char **argv);
+int nprfx_cmd_farm(int argc, char **argv);
 
 /* What a program built on the runner adds to `run` (the OpenFX test host of tests/ofxhost/ gives
  * every node a render hook that drives the plug-ins): options of its own and a render hook for

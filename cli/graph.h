@@ -112,6 +112,17 @@ void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
 nprfx_result nprfx_graph_output_patterns(const nprfx_graph *g, char ***paths, int *count);
 void nprfx_graph_output_patterns_free(char **paths, int count);
 
+/* Every read node's file pattern, resolved as a render resolves it (relative to the graph file),
+ * frame tokens kept; *nodes (may be NULL) receives the read nodes' names (the graph's own strings,
+ * valid while it lives). In graph order. Free the paths with nprfx_graph_output_patterns_free and
+ * *nodes with free. */
+nprfx_result nprfx_graph_read_patterns(const nprfx_graph *g, char ***paths, const char ***nodes,
+                                       int *count);
+
+/* Whether the graph has a shot of its own ("frames", or --shot through nprfx_graph_set_shot);
+ * *first and *last receive the shot's first and last frame (its frames' range) when it has. */
+int nprfx_graph_shot(const nprfx_graph *g, int *first, int *last);
+
 /* Warnings, one a line into buf, when rendering `frames` frames of g would take hours: many frames,
  * or a node whose footprint (nprfx_node_footprint) makes every pixel read a huge area. Before a
  * single pixel is read, so it knows no frame size: counts, not seconds. Returns how many. */

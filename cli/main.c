@@ -30,6 +30,8 @@ static const command commands[] = {
     {"ivs", nprfx_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
     {"pam", nprfx_cmd_pam,
      "painterly art maps: build one from brushstroke samples, check one, paint samples"},
+    {"farm", nprfx_cmd_farm,
+     "render a shot in frame chunks on a farm (Slurm array job), check every frame arrived"},
 };
 
 static void usage(FILE *f)

@@ -29,6 +29,7 @@ typedef struct lock_entry {
 struct nprfx_output_locks {
     lock_entry *entries;
     int count;
+    int shared; /* LOCK_SH: other shared holders may hold the same files */
 };
 
 /* Create dir and its missing parents, as the writers would before the first frame. */
@@ -136,15 +137,24 @@ static void write_holder(int fd, const char *graph_path)
  * because a releasing run unlinks its lock file: a run that opened the old file and got its
  * lock after the release holds a lock nobody else can see, so it opens the path again. */
 static nprfx_result acquire(nprfx_context *ctx, lock_entry *e, const char *graph_path, int wait,
-                            nprfx_output_lock_notice notice, void *user)
+                            int shared, nprfx_output_lock_notice notice, void *user)
 {
-    int told = 0;
+    int told = 0, transient = 0, how = shared ? LOCK_SH : LOCK_EX;
     for (;;) {
         int fd = open(e->path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
         if (fd < 0)
             return nprfx_error(ctx, NPRFX_ERR_IO, "cannot lock '%s': cannot open '%s': %s",
                                e->pattern, e->path, strerror(errno));
-        int rc = flock(fd, LOCK_EX | LOCK_NB);
+        int rc = flock(fd, how | LOCK_NB);
+        if (rc && errno == EWOULDBLOCK && shared && transient < 100) {
+            /* The last shared holder makes its lock exclusive for a moment to remove the file
+             * (nprfx_output_locks_release): try again before calling it another run's. */
+            close(fd);
+            transient++;
+            struct timespec ts = {0, 10 * 1000 * 1000};
+            nanosleep(&ts, NULL);
+            continue;
+        }
         if (rc && errno == EWOULDBLOCK) {
             char who[8192], msg[16384];
             describe_holder(fd, who, sizeof who);
@@ -161,7 +171,7 @@ static nprfx_result acquire(nprfx_context *ctx, lock_entry *e, const char *graph
                 notice(user, msg);
                 told = 1;
             }
-            while ((rc = flock(fd, LOCK_EX)) && errno == EINTR)
+            while ((rc = flock(fd, how)) && errno == EINTR)
                 ;
         }
         if (rc) {
@@ -237,10 +247,9 @@ static void remove_stale_temps(const lock_entry *e, nprfx_output_lock_notice not
     }
 }
 
-nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patterns, int count,
-                                     const char *graph_path, int wait,
-                                     nprfx_output_lock_notice notice, void *user,
-                                     nprfx_output_locks **out)
+static nprfx_result take(nprfx_context *ctx, const char *const *patterns, int count,
+                         const char *graph_path, int wait, int shared,
+                         nprfx_output_lock_notice notice, void *user, nprfx_output_locks **out)
 {
     *out = NULL;
     nprfx_output_locks *l = calloc(1, sizeof *l);
@@ -251,6 +260,7 @@ nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patt
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory for output locks");
     }
     l->entries = es;
+    l->shared = shared;
     nprfx_result r = NPRFX_OK;
     for (int i = 0; !r && i < count; i++)
         r = entry_init(ctx, patterns[i], &es[i]);
@@ -261,7 +271,7 @@ nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patt
             if (!l->count || strcmp(es[l->count - 1].key, es[i].key)) es[l->count++] = es[i];
     }
     for (int i = 0; !r && i < l->count; i++) {
-        r = acquire(ctx, &es[i], graph_path, wait, notice, user);
+        r = acquire(ctx, &es[i], graph_path, wait, shared, notice, user);
         if (r) {
             l->count = i; /* release the ones taken */
             nprfx_output_locks_release(l);
@@ -273,10 +283,26 @@ nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patt
         nprfx_output_locks_release(l);
         return r;
     }
-    for (int i = 0; i < l->count; i++)
+    for (int i = 0; !shared && i < l->count; i++)
         remove_stale_temps(&es[i], notice, user);
     *out = l;
     return NPRFX_OK;
+}
+
+nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patterns, int count,
+                                     const char *graph_path, int wait,
+                                     nprfx_output_lock_notice notice, void *user,
+                                     nprfx_output_locks **out)
+{
+    return take(ctx, patterns, count, graph_path, wait, 0, notice, user, out);
+}
+
+nprfx_result nprfx_output_locks_take_shared(nprfx_context *ctx, const char *const *patterns,
+                                            int count, const char *graph_path, int wait,
+                                            nprfx_output_lock_notice notice, void *user,
+                                            nprfx_output_locks **out)
+{
+    return take(ctx, patterns, count, graph_path, wait, 1, notice, user, out);
 }
 
 void nprfx_output_locks_release(nprfx_output_locks *l)
@@ -284,8 +310,11 @@ void nprfx_output_locks_release(nprfx_output_locks *l)
     if (!l) return;
     for (int i = l->count - 1; i >= 0; i--) {
         /* Unlinked while still held, so no run can lock this file after it is released (the
-         * inode check in acquire sends a run that opened it to the new one). */
-        unlink(l->entries[i].path);
+         * inode check in acquire sends a run that opened it to the new one). A shared holder
+         * unlinks only when it can make its lock exclusive, i.e. when it is the last: unlinking
+         * under other holders would let an exclusive run lock a new file beside them. */
+        if (!l->shared || flock(l->entries[i].fd, LOCK_EX | LOCK_NB) == 0)
+            unlink(l->entries[i].path);
         close(l->entries[i].fd);
     }
     free(l->entries);

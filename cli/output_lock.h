@@ -33,7 +33,18 @@ nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patt
                                      nprfx_output_lock_notice notice, void *user,
                                      nprfx_output_locks **out);
 
-/* Remove the lock files and release the locks (NULL: nothing). */
+/* As nprfx_output_locks_take, but the locks are shared: runs that lock shared (nprfx farm's
+ * chunk tasks, `run --shared-lock`, which write disjoint frames of one sequence) run together,
+ * and a run locking exclusively still excludes them all, and they it. A shared holder removes no
+ * temporary file, since another holder may be writing it: the next exclusive holder does (the
+ * farm's check job, after the last chunk). */
+nprfx_result nprfx_output_locks_take_shared(nprfx_context *ctx, const char *const *patterns,
+                                            int count, const char *graph_path, int wait,
+                                            nprfx_output_lock_notice notice, void *user,
+                                            nprfx_output_locks **out);
+
+/* Remove the lock files and release the locks (NULL: nothing). A shared holder removes a lock
+ * file only when it is the last holder. */
 void nprfx_output_locks_release(nprfx_output_locks *locks);
 
 #endif
