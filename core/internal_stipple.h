@@ -78,21 +78,39 @@ typedef struct stlist {
     int failed;
 } stlist;
 
-/* Discs of one radius drawn from a table of exact stencils, one per centre phase (1/32 px; see
- * core/stipple_disc.c). Stencils up to STENCIL_MAX pixels a side (radius ~3.2 px); larger dots
- * are drawn exactly. */
+/* Dots drawn from tables of exact stencils, one per centre phase (core/stipple_disc.c):
+ * uniform and multitone dots (one radius) at 1/32 px, radius dots (area g a0) from two of
+ * RADIUS_LEVELS + 1 areas at 1/16 px. Stencils up to STENCIL_MAX pixels a side (radius ~3.2 px);
+ * larger dots are drawn exactly. */
 #define STENCIL_PHASES 32
+#define RADIUS_PHASES 16
+#define RADIUS_LEVELS 64
 #define STENCIL_MAX 8
 typedef struct internal_stencils {
     double r;
+    int phases;
     int lo, size; /* the stencil's pixels: offsets lo .. lo + size - 1 from the centre's pixel */
     float *cov;   /* size^2 coverages per phase, phases row by row; NULL: not made */
 } internal_stencils;
-/* 1 when made; 0 when the radius is too large for a stencil (draw exactly); -1 out of memory. */
-int internal_stipple_stencils_init(internal_stencils *st, double r);
+/* Whether stencils of a disc of radius `extent` fit STENCIL_MAX. */
+int internal_stipple_stencils_fits(double extent);
+/* The stencils of radius r (>= 0) at phases^2 centres, spanning the pixels a disc of radius
+ * extent >= r touches. 1 when made; 0 when too large (draw exactly); -1 out of memory. */
+int internal_stipple_stencils_init(internal_stencils *st, double r, int phases, double extent);
 void internal_stipple_stencils_free(internal_stencils *st);
 void internal_stipple_splat_stencil(float *t, nprfx_rect rect, const internal_stencils *st,
                                     double cx, double cy, double tone);
+typedef struct internal_levels {
+    int made;
+    double amax; /* the area of the top level (a0) */
+    internal_stencils level[RADIUS_LEVELS + 1];
+} internal_levels;
+/* 1 made, 0 too large (draw exactly), -1 out of memory. */
+int internal_stipple_levels_init(internal_levels *lv, double amax);
+void internal_stipple_levels_free(internal_levels *lv);
+/* A dot of radius r <= sqrt(amax / pi). */
+void internal_stipple_splat_levels(float *t, nprfx_rect rect, const internal_levels *lv, double cx,
+                                   double cy, double r, double tone);
 
 /* Per-worker memory, reused from tile to tile. */
 typedef struct scratch {
@@ -123,6 +141,7 @@ typedef struct sjob {
     int *row_start;    /* render: per unit, UNIT_ROWS + 1 offsets of its owner rows */
     scratch *scr;      /* one per worker */
     internal_stencils stencils; /* render: uniform and multitone discs (cov NULL: none) */
+    internal_levels levels;     /* render: radius discs (made 0: none) */
     atomic_int error;
 } sjob;
 

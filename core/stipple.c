@@ -364,6 +364,9 @@ static void render_tiles(void *user, int begin, int end, int worker)
                         if (j->stencils.cov && rad == j->stencils.r)
                             internal_stipple_splat_stencil(t, rows, &j->stencils, q[i].x, q[i].y,
                                                            q[i].tone);
+                        else if (j->levels.made)
+                            internal_stipple_splat_levels(t, rows, &j->levels, q[i].x, q[i].y, rad,
+                                                          q[i].tone);
                         else
                             internal_stipple_splat_disc(t, rows, q[i].x, q[i].y, rad, q[i].tone);
                     }
@@ -482,7 +485,12 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
     /* uniform and multitone discs share one radius: drawn from stencils (all of them, so that
      * the pixels never depend on the window or the tiles) */
     if (r == NPRFX_OK && p->mode != NPRFX_STIPPLE_RADIUS &&
-        internal_stipple_stencils_init(&j.stencils, (double)j.radius) < 0)
+        internal_stipple_stencils_init(&j.stencils, (double)j.radius, STENCIL_PHASES,
+                                       (double)j.radius) < 0)
+        r = NPRFX_ERR_OUT_OF_MEMORY;
+    /* radius dots: areas g a0 <= a0 (the float radius of a0 itself may round up: a hair more) */
+    if (r == NPRFX_OK && p->mode == NPRFX_STIPPLE_RADIUS &&
+        internal_stipple_levels_init(&j.levels, p->a0 * (1 + 1e-6)) < 0)
         r = NPRFX_ERR_OUT_OF_MEMORY;
     if (r == NPRFX_OK) {
         int tiles = ((nprfx_rect_height(window) + STRIPE_ROWS - 1) / STRIPE_ROWS) *
@@ -495,6 +503,7 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
     free(j.lists);
     free(j.row_start);
     internal_stipple_stencils_free(&j.stencils);
+    internal_stipple_levels_free(&j.levels);
     job_free(&j);
     if (r == NPRFX_ERR_OUT_OF_MEMORY)
         return nprfx_error(ctx, r, "stipple: out of memory rendering %dx%d pixels",

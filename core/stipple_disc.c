@@ -3,6 +3,7 @@
  * exactly pi r^2 and overlapping discs multiply their paper (a union of ink). */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -236,14 +237,15 @@ void internal_stipple_splat_disc(float *t, nprfx_rect rect, double cx, double cy
     disc_coverage(rect, cx, cy, r, put_splat, &s);
 }
 
-/* ---- discs of one radius, from a table ----
+/* ---- discs from tables ----
  *
  * Uniform and multitone dots all have one radius, so a dot's coverage depends only on where its
- * centre falls within its pixel. The table holds the exact coverage (above) of the
- * STENCIL_PHASES^2 centres (i + a / STENCIL_PHASES, j + b / STENCIL_PHASES), and a dot is drawn
- * with the stencil of the nearest one: its centre moves by at most 1/64 px, its ink still sums to
- * exactly its area, and the drawing is a few multiplies a pixel instead of the chord integrals
- * (which were a third of the render). */
+ * centre falls within its pixel. A table holds the exact coverage (above) of the phases^2
+ * centres (i + a / phases, j + b / phases), and a dot is drawn with the stencil of the nearest
+ * one: its centre moves by at most half a phase (1/64 px), its ink still sums to exactly its
+ * area, and the drawing is a few multiplies a pixel instead of the chord integrals (which were
+ * a third of the render). Radius dots (area g a0) take two tables of neighbouring areas, mixed
+ * so that the ink is again exactly the dot's area (below). */
 
 typedef struct stencil_fill {
     double *c;
@@ -256,18 +258,30 @@ static void put_stencil(void *user, int x, int y, double c)
     f->c[(size_t)(y - f->y0) * (size_t)f->s + (size_t)(x - f->x0)] = c;
 }
 
-int internal_stipple_stencils_init(internal_stencils *st, double r)
+/* The pixels any centre in [0, 1)^2 touches with a disc of radius `extent`: i0 = floor(c - r -
+ * 0.5) + 1 from c = 0, i1 = ceil(c + r + 0.5) - 1 up to c = 1. */
+static void stencil_span(double extent, int *lo, int *size)
+{
+    *lo = (int)floor(-extent - 0.5) + 1;
+    *size = (int)ceil(1.0 + extent + 0.5) - 1 - *lo + 1;
+}
+
+int internal_stipple_stencils_fits(double extent)
+{
+    int lo, size;
+    stencil_span(extent, &lo, &size);
+    return extent > 0 && size <= STENCIL_MAX;
+}
+
+int internal_stipple_stencils_init(internal_stencils *st, double r, int phases, double extent)
 {
     st->cov = NULL;
     st->r = r;
-    /* the pixels any centre in [0, 1)^2 (rounded to a phase) touches: i0 = floor(c - r - 0.5) + 1
-     * from c = 0, i1 = ceil(c + r + 0.5) - 1 up to c = 1 */
-    st->lo = (int)floor(-r - 0.5) + 1;
-    const int hi = (int)ceil(1.0 + r + 0.5) - 1;
-    st->size = hi - st->lo + 1;
-    if (!(r > 0) || st->size > STENCIL_MAX) return 0; /* drawn exactly */
+    st->phases = phases;
+    stencil_span(extent, &st->lo, &st->size);
+    if (!(r >= 0) || !(extent >= r) || st->size > STENCIL_MAX) return 0; /* drawn exactly */
     const int s = st->size, n = s * s;
-    st->cov = malloc(sizeof(float) * (size_t)n * STENCIL_PHASES * STENCIL_PHASES);
+    st->cov = calloc((size_t)n * (size_t)phases * (size_t)phases, sizeof(float));
     double *c = malloc(sizeof(double) * (size_t)n);
     if (!st->cov || !c) {
         free(st->cov);
@@ -275,15 +289,14 @@ int internal_stipple_stencils_init(internal_stencils *st, double r)
         st->cov = NULL;
         return -1;
     }
-    for (int b = 0; b < STENCIL_PHASES; b++)
-        for (int a = 0; a < STENCIL_PHASES; a++) {
+    for (int b = 0; b < phases && r > 0; b++)
+        for (int a = 0; a < phases; a++) {
             for (int k = 0; k < n; k++)
                 c[k] = 0;
             stencil_fill f = {c, st->lo, st->lo, s};
             disc_coverage(nprfx_rect_make(st->lo, st->lo, st->lo + s, st->lo + s),
-                          (double)a / STENCIL_PHASES, (double)b / STENCIL_PHASES, r, put_stencil,
-                          &f);
-            float *out = st->cov + (size_t)(b * STENCIL_PHASES + a) * (size_t)n;
+                          (double)a / phases, (double)b / phases, r, put_stencil, &f);
+            float *out = st->cov + (size_t)(b * phases + a) * (size_t)n;
             for (int k = 0; k < n; k++)
                 out[k] = (float)c[k];
         }
@@ -297,32 +310,100 @@ void internal_stipple_stencils_free(internal_stencils *st)
     st->cov = NULL;
 }
 
+/* Where the stencil of a dot at (cx, cy) goes: its coverages, its first pixel (x0, y0), and
+ * the part of it inside rect, [cx0, cx1) x [cy0, cy1); 0 when nothing is inside. */
+static inline int stencil_place(const internal_stencils *st, nprfx_rect rect, double cx, double cy,
+                                const float **cov, long long *x0, long long *y0, int *cx0, int *cx1,
+                                int *cy0, int *cy1)
+{
+    const int P = st->phases;
+    /* the nearest phase: centre (ix + a / P, iy + b / P) */
+    const double fx = floor(cx * P + 0.5), fy = floor(cy * P + 0.5);
+    if (!(fabs(fx) < 1e9 && fabs(fy) < 1e9)) return 0; /* far outside any frame */
+    const long long qx = (long long)fx, qy = (long long)fy;
+    const long long ix = qx >= 0 ? qx / P : -((-qx + P - 1) / P);
+    const long long iy = qy >= 0 ? qy / P : -((-qy + P - 1) / P);
+    const int a = (int)(qx - ix * P), b = (int)(qy - iy * P);
+    const int s = st->size;
+    *x0 = ix + st->lo;
+    *y0 = iy + st->lo;
+    *cx0 = *x0 > rect.x0 ? (int)*x0 : rect.x0;
+    *cx1 = *x0 + s < rect.x1 ? (int)(*x0 + s) : rect.x1;
+    *cy0 = *y0 > rect.y0 ? (int)*y0 : rect.y0;
+    *cy1 = *y0 + s < rect.y1 ? (int)(*y0 + s) : rect.y1;
+    *cov = st->cov + (size_t)(b * P + a) * (size_t)(s * s);
+    return *cx0 < *cx1 && *cy0 < *cy1;
+}
+
 void internal_stipple_splat_stencil(float *t, nprfx_rect rect, const internal_stencils *st,
                                     double cx, double cy, double tone)
 {
-    /* the nearest phase: centre (ix + a / P, iy + b / P) */
-    const double fx = floor(cx * STENCIL_PHASES + 0.5), fy = floor(cy * STENCIL_PHASES + 0.5);
-    if (!(fabs(fx) < 1e9 && fabs(fy) < 1e9)) return; /* far outside any frame */
-    const long long qx = (long long)fx, qy = (long long)fy;
-    const long long ixl =
-        qx >= 0 ? qx / STENCIL_PHASES : -((-qx + STENCIL_PHASES - 1) / STENCIL_PHASES);
-    const long long iyl =
-        qy >= 0 ? qy / STENCIL_PHASES : -((-qy + STENCIL_PHASES - 1) / STENCIL_PHASES);
-    const int a = (int)(qx - ixl * STENCIL_PHASES), b = (int)(qy - iyl * STENCIL_PHASES);
-    const int s = st->size;
-    const long long x0 = ixl + st->lo, y0 = iyl + st->lo;
-    const int cx0 = x0 > rect.x0 ? (int)x0 : rect.x0;
-    const int cx1 = x0 + s < rect.x1 ? (int)(x0 + s) : rect.x1;
-    const int cy0 = y0 > rect.y0 ? (int)y0 : rect.y0;
-    const int cy1 = y0 + s < rect.y1 ? (int)(y0 + s) : rect.y1;
-    if (cx0 >= cx1 || cy0 >= cy1) return;
-    const float *cov = st->cov + (size_t)(b * STENCIL_PHASES + a) * (size_t)(s * s);
-    const int width = rect.x1 - rect.x0;
+    const float *cov;
+    long long x0, y0;
+    int cx0, cx1, cy0, cy1;
+    if (!stencil_place(st, rect, cx, cy, &cov, &x0, &y0, &cx0, &cx1, &cy0, &cy1)) return;
+    const int s = st->size, width = rect.x1 - rect.x0;
     const float tf = (float)tone;
     for (int y = cy0; y < cy1; y++) {
         const float *crow = cov + (size_t)(y - y0) * s - x0;
         float *trow = t + (size_t)(y - rect.y0) * width - rect.x0;
         for (int x = cx0; x < cx1; x++)
             trow[x] *= 1.0f - crow[x] * tf;
+    }
+}
+
+/* ---- radius dots: areas between levels ----
+ *
+ * A radius dot's area g a0 lies between two of the levels a0 k / RADIUS_LEVELS; the dot is drawn
+ * as (1 - w) times the lower level's disc plus w times the upper one's, w the fraction between
+ * them: the ink sums to exactly the dot's area, and the two edges, a hair apart, make one. */
+
+int internal_stipple_levels_init(internal_levels *lv, double amax)
+{
+    memset(lv, 0, sizeof *lv);
+    lv->amax = amax;
+    const double rmax = sqrt(amax / PI_D);
+    if (!internal_stipple_stencils_fits(rmax)) return 0; /* drawn exactly */
+    for (int k = 0; k <= RADIUS_LEVELS; k++) {
+        const double r = sqrt(amax * k / RADIUS_LEVELS / PI_D);
+        if (internal_stipple_stencils_init(&lv->level[k], r, RADIUS_PHASES, rmax) < 0) {
+            internal_stipple_levels_free(lv);
+            return -1;
+        }
+    }
+    lv->made = 1;
+    return 1;
+}
+
+void internal_stipple_levels_free(internal_levels *lv)
+{
+    for (int k = 0; k <= RADIUS_LEVELS; k++)
+        internal_stipple_stencils_free(&lv->level[k]);
+    lv->made = 0;
+}
+
+void internal_stipple_splat_levels(float *t, nprfx_rect rect, const internal_levels *lv, double cx,
+                                   double cy, double r, double tone)
+{
+    double f = PI_D * r * r / lv->amax * RADIUS_LEVELS;
+    f = f < 0 ? 0 : f > RADIUS_LEVELS ? RADIUS_LEVELS : f;
+    int k = (int)f;
+    if (k == RADIUS_LEVELS) k--;
+    const float w = (float)(f - k), w0 = 1.0f - w;
+    const internal_stencils *lo = &lv->level[k], *hi = &lv->level[k + 1];
+    const float *c0, *c1 = NULL;
+    long long x0, y0;
+    int cx0, cx1, cy0, cy1;
+    if (!stencil_place(lo, rect, cx, cy, &c0, &x0, &y0, &cx0, &cx1, &cy0, &cy1)) return;
+    /* the same span and phase (the levels share their extent) */
+    if (!stencil_place(hi, rect, cx, cy, &c1, &x0, &y0, &cx0, &cx1, &cy0, &cy1)) return;
+    const int s = lo->size, width = rect.x1 - rect.x0;
+    const float tf = (float)tone;
+    for (int y = cy0; y < cy1; y++) {
+        const size_t o = (size_t)(y - y0) * s;
+        const float *r0 = c0 + o - x0, *r1 = c1 + o - x0;
+        float *trow = t + (size_t)(y - rect.y0) * width - rect.x0;
+        for (int x = cx0; x < cx1; x++)
+            trow[x] *= 1.0f - (w0 * r0[x] + w * r1[x]) * tf;
     }
 }
