@@ -32,6 +32,9 @@ double nprfx_cli_now(void);
 
 /* Peak resident memory of this process in MiB. */
 double nprfx_cli_peak_mib(void);
+/* The bytes per second a parallel memcpy of `bytes` (at least 64 MiB) moves, read plus
+ * written, on the executor's threads: best of five (cli/bench_floor.c). 0 when out of memory. */
+double nprfx_cli_copy_bandwidth(const nprfx_executor *ex, size_t bytes);
 
 /* --mem-limit SIZE of command `cmd`: set the process's memory limit (io_limits.h), or say why
  * SIZE is not a size on stderr and return non-zero. */

@@ -135,13 +135,14 @@ int nprfx_cmd_bench(int argc, char **argv)
         status = 2;
         goto done;
     }
-    double total = 0, best = 1e30, cpu = 0;
+    double total = 0, best = 1e30, cpu = 0, traffic = 0;
     long long items = 0;
     nprfx_image out;
     for (int f = 0; f <= frames; f++) { /* frame 0 warms caches and page tables */
         nprfx_graph_take_render_seconds(g);
         nprfx_graph_take_render_cpu_seconds(g);
         nprfx_graph_take_render_items(g);
+        nprfx_graph_take_render_bytes(g);
         if (nprfx_graph_eval(g, "bench", 1 + f, &out)) {
             fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
             status = 1;
@@ -149,6 +150,7 @@ int nprfx_cmd_bench(int argc, char **argv)
         }
         double s = nprfx_graph_take_render_seconds(g);
         cpu += nprfx_graph_take_render_cpu_seconds(g) * (f > 0);
+        traffic += nprfx_graph_take_render_bytes(g) * (f > 0);
         long long n = nprfx_graph_take_render_items(g);
         if (f == 0) continue;
         items += n;
@@ -163,6 +165,13 @@ int nprfx_cmd_bench(int argc, char **argv)
            nprfx_executor_workers(nprfx_context_executor(env.ctx)),
            nprfx_executor_workers(nprfx_context_executor(env.ctx)) == 1 ? "" : "s", mean * 1e3,
            best * 1e3, cpu / frames * 1e3, (double)w * h / mean * 1e-6, nprfx_cli_peak_mib());
+    /* the floor: the frames' bytes the node must read and write, at this machine's copy speed */
+    double per_frame = traffic / frames;
+    double bw = nprfx_cli_copy_bandwidth(nprfx_context_executor(env.ctx), (size_t)per_frame);
+    if (bw > 0 && per_frame > 0)
+        printf("memory floor: %.2f ms/frame (%.0f MB of frames read and written at %.1f GB/s "
+               "memcpy); the node takes %.1fx that\n",
+               per_frame / bw * 1e3, per_frame * 1e-6, bw * 1e-9, mean / (per_frame / bw));
     if (d->item_name && items > 0) /* what the node counts: e.g. stipples drawn */
         printf("%s: %.0f %s/frame, %.2f M %s/s\n", node_id, (double)items / frames, d->item_name,
                (double)items / total * 1e-6, d->item_name);

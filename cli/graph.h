@@ -160,6 +160,9 @@ double nprfx_graph_take_render_seconds(nprfx_graph *g);
 /* The process's CPU seconds (all threads) over the same spans: on a loaded machine, what the
  * renders cost rather than how long they waited for a core; resets. */
 double nprfx_graph_take_render_cpu_seconds(nprfx_graph *g);
+/* The bytes of frames the renders read (each input once) and wrote (the output once) since the
+ * last call: the memory traffic no implementation can avoid (bench's floor); resets. */
+double nprfx_graph_take_render_bytes(nprfx_graph *g);
 /* Items the nodes counted since the last call (nprfx_render_args.items; for bench); resets. */
 long long nprfx_graph_take_render_items(nprfx_graph *g);
 

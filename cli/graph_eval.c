@@ -598,6 +598,14 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
         }
     g->render_seconds += internal_graph_now() - t0;
     g->render_cpu_seconds += internal_graph_cpu_now() - c0;
+    /* what the render must at least move through memory: its inputs read once, its output
+     * written once (bench's floor) */
+    for (int k = 0; k < d->num_inputs; k++)
+        if (in_ch[k])
+            g->render_bytes += 4.0 * in_ch[k] * (double)nprfx_rect_width(inputs[k].bounds) *
+                               nprfx_rect_height(inputs[k].bounds);
+    g->render_bytes +=
+        4.0 * oi.channels * (double)nprfx_rect_width(frame_rect) * nprfx_rect_height(frame_rect);
     if (!r && !(g->has_hook && g->hook.exports)) r = export_node(g, n, &a, frame);
     if (r) { /* the message went out through n->ctx, naming the node */
         internal_graph_frame_release(g, im);

@@ -240,6 +240,13 @@ long long nprfx_graph_take_render_items(nprfx_graph *g)
     return n;
 }
 
+double nprfx_graph_take_render_bytes(nprfx_graph *g)
+{
+    double b = g->render_bytes;
+    g->render_bytes = 0;
+    return b;
+}
+
 double nprfx_graph_take_render_cpu_seconds(nprfx_graph *g)
 {
     double s = g->render_cpu_seconds;

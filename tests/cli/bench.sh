@@ -24,7 +24,10 @@ for m in uniform radius multitone; do
   [ -n "$n" ] && [ "$n" -gt 50 ] && pass || { fail "$m: no plausible 'stipples/frame' line"; cat out.txt; }
 done
 expect 0 "^gabor-splat: [0-9]+ kernels/frame" "$NPRFX" bench gabor-splat --size 96x64 --frames 1
-expect 0 "ms/frame" "$NPRFX" bench blend --size 64x64 --frames 1
+expect 0 "ms/frame" "$NPRFX" bench blend --size 500x500 --frames 1
+# blend reads base and layer (RGBA each) and writes RGBA: 12 floats a pixel, 12 MB a frame
+grep -qE "^memory floor: [0-9.]+ ms/frame \(12 MB of frames read and written at [0-9.]+ GB/s memcpy\); the node takes [0-9.]+x that$" out.txt \
+  && pass || { fail "blend: no memory floor line"; cat out.txt; }
 ! grep -q "^blend:" out.txt && pass || fail "blend reports a count it does not make"
 expect 2 "unknown node 'nope'" "$NPRFX" bench nope
 expect 2 "--size must be WxH" "$NPRFX" bench blend --size big
