@@ -34,6 +34,18 @@ double nprfx_cli_now(void);
 double nprfx_cli_peak_mib(void);
 /* The bytes per second a parallel memcpy of `bytes` (at least 64 MiB) moves, read plus
  * written, on the executor's threads: best of five (cli/bench_floor.c). 0 when out of memory. */
+/* What nprfx bench and bench-graph both take (cli/bench_options.c). */
+#define NPRFX_CLI_BENCH_MAX_SETS 64
+typedef struct nprfx_cli_bench_options {
+    const char *size, *scene, *mem_limit;
+    const char *sets[NPRFX_CLI_BENCH_MAX_SETS];
+    int nsets, frames, threads, no_pool;
+} nprfx_cli_bench_options;
+/* Consume argv[*i] (and its value) when it is one of the shared options: --size, --frames,
+ * --threads, --scene, --set, --mem-limit, --no-pool. 1 when taken. */
+int nprfx_cli_bench_option(int argc, char **argv, int *i, nprfx_cli_bench_options *o);
+/* Parse o->size into w, h; 2 (with the message) when it is not WxH within 65536. */
+int nprfx_cli_bench_size(const char *cmd, const nprfx_cli_bench_options *o, int *w, int *h);
 double nprfx_cli_copy_bandwidth(const nprfx_executor *ex, size_t bytes);
 
 /* --mem-limit SIZE of command `cmd`: set the process's memory limit (io_limits.h), or say why

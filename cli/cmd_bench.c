@@ -26,7 +26,9 @@ static void usage(FILE *f)
         "process's peak memory, and for nodes that count what they make (stipple: dots\n"
         "drawn) that count per frame and per second. File I/O and plate synthesis are not\n"
         "timed. Frames come from the runner's frame pool (--no-pool: calloc'd afresh, as\n"
-        "before); --mem-limit is as for nprfx run. 'nprfx bench-graph' times whole graphs.\n\n"
+        "before); --mem-limit is as for nprfx run. Then the node's memory floor: the bytes of\n"
+            "frames it reads and writes, at this machine's memcpy speed on as many threads, and how\n"
+            "many times that the node takes. 'nprfx bench-graph' times whole graphs.\n\n"
         "example:\n"
         "  nprfx bench stipple --size 1920x1080 --connect uv=UV.U,UV.V --connect id=id \\\n"
         "      --set mode=radius\n");
@@ -34,32 +36,18 @@ static void usage(FILE *f)
 
 int nprfx_cmd_bench(int argc, char **argv)
 {
-    const char *node_id = NULL, *size = "1920x1080", *scene = "orbit";
-    const char *sets[64], *connects[32];
-    int nsets = 0, nconn = 0, frames = 10, threads = 0, no_pool = 0;
-    const char *mem_limit = NULL;
+    const char *node_id = NULL, *connects[32];
+    int nconn = 0;
+    nprfx_cli_bench_options o = {.size = "1920x1080", .scene = "orbit", .frames = 10};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        int has = i + 1 < argc;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             return 0;
-        } else if (!strcmp(a, "--size") && has)
-            size = argv[++i];
-        else if (!strcmp(a, "--frames") && has)
-            frames = atoi(argv[++i]);
-        else if (!strcmp(a, "--threads") && has)
-            threads = atoi(argv[++i]);
-        else if (!strcmp(a, "--scene") && has)
-            scene = argv[++i];
-        else if (!strcmp(a, "--set") && has && nsets < 64)
-            sets[nsets++] = argv[++i];
-        else if (!strcmp(a, "--connect") && has && nconn < 32)
+        } else if (nprfx_cli_bench_option(argc, argv, &i, &o))
+            continue;
+        else if (!strcmp(a, "--connect") && i + 1 < argc && nconn < 32)
             connects[nconn++] = argv[++i];
-        else if (!strcmp(a, "--mem-limit") && has)
-            mem_limit = argv[++i];
-        else if (!strcmp(a, "--no-pool"))
-            no_pool = 1;
         else if (a[0] != '-' && !node_id)
             node_id = a;
         else {
@@ -68,6 +56,9 @@ int nprfx_cmd_bench(int argc, char **argv)
             return 2;
         }
     }
+    const char *scene = o.scene, *mem_limit = o.mem_limit;
+    const char *const *sets = o.sets;
+    const int nsets = o.nsets, frames = o.frames, threads = o.threads, no_pool = o.no_pool;
     if (!node_id || frames < 1) {
         usage(stderr);
         return 2;
@@ -78,10 +69,7 @@ int nprfx_cmd_bench(int argc, char **argv)
         return 2;
     }
     int w, h;
-    if (sscanf(size, "%dx%d", &w, &h) != 2 || w < 1 || h < 1) {
-        fprintf(stderr, "nprfx bench: --size must be WxH, e.g. 1920x1080\n");
-        return 2;
-    }
+    if (nprfx_cli_bench_size("bench", &o, &w, &h)) return 2;
     /* Build the graph as JSON text, so bench exercises exactly the runner's wiring. */
     char json[8192];
     int len = snprintf(json, sizeof json,

@@ -38,31 +38,18 @@ static void usage(FILE *f)
 
 int nprfx_cmd_bench_graph(int argc, char **argv)
 {
-    const char *path = NULL, *size = "1920x1080", *scene = "orbit", *write_dir = NULL;
-    const char *mem_limit = NULL, *sets[64];
-    int nsets = 0, frames = 8, threads = 0, no_pool = 0, stats = 0;
+    const char *path = NULL, *write_dir = NULL;
+    int stats = 0;
+    nprfx_cli_bench_options o = {.size = "1920x1080", .scene = "orbit", .frames = 8};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        int has = i + 1 < argc;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             return 0;
-        } else if (!strcmp(a, "--size") && has)
-            size = argv[++i];
-        else if (!strcmp(a, "--frames") && has)
-            frames = atoi(argv[++i]);
-        else if (!strcmp(a, "--threads") && has)
-            threads = atoi(argv[++i]);
-        else if (!strcmp(a, "--scene") && has)
-            scene = argv[++i];
-        else if (!strcmp(a, "--set") && has && nsets < 64)
-            sets[nsets++] = argv[++i];
-        else if (!strcmp(a, "--write") && has)
+        } else if (nprfx_cli_bench_option(argc, argv, &i, &o))
+            continue;
+        else if (!strcmp(a, "--write") && i + 1 < argc)
             write_dir = argv[++i];
-        else if (!strcmp(a, "--mem-limit") && has)
-            mem_limit = argv[++i];
-        else if (!strcmp(a, "--no-pool"))
-            no_pool = 1;
         else if (!strcmp(a, "--stats"))
             stats = 1;
         else if (a[0] != '-' && !path)
@@ -73,15 +60,15 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
             return 2;
         }
     }
+    const char *scene = o.scene, *mem_limit = o.mem_limit;
+    const char *const *sets = o.sets;
+    const int nsets = o.nsets, frames = o.frames, threads = o.threads, no_pool = o.no_pool;
     if (!path || frames < 1) {
         usage(stderr);
         return 2;
     }
     int w, h;
-    if (sscanf(size, "%dx%d", &w, &h) != 2 || w < 1 || h < 1 || w > 65536 || h > 65536) {
-        fprintf(stderr, "nprfx bench-graph: --size must be WxH, e.g. 1920x1080\n");
-        return 2;
-    }
+    if (nprfx_cli_bench_size("bench-graph", &o, &w, &h)) return 2;
     uint64_t limit_bytes = 0;
     if (mem_limit && nprfx_parse_size(mem_limit, &limit_bytes)) {
         fprintf(stderr,

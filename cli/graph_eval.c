@@ -662,6 +662,9 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     if (*out) (*out)->from_reader = from_reader;
     if (!*out) {
         free(meta.types);
+        for (int c = 0; names && c < im.channels; c++) /* the entry did not take them */
+            free(names[c]);
+        free(names);
         if (from_reader) { /* the reader's own buffer, never the pool's */
             size_t bytes = (size_t)nprfx_rect_width(im.bounds) *
                            (size_t)nprfx_rect_height(im.bounds) * (size_t)im.channels *
