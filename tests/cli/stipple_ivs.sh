@@ -65,12 +65,12 @@ cp seq/a.ivs ver.ivs
 printf '\011' | dd of=ver.ivs bs=1 seek=8 conv=notrunc 2> /dev/null
 expect 1 "version 9" "$NPRFX" ivs --check ver.ivs
 
-# the shipped file: the build writes the first 2^20 points beside the runner (share/nprfx) and
+# the shipped file: the build writes the first 2^21 points (all a pixel may use) beside the runner (share/nprfx) and
 # into the OpenFX bundle; the node reads it, and renders exactly what it renders generating the
 # sequence itself ($NPRFX_DATA_DIR empty: no data folder)
 BIN=$(cd "$(dirname "$NPRFX")" && pwd)
 SHIP="$BIN/share/nprfx/ivs.bin"
-expect 0 "1048576 points, seed 20180601" "$NPRFX" ivs --check "$SHIP"
+expect 0 "2097152 points, seed 20180601" "$NPRFX" ivs --check "$SHIP"
 cmp -s "$SHIP" "$BIN/plugins/ofx/nprfx.ofx.bundle/Contents/Resources/ivs.bin" && pass || fail "the OpenFX bundle lacks the shipped ivs.bin"
 "$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir shipped --quiet && pass || fail "render with the shipped file"
 NPRFX_DATA_DIR= "$NPRFX" run "$SRC/tests/graphs/stipple.json" --frames 1 --output-dir generated --quiet && pass || fail "render generating the sequence"
