@@ -154,6 +154,17 @@ static nprfx_result gather_wants(nprfx_graph *g)
     return NPRFX_OK;
 }
 
+typedef struct read_pick {
+    nprfx_graph *g;
+    int node;
+} read_pick;
+
+static int pick_channels(void *user, const char *const *names, int n, int *pick)
+{
+    const read_pick *rp = user;
+    return internal_graph_read_pick(rp->g, rp->node, names, n, pick);
+}
+
 static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
                               gmeta *meta)
 {
@@ -164,8 +175,12 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     memset(&plate, 0, sizeof plate);
     nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
-    nprfx_read_options ro = {sizeof ro, n->part, n->read_view, (const char *const *)n->wants,
-                             n->nwants};
+    /* Only the channels the graph uses are read (the plan picks them from the names the read
+     * would deliver): a renderer's plate has 23-56, a graph reads a dozen. */
+    read_pick rp = {g, node};
+    nprfx_read_options ro = {sizeof ro, n->part,   n->read_view, (const char *const *)n->wants,
+                             n->nwants, NULL,      0,            pick_channels,
+                             &rp};
     if ((r = nprfx_io_read_ex(n->ctx, file, &ro, &plate))) return r;
     if (plate.note && !n->noted && g->notice) {
         char msg[4600];

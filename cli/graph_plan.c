@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "channels.h"
 #include "internal_graph.h"
 #include "io.h"
 #include "io_limits.h"
@@ -111,6 +112,87 @@ int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *n
             }
     }
     return kept;
+}
+
+/* Whether input k of reader selects from names (nc) the channels that `whole` (nw) gives it,
+ * through map (index in names -> index in whole). */
+static int same_selection(nprfx_graph *g, const gnode *reader, int k, const char *const *whole,
+                          int nw, const char *const *names, int nc, const int *map)
+{
+    int a[256], b[256], ca = 0, cb = 0;
+    if (internal_graph_input_channels(g, reader, k, whole, nw, a, &ca) ||
+        internal_graph_input_channels(g, reader, k, names, nc, b, &cb) || ca != cb)
+        return 0;
+    for (int c = 0; c < ca; c++)
+        if (map[b[c]] != a[c]) return 0;
+    return 1;
+}
+
+/* Whether `sel` picks from names (nc) the channels it picks from whole (nw), through map. */
+static int same_pick(const char *sel, const char *const *whole, int nw, const char *const *names,
+                     int nc, const int *map)
+{
+    int a[8], b[8], amb;
+    char bad[64];
+    int ca = nprfx_channels_select(whole, nw, sel, a, 8, bad, sizeof bad, &amb);
+    int cb = nprfx_channels_select(names, nc, sel, b, 8, bad, sizeof bad, &amb);
+    if (ca != cb) return 0;
+    for (int c = 0; c < ca; c++)
+        if (map[b[c]] != a[c]) return 0;
+    return 1;
+}
+
+int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *pick)
+{
+    const gnode *n = &g->nodes[node];
+    int motion = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
+    if (nc < 1 || nc + motion > 1024) return -1; /* wider plates are read whole */
+    const char *all[1024], *sub[1024];
+    unsigned char keep[1024];
+    int map[1024];
+    for (int c = 0; c < nc; c++)
+        all[c] = names[c];
+    for (int k = 0; k < motion; k++)
+        all[nc + k] = internal_graph_motion_names[k];
+    int na = nc + motion;
+    if (internal_graph_plate_channels(g, node, all, na, keep) <= 0) return -1;
+    /* What the read makes of its plate needs its sources: the channels the motion channels are
+     * made of (the read fails without them), and R,G,B when it converts colour (OCIO may mix
+     * them), so the channels read are converted exactly as in the whole plate. */
+    int src[4] = {0}, rgb[3], amb;
+    double sign[4];
+    char bad[64];
+    if (motion && internal_graph_motion_sources(g, n, "", names, nc, src, sign)) return -1;
+    for (int k = 0; k < motion; k++)
+        keep[src[k]] = 1;
+    int have_rgb = n->colorspace && nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad,
+                                                          sizeof bad, &amb) == 3;
+    for (int c = 0; have_rgb && c < 3; c++)
+        keep[rgb[c]] = 1;
+    int m = 0;
+    for (int c = 0; c < nc; c++)
+        if (keep[c]) {
+            map[m] = c;
+            sub[m] = names[c];
+            pick[m++] = c;
+        }
+    if (m == nc) return -1;
+    for (int k = 0; k < motion; k++) {
+        map[m + k] = nc + k;
+        sub[m + k] = all[nc + k];
+    }
+    /* Every choice made on the plate must come out the same on the channels read (a suffix
+     * ambiguous in the whole plate could become unique); else the whole plate is read. */
+    for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++)
+        if (!same_selection(g, &g->nodes[g->plan_readers[r][0]], g->plan_readers[r][1], all, na,
+                            sub, m + motion, map))
+            return -1;
+    int sub_src[4];
+    if (motion && internal_graph_motion_sources(g, n, "", sub, m, sub_src, sign)) return -1;
+    for (int k = 0; k < motion; k++)
+        if (map[sub_src[k]] != src[k]) return -1;
+    if (n->colorspace && !same_pick("R,G,B", all, na, sub, m + motion, map)) return -1;
+    return m;
 }
 
 int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta)
@@ -424,14 +506,25 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         memset(&info, 0, sizeof info);
         if (nprfx_io_info(g->ctx, file, &info)) return 1;
         int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
-        sh->names = calloc((size_t)(info.nchannels + extra), sizeof *sh->names);
-        for (int c = 0; sh->names && c < info.nchannels; c++)
-            sh->names[c] = internal_graph_strdup(info.names[c]);
+        /* The read delivers only the channels it picks (eval_read), then appends the motion
+         * channels; the trim drops what only those were read for. */
+        int pick[1024], nread = info.nchannels;
+        int m = info.nchannels <= 1024 ? internal_graph_read_pick(g, i, (const char *const *)info.names,
+                                                                  info.nchannels, pick)
+                                       : -1;
+        if (m > 0)
+            nread = m;
+        else
+            for (int c = 0; c < nread; c++)
+                pick[c] = c;
+        sh->names = calloc((size_t)(nread + extra), sizeof *sh->names);
+        for (int c = 0; sh->names && c < nread; c++)
+            sh->names[c] = internal_graph_strdup(info.names[pick[c]]);
         for (int c = 0; sh->names && c < extra; c++)
-            sh->names[info.nchannels + c] = internal_graph_strdup(internal_graph_motion_names[c]);
+            sh->names[nread + c] = internal_graph_strdup(internal_graph_motion_names[c]);
         sh->w = nprfx_rect_width(info.bounds);
         sh->h = nprfx_rect_height(info.bounds);
-        sh->channels = info.nchannels + extra;
+        sh->channels = nread + extra;
         nprfx_file_info_free(&info);
         if (!sh->names) return 1;
         sh->known = 1;
@@ -602,7 +695,9 @@ static int sim_eval(sim *s, int root)
         }
         uint64_t b = shape_bytes(sh), extra = s->scratch[node];
         int plate = n->kind == GK_READ || n->kind == GK_SYNTH;
-        if (plate && extra) { /* the whole plate, then its trim (internal_graph_trim_plate) */
+        /* the plate as made (a read's picked channels, a synth's all), then its trim
+         * (internal_graph_trim_plate) */
+        if (plate && extra) {
             if (n->kind == GK_SYNTH)
                 sim_alloc(s, extra);
             else

@@ -151,6 +151,13 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
  * nprfx_graph_eval, who sees all of it. Only a planned graph trims plates. */
 int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *names, int nc,
                                   unsigned char *keep);
+/* The channels read node `node` reads of a file whose whole read would deliver names (nc):
+ * those its readers take (internal_graph_plate_channels on names with the motion channels
+ * appended), the sources of its motion channels and its R,G,B when it converts colour, as
+ * indices into names in file order into pick (room for nc); -1 to read them all: nothing to
+ * leave out, no plan, or a selection that would come out otherwise on the channels read. */
+int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc,
+                             int *pick);
 /* Keep only the channels of plate node's result (im, names, and meta's per-channel types when it
  * has them) that its readers take, when every reader then selects the very same channels
  * (internal_graph_plate_channels); whether it did. */

@@ -51,6 +51,18 @@ typedef struct nprfx_read_options {
      * the first group of parts (same data and display window) of the view that holds them all. */
     const char *const *want;
     int nwant;
+    /* Appended (read when size covers them). The channels to read, by the names a whole read
+     * gives them (nprfx_plate.names), in the order the plate should have them; NULL: all. Only
+     * these are decoded into the plate (EXR: a block of whole chunks at a time, converting only
+     * the span of a part's channels that holds them) and counted against the memory limit. */
+    const char *const *channels;
+    int nchannels;
+    /* Without `channels`: chosen once the names are known, from the same look at the header.
+     * Called with the n names a whole read would deliver, in order, before any pixel is read;
+     * fills pick (room for n) with indices into names and returns how many, or 0 or less for
+     * all of them. */
+    int (*pick)(void *user, const char *const *names, int n, int *pick);
+    void *pick_user;
 } nprfx_read_options;
 
 /* Read a file's default part group: the first part of the default view and every other part

@@ -505,6 +505,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         /* UINT channels are read into a scratch buffer of their own before the cast. */
         if ((int64_t)nuint * w * h > uint_scratch) uint_scratch = (int64_t)nuint * w * h;
     }
+    /* NPRFX_GUARD_READ_CHOSEN: the reader checks the channels it delivers itself. */
     if (mode == NPRFX_GUARD_READ) {
         /* What the read allocates: one float per channel per pixel of all parts' windows, and
          * the scratch of UINT channels and of a row of tiles. */
@@ -528,7 +529,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
                                exr_why(rv));
         if (st == EXR_STORAGE_DEEP_SCANLINE || st == EXR_STORAGE_DEEP_TILED) continue;
         wk.part = p;
-        wk.ratio = mode == NPRFX_GUARD_READ ? max_ratio(comp) : 0.0;
+        wk.ratio = mode != NPRFX_GUARD_HEADER ? max_ratio(comp) : 0.0;
         r = st == EXR_STORAGE_TILED ? walk_tiles(&wk) : walk_scanlines(&wk, &dw);
         if (r) return r;
     }
