@@ -760,6 +760,63 @@ static int sim_frame(sim *s)
     return 0;
 }
 
+/* Rows per strip when the plan chooses strips itself (a graph over the memory limit): a few
+ * chunks of most EXR compressions, small against any frame worth striping. */
+#define PLAN_STRIP_ROWS 64
+
+/* Strips (graph_strips.c) instead of whole frames: always with --strip-rows N, and when whole
+ * frames would pass the limit (over) and every write can render by rows. out->need becomes what
+ * the strips hold; a limit even strips pass is refused here. Otherwise why says what keeps the
+ * graph from strips (for the whole-frame refusal). */
+static nprfx_result plan_strips(nprfx_graph *g, int frame, int over, nprfx_graph_plan_info *out,
+                                char *why, size_t n)
+{
+    g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
+    if (g->strip_option < 0 || (g->strip_option == 0 && !over) || g->no_pool) return NPRFX_OK;
+    int rows = g->strip_option > 0 ? g->strip_option : PLAN_STRIP_ROWS;
+    uint64_t need = 0;
+    int writer = -1, writes = 0, all = 1;
+    for (int i = 0; i < g->count; i++) {
+        if (g->nodes[i].kind != GK_WRITE) continue;
+        writes++;
+        if (!internal_graph_strips_possible(g, i, why, n)) {
+            all = 0;
+            continue;
+        }
+        int known = 0;
+        uint64_t b = internal_graph_strip_need(g, i, frame, rows, &known);
+        if (!known) return NPRFX_OK; /* the render reports what is wrong */
+        if (b > need) {
+            need = b;
+            writer = i;
+        }
+    }
+    /* Some writes whole, some by strips: only with --strip-rows, and the whole-frame estimate
+     * (all writes) stands. */
+    if (!writes || (!all && g->strip_option == 0)) return NPRFX_OK;
+    if (!all) {
+        g->strip_rows = rows;
+        return NPRFX_OK;
+    }
+    g->strip_rows = rows;
+    out->strip_rows = rows;
+    out->need = need;
+    out->peak = need;
+    out->peak_node = writer >= 0 ? g->nodes[writer].name : out->peak_node;
+    if (g->mem_limit == UINT64_MAX || need <= g->mem_limit) return NPRFX_OK;
+    g->strip_rows = 0;
+    char nb[32], wb[32], lim[32];
+    nprfx_format_bytes(nb, sizeof nb, need);
+    nprfx_format_bytes(wb, sizeof wb, out->whole_need);
+    nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
+    return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
+                       "frame %d needs %s of frames whole, and still %s in strips of %d rows "
+                       "(write node '%s' and the nodes it reads, %dx%d): above the %s memory "
+                       "limit (%s); nothing was rendered (fewer rows: --strip-rows)",
+                       frame, wb, nb, rows, g->nodes[writer].name, out->width, out->height, lim,
+                       nprfx_mem_limit_origin());
+}
+
 nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out)
 {
     memset(out, 0, sizeof *out);
@@ -788,7 +845,13 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
         out->width = sh->w;
         out->height = sh->h;
         out->peak_node = g->nodes[s.peak_node].name;
-        if (g->mem_limit != UINT64_MAX && s.need > g->mem_limit) {
+        out->whole_need = s.need;
+        int over = g->mem_limit != UINT64_MAX && s.need > g->mem_limit;
+        char why[600] = "";
+        r = plan_strips(g, frame, over, out, why, sizeof why);
+        if (r || out->strip_rows > 0) {
+            over = 0; /* strips decided, or refused with their own message */
+        } else if (over) {
             char need[32], lim[32], one[32];
             nprfx_format_bytes(need, sizeof need, s.need);
             nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
@@ -797,9 +860,10 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
                 g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                 "frame %d needs %s of frames at its peak, at node '%s' (its %dx%d frame "
                 "with %d channel%s, %s, joins the frames still held): above the %s "
-                "memory limit (%s); nothing was rendered",
+                "memory limit (%s); nothing was rendered%s%s%s",
                 frame, need, g->nodes[s.peak_node].name, sh->w, sh->h, sh->channels,
-                sh->channels == 1 ? "" : "s", one, lim, nprfx_mem_limit_origin());
+                sh->channels == 1 ? "" : "s", one, lim, nprfx_mem_limit_origin(),
+                why[0] ? " (nor can it render by strips of rows: " : "", why, why[0] ? ")" : "");
         }
     }
     for (int i = 0; s.shapes && i < g->count; i++)

@@ -8,6 +8,7 @@
 
 #include "frame_pool.h"
 #include "graph.h"
+#include "io.h"
 #include "nprfx/nprfx.h"
 
 typedef enum gkind { GK_NODE, GK_READ, GK_SYNTH, GK_WRITE } gkind;
@@ -101,6 +102,9 @@ struct nprfx_graph {
      * to check that pooling never changes a pixel). */
     nprfx_frame_pool *pool;
     int no_pool;
+    /* Strip renders (graph_strips.c): the option (nprfx_graph_options.strip_rows), and the rows
+     * per strip the plan chose (0: whole frames). */
+    int strip_option, strip_rows;
     int plan_ready;
     int *plan_uses;               /* per node: inputs reading it at the same frame */
     unsigned char *plan_temporal; /* per node: some temporal node reads it at other frames */
@@ -218,6 +222,28 @@ void internal_graph_variant_plate(const nprfx_graph *g, nprfx_image *im, char **
 /* NPRFX_VARIANT_WHITE: the params node n renders frame with (its own, or *copy altered). */
 const nprfx_value *internal_graph_variant_params(const nprfx_graph *g, const gnode *n, int frame,
                                                  nprfx_value *copy);
+/* Strip renders (graph_strips.c): read node `node`'s file at frame (its path into file, n bytes)
+ * opened for rows with the channels eval_read would read; *shape describes the plate. */
+nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, char *file,
+                                           size_t n, nprfx_plate *shape, nprfx_row_reader **rr);
+/* Rows [y0, y1) of it as a plate of their own (malloc'd), with the motion channels and the
+ * colour conversion eval_read applies to a whole plate. */
+nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
+                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0, int y1,
+                                      nprfx_plate *out);
+/* Write node w would overwrite one of the graph's inputs at frame with out: the error. */
+nprfx_result internal_graph_check_not_input(nprfx_graph *g, const gnode *w, const char *out,
+                                            int frame);
+/* Whether write node `node` can be rendered a strip of rows at a time (graph_strips.c): every
+ * node it depends on is a read of an EXR or a node with NPRFX_NODE_ROWS and a footprint >= 0,
+ * none temporal; no preview. When not, why names the node in the way. */
+int internal_graph_strips_possible(nprfx_graph *g, int node, char *why, size_t n);
+/* Render write node `node` at frame by strips of g->strip_rows rows (graph_strips.c). */
+nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame);
+/* The bytes a strip render of write node `write` at frame holds at most with strips of `rows`
+ * rows (the plates' headers are read); *known 0 when it cannot be told without rendering. */
+uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows, int *known);
+
 /* The cache entry of node at frame, evaluated (and its inputs) when not cached. */
 nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out);
 

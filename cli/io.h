@@ -74,6 +74,19 @@ nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *ou
 nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path, const nprfx_read_options *opt,
                               nprfx_plate *out);
 
+/* A plate a strip of rows at a time (EXR), for the runner's strip renders (docs/design.md §1
+ * "Memory"): opened with the same options as nprfx_io_read_ex, *shape gets the plate's
+ * description (everything but pixels); then any rows [y0, y1) of the data window, in any order,
+ * are decoded into dst (shape's nchannels floats per pixel, rows of the window's width), a block
+ * of whole chunks at a time, so the read never holds more than its block. The memory limit
+ * counts the block, not the plate. Other formats: NPRFX_ERR_UNSUPPORTED. */
+typedef struct nprfx_row_reader nprfx_row_reader;
+nprfx_result nprfx_io_rows_open(nprfx_context *ctx, const char *path, const nprfx_read_options *opt,
+                                nprfx_plate *shape, nprfx_row_reader **out);
+nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader *r, int y0, int y1,
+                                float *dst);
+void nprfx_io_rows_close(nprfx_row_reader *r);
+
 /* One part (subimage) of a file, for `nprfx info`. */
 typedef struct nprfx_part_info {
     int index;
@@ -142,6 +155,18 @@ void nprfx_attributes_free(char **names, char **values, int count);
 nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
                             const char *const *names, const nprfx_rect *display,
                             const nprfx_write_options *opt);
+
+/* An image written a strip of rows at a time, top to bottom: as nprfx_io_write (same header,
+ * types and options, a temporary name beside path), but each nprfx_io_rows_write gives the next
+ * rows (full width of bounds), and nprfx_io_rows_finish with keep renames the file into place
+ * once every row is written; without keep (or on any error) the temporary file is removed. The
+ * writer is freed by finish. */
+typedef struct nprfx_row_writer nprfx_row_writer;
+nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path, nprfx_rect bounds,
+                                  int channels, const char *const *names, const nprfx_rect *display,
+                                  const nprfx_write_options *opt, nprfx_row_writer **out);
+nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer *w, const nprfx_image *rows);
+nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_writer *w, int keep);
 
 /* Write an 8-bit PNG preview of a scene-linear image. 1 channel: grey; 2: R,G (B = 0); 3: RGB;
  * 4: RGBA. With an OCIO config (ocio_config path, or $OCIO when NULL) the image goes from

@@ -647,10 +647,10 @@ void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, 
 
 /* Guard, header, choice of parts and view, and the channels to deliver: everything but pixels. */
 nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read_options &o,
-                          reading &rd)
+                          reading &rd, bool rows = false)
 {
     rd.path = path;
-    rd.chosen = o.channels || o.pick;
+    rd.chosen = o.channels || o.pick || rows;
     /* Damaged files are refused before OIIO allocates anything (io_validate.h). A read of chosen
      * channels is held to the memory limit by what it delivers, checked once they are known. */
     if (nprfx_result g = nprfx_io_guard(ctx, path, rd.chosen ? NPRFX_GUARD_READ_CHOSEN
@@ -708,6 +708,10 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
         return nprfx_error(ctx, NPRFX_ERR_IO, "%s holds an empty image (%dx%d, %zu channels)",
                            where.c_str(), first.width, first.height, nch);
     rd.blocks = rd.chosen && rd.h.format == "openexr";
+    if (rows && !rd.blocks)
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
+                           "'%s' is %s: only EXR files can be read a strip of rows at a time", path,
+                           rd.h.format.c_str());
     if (rd.chosen) {
         /* What this read allocates: its channels, and one block per part (or the uint scratch
          * of a read by channel runs). */
@@ -721,8 +725,9 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
             uint64_t b = rows * (uint64_t)first.width * span * 4u;
             if (b > scratch) scratch = b;
         }
+        /* A read by rows holds its blocks only; the caller's strips are the caller's. */
         std::string what = "'" + std::string(path) + "': data window";
-        if ((r = nprfx_image_limit_check(ctx, what.c_str(), first.width, first.height,
+        if ((r = nprfx_image_limit_check(ctx, what.c_str(), first.width, rows ? 0 : first.height,
                                          (int64_t)nch, scratch)))
             return r;
     }
@@ -1092,19 +1097,14 @@ extern "C" void nprfx_attributes_free(char **names, char **values, int count)
 
 /* ---- writing ------------------------------------------------------------------------------ */
 
-extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
-                                       const char *const *names, const nprfx_rect *display,
-                                       const nprfx_write_options *opt)
+namespace
 {
-    if (!path || !im || !im->data)
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': no image",
-                           path ? path : "(null)");
-    if (im->channels < 1 || nprfx_rect_empty(im->bounds))
-        return nprfx_error(
-            ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': empty image (%dx%d, %d channels)",
-            path, nprfx_rect_width(im->bounds), nprfx_rect_height(im->bounds), im->channels);
-    /* Read only the option fields the caller's struct has (size-versioned). */
-    nprfx_write_options o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
+
+/* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
+nprfx_result write_options(nprfx_context *ctx, const char *path, const nprfx_write_options *opt,
+                           nprfx_write_options &o)
+{
+    o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
     if (opt) {
         if (opt->size < offsetof(nprfx_write_options, compression) + sizeof(const char *) ||
             opt->size > sizeof o)
@@ -1114,11 +1114,20 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
         std::memcpy(&o, opt, opt->size);
         if (!o.compression || !*o.compression) o.compression = "zip";
     }
-    try {
+    return NPRFX_OK;
+}
+
+/* The header of a write of `channels` channels over bounds, and the channels' own types when
+ * they differ (formats empty: all float, or all half). */
+nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds, int channels,
+                        const char *const *names, const nprfx_rect *display,
+                        const nprfx_write_options &o, ImageSpec &spec,
+                        std::vector<TypeDesc> &formats)
+{
         std::vector<std::string> cn;
         if (names) {
             std::set<std::string> seen;
-            for (int c = 0; c < im->channels; c++) {
+            for (int c = 0; c < channels; c++) {
                 if (!names[c] || !*names[c])
                     return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                                        "cannot write '%s': channel %d has no name", path, c);
@@ -1129,20 +1138,20 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
                 cn.push_back(names[c]);
             }
         } else {
-            cn = default_names(im->channels);
+            cn = default_names(channels);
         }
-        const int w = nprfx_rect_width(im->bounds), h = nprfx_rect_height(im->bounds);
-        ImageSpec spec(w, h, im->channels, o.half ? TypeDesc::HALF : TypeDesc::FLOAT);
-        spec.x = im->bounds.x0;
-        spec.y = im->bounds.y0;
-        nprfx_rect d = display ? *display : im->bounds;
+        const int w = nprfx_rect_width(bounds), h = nprfx_rect_height(bounds);
+        spec = ImageSpec(w, h, channels, o.half ? TypeDesc::HALF : TypeDesc::FLOAT);
+        spec.x = bounds.x0;
+        spec.y = bounds.y0;
+        nprfx_rect d = display ? *display : bounds;
         spec.full_x = d.x0;
         spec.full_y = d.y0;
         spec.full_width = nprfx_rect_width(d);
         spec.full_height = nprfx_rect_height(d);
         spec.channelnames = cn;
         spec.alpha_channel = -1;
-        for (int c = 0; c < im->channels; c++)
+        for (int c = 0; c < channels; c++)
             if (cn[c] == "A" || cn[c] == "Alpha") spec.alpha_channel = c;
         std::string lower = std::filesystem::path(path).extension().string();
         for (char &ch : lower)
@@ -1178,49 +1187,82 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
             }
         }
         if (o.pixel_aspect > 0.0f) spec.attribute("PixelAspectRatio", o.pixel_aspect);
-        bool mixed = false;
-        for (int c = 0; o.types && c < im->channels; c++)
-            mixed |= o.types[c] != NPRFX_PIXEL_FLOAT;
-        if (!mixed)
+    bool mixed = false;
+    for (int c = 0; o.types && c < channels; c++)
+        mixed |= o.types[c] != NPRFX_PIXEL_FLOAT;
+    formats.clear();
+    if (!mixed) return NPRFX_OK;
+    /* Channels of their own types (a copy keeps each channel's file type): the pixels go out in
+     * those native types, since OIIO would scale floats into the full uint range. */
+    for (int c = 0; c < channels; c++)
+        formats.push_back(o.types[c] == NPRFX_PIXEL_UINT             ? TypeDesc::UINT
+                          : o.types[c] == NPRFX_PIXEL_HALF || o.half ? TypeDesc::HALF
+                                                                     : TypeDesc::FLOAT);
+    spec.set_format(TypeDesc::FLOAT); /* the header's default; channelformats rule */
+    spec.channelformats = formats;
+    return NPRFX_OK;
+}
+
+/* im's pixels in the channels' native types (formats), packed: uint takes the float's integer
+ * value; anything else in a uint channel is rounded. */
+void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &formats,
+                 std::vector<unsigned char> &buf)
+{
+    size_t bytes = 0;
+    for (const TypeDesc &t : formats)
+        bytes += t.size();
+    buf.resize((size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
+               bytes);
+    unsigned char *q = buf.data();
+    for (int y = im->bounds.y0; y < im->bounds.y1; y++)
+        for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
+            const float *p = nprfx_image_at(im, x, y);
+            for (int c = 0; c < im->channels; c++) {
+                float v = p[c];
+                if (formats[c] == TypeDesc::UINT) {
+                    uint32_t u = !(v > 0.0f)          ? 0u
+                                 : v >= 4294967295.0f ? 4294967295u
+                                                      : (uint32_t)std::lrint(v);
+                    std::memcpy(q, &u, 4);
+                    q += 4;
+                } else if (formats[c] == TypeDesc::HALF) {
+                    OIIO::convert_pixel_values(TypeDesc::FLOAT, &v, TypeDesc::HALF, q, 1);
+                    q += 2;
+                } else {
+                    std::memcpy(q, &v, 4);
+                    q += 4;
+                }
+            }
+        }
+}
+
+} // namespace
+
+extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
+                                       const char *const *names, const nprfx_rect *display,
+                                       const nprfx_write_options *opt)
+{
+    if (!path || !im || !im->data)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': no image",
+                           path ? path : "(null)");
+    if (im->channels < 1 || nprfx_rect_empty(im->bounds))
+        return nprfx_error(
+            ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': empty image (%dx%d, %d channels)",
+            path, nprfx_rect_width(im->bounds), nprfx_rect_height(im->bounds), im->channels);
+    nprfx_write_options o;
+    if (nprfx_result r = write_options(ctx, path, opt, o)) return r;
+    try {
+        ImageSpec spec;
+        std::vector<TypeDesc> formats;
+        nprfx_result r =
+            write_spec(ctx, path, im->bounds, im->channels, names, display, o, spec, formats);
+        if (r) return r;
+        if (formats.empty())
             return write_atomic(ctx, path, spec, TypeDesc::FLOAT, im->data,
                                 (OIIO::stride_t)(im->pixel_stride * (ptrdiff_t)sizeof(float)),
                                 (OIIO::stride_t)(im->row_stride * (ptrdiff_t)sizeof(float)));
-        /* Channels of their own types (a copy keeps each channel's file type): the pixels go
-         * out in those native types, since OIIO would scale floats into the full uint range.
-         * uint takes the float's integer value; anything else in a uint channel is rounded. */
-        std::vector<TypeDesc> formats;
-        size_t bytes = 0;
-        for (int c = 0; c < im->channels; c++) {
-            TypeDesc t = o.types[c] == NPRFX_PIXEL_UINT             ? TypeDesc::UINT
-                         : o.types[c] == NPRFX_PIXEL_HALF || o.half ? TypeDesc::HALF
-                                                                    : TypeDesc::FLOAT;
-            formats.push_back(t);
-            bytes += t.size();
-        }
-        spec.set_format(TypeDesc::FLOAT); /* the header's default; channelformats rule */
-        spec.channelformats = formats;
-        std::vector<unsigned char> buf((size_t)w * (size_t)h * bytes);
-        unsigned char *q = buf.data();
-        for (int y = im->bounds.y0; y < im->bounds.y1; y++)
-            for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
-                const float *p = nprfx_image_at(im, x, y);
-                for (int c = 0; c < im->channels; c++) {
-                    float v = p[c];
-                    if (formats[c] == TypeDesc::UINT) {
-                        uint32_t u = !(v > 0.0f)          ? 0u
-                                     : v >= 4294967295.0f ? 4294967295u
-                                                          : (uint32_t)std::lrint(v);
-                        std::memcpy(q, &u, 4);
-                        q += 4;
-                    } else if (formats[c] == TypeDesc::HALF) {
-                        OIIO::convert_pixel_values(TypeDesc::FLOAT, &v, TypeDesc::HALF, q, 1);
-                        q += 2;
-                    } else {
-                        std::memcpy(q, &v, 4);
-                        q += 4;
-                    }
-                }
-            }
+        std::vector<unsigned char> buf;
+        pack_native(im, formats, buf);
         return write_atomic(ctx, path, spec, TypeDesc::UNKNOWN, buf.data(), OIIO::AutoStride,
                             OIIO::AutoStride);
     } catch (const std::exception &e) {
@@ -1229,6 +1271,210 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
 }
 
 /* ---- colour ------------------------------------------------------------------------------- */
+
+/* ---- rows: strip renders ----------------------------------------------------------------- */
+
+struct nprfx_row_reader {
+    reading rd;
+};
+
+extern "C" nprfx_result nprfx_io_rows_open(nprfx_context *ctx, const char *path,
+                                           const nprfx_read_options *opt, nprfx_plate *shape,
+                                           nprfx_row_reader **out)
+{
+    if (!path || !shape || !out)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_open: NULL argument");
+    std::memset(shape, 0, sizeof *shape);
+    *out = nullptr;
+    const nprfx_read_options o = read_options(opt);
+    try {
+        std::unique_ptr<nprfx_row_reader> r(new nprfx_row_reader);
+        nprfx_result e = open_reading(ctx, path, o, r->rd, true);
+        if (!e) e = describe(ctx, r->rd, shape);
+        if (!e) e = set_note(ctx, r->rd, shape);
+        if (e) {
+            nprfx_plate_free(shape);
+            return e;
+        }
+        *out = r.release();
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        nprfx_plate_free(shape);
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
+    }
+}
+
+extern "C" nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader *r, int y0, int y1,
+                                           float *dst)
+{
+    if (!r || !dst)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_read: NULL argument");
+    const ImageSpec &first = r->rd.ch.group[0]->spec;
+    if (y0 < first.y || y1 > first.y + first.height || y0 >= y1)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "'%s': rows %d..%d are not inside the data window's rows %d..%d",
+                           r->rd.path.c_str(), y0, y1, first.y, first.y + first.height);
+    try {
+        return read_blocks(ctx, r->rd, y0, y1, dst);
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", r->rd.path.c_str(), e.what());
+    }
+}
+
+extern "C" void nprfx_io_rows_close(nprfx_row_reader *r)
+{
+    if (r && r->rd.in) r->rd.in->close();
+    delete r;
+}
+
+struct nprfx_row_writer {
+    std::string path, tmp;
+    std::unique_ptr<ImageOutput> out;
+    std::vector<TypeDesc> formats;
+    std::vector<unsigned char> buf;
+    nprfx_rect bounds;
+    int next_y = 0, dy = 0; /* the next row to write; file row = row + dy (formats without origin) */
+};
+
+namespace
+{
+
+void rows_discard(nprfx_row_writer *w)
+{
+    if (w->out) w->out->close();
+    w->out.reset();
+    std::error_code ec;
+    std::filesystem::remove(w->tmp, ec);
+    delete w;
+}
+
+} // namespace
+
+extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path,
+                                             nprfx_rect bounds, int channels,
+                                             const char *const *names, const nprfx_rect *display,
+                                             const nprfx_write_options *opt,
+                                             nprfx_row_writer **out)
+{
+    namespace fs = std::filesystem;
+    if (!path || !out)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_create: NULL argument");
+    *out = nullptr;
+    if (channels < 1 || nprfx_rect_empty(bounds))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "cannot write '%s': empty image (%dx%d, %d channels)", path,
+                           nprfx_rect_width(bounds), nprfx_rect_height(bounds), channels);
+    nprfx_write_options o;
+    if (nprfx_result r = write_options(ctx, path, opt, o)) return r;
+    try {
+        std::unique_ptr<nprfx_row_writer> w(new nprfx_row_writer);
+        ImageSpec spec;
+        nprfx_result r = write_spec(ctx, path, bounds, channels, names, display, o, spec, w->formats);
+        if (r) return r;
+        fs::path target(path);
+        if (target.filename().empty())
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "cannot write '%s': not a file name", path);
+        std::error_code ec;
+        if (target.has_parent_path()) {
+            fs::create_directories(target.parent_path(), ec);
+            if (ec)
+                return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
+                                   target.parent_path().string().c_str(), path,
+                                   ec.message().c_str());
+        }
+        w->out = ImageOutput::create(path);
+        if (!w->out) {
+            std::string e = OIIO::geterror();
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path,
+                               e.empty() ? "no image format for this file extension" : e.c_str());
+        }
+        if (!w->out->supports("origin")) spec.x = spec.y = 0;
+        if (!w->out->supports("displaywindow")) {
+            spec.full_x = spec.x;
+            spec.full_y = spec.y;
+            spec.full_width = spec.width;
+            spec.full_height = spec.height;
+        }
+        w->path = path;
+        w->tmp = temp_path_for(target);
+        w->bounds = bounds;
+        w->next_y = bounds.y0;
+        w->dy = spec.y - bounds.y0;
+        /* Written under a temporary name, renamed by nprfx_io_rows_finish (as every write). */
+        if (!w->out->open(w->tmp, spec)) {
+            std::string e = oiio_error(w->out.get());
+            rows_discard(w.release());
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, e.c_str());
+        }
+        *out = w.release();
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, e.what());
+    }
+}
+
+extern "C" nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer *w,
+                                            const nprfx_image *rows)
+{
+    if (!w || !rows || !rows->data)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_write: NULL argument");
+    const nprfx_rect b = rows->bounds;
+    if (b.x0 != w->bounds.x0 || b.x1 != w->bounds.x1 || b.y0 != w->next_y || b.y1 > w->bounds.y1 ||
+        b.y1 <= b.y0)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "cannot write '%s': rows %d..%d of x %d..%d come out of order (next: "
+                           "row %d of x %d..%d)",
+                           w->path.c_str(), b.y0, b.y1, b.x0, b.x1, w->next_y, w->bounds.x0,
+                           w->bounds.x1);
+    try {
+        bool ok;
+        if (w->formats.empty()) {
+            ok = w->out->write_scanlines(
+                b.y0 + w->dy, b.y1 + w->dy, 0, TypeDesc::FLOAT, nprfx_image_at(rows, b.x0, b.y0),
+                (OIIO::stride_t)(rows->pixel_stride * (ptrdiff_t)sizeof(float)),
+                (OIIO::stride_t)(rows->row_stride * (ptrdiff_t)sizeof(float)));
+        } else {
+            pack_native(rows, w->formats, w->buf);
+            ok = w->out->write_scanlines(b.y0 + w->dy, b.y1 + w->dy, 0, TypeDesc::UNKNOWN,
+                                         w->buf.data());
+        }
+        if (!ok)
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", w->path.c_str(),
+                               oiio_error(w->out.get()).c_str());
+        w->next_y = b.y1;
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", w->path.c_str(), e.what());
+    }
+}
+
+extern "C" nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_writer *w, int keep)
+{
+    if (!w) return NPRFX_OK;
+    if (!keep || w->next_y != w->bounds.y1) {
+        rows_discard(w);
+        return keep ? nprfx_error(ctx, NPRFX_ERR_INTERNAL, "a strip write ended before its last row")
+                    : NPRFX_OK;
+    }
+    std::string path = w->path, err;
+    try {
+        bool ok = w->out->close();
+        if (!ok) err = oiio_error(w->out.get());
+        w->out.reset();
+        if (ok && std::rename(w->tmp.c_str(), path.c_str()) != 0)
+            err = std::string("cannot rename the temporary file into place: ") +
+                  std::strerror(errno);
+    } catch (const std::exception &e) {
+        err = e.what();
+    }
+    if (err.empty()) {
+        delete w;
+        return NPRFX_OK;
+    }
+    rows_discard(w);
+    return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path.c_str(), err.c_str());
+}
 
 extern "C" nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *path,
                                                const nprfx_image *im,

@@ -190,6 +190,7 @@ const nprfx_node_desc nprfx_node_blend = {
     .params = params,
     .num_params = P_COUNT,
     .output_channels = 0, /* as many as base */
+    .flags = NPRFX_NODE_ROWS, /* per pixel, or within its footprint */
     .render = blend_render,
     .params_size = sizeof(bp),
     .version_major = 1,

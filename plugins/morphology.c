@@ -104,6 +104,7 @@ const nprfx_node_desc nprfx_node_morphology = {
     .params = params,
     .num_params = P_COUNT,
     .output_channels = 0, /* as many as image */
+    .flags = NPRFX_NODE_ROWS, /* per pixel, or within its footprint */
     .render = morph_render,
     .footprint = morph_footprint,
     .params_size = sizeof(mp),
