@@ -196,14 +196,19 @@ static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, npr
     return r;
 }
 
-static nprfx_read_options read_options_of(nprfx_graph *g, gnode *n, read_pick *rp)
+static nprfx_read_options read_options_of(gnode *n, read_pick *rp)
 {
+    nprfx_read_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.size = sizeof ro;
+    ro.part = n->part;
+    ro.view = n->read_view;
+    ro.want = (const char *const *)n->wants;
+    ro.nwant = n->nwants;
     /* Only the channels the graph uses are read (the plan picks them from the names the read
      * would deliver): a renderer's plate has 23-56, a graph reads a dozen. */
-    nprfx_read_options ro = {sizeof ro, n->part,   n->read_view, (const char *const *)n->wants,
-                             n->nwants, NULL,      0,            pick_channels,
-                             rp};
-    (void)g;
+    ro.pick = pick_channels;
+    ro.pick_user = rp;
     return ro;
 }
 
@@ -215,13 +220,13 @@ nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, 
     nprfx_result r = nd->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
     read_pick rp = {g, node};
-    nprfx_read_options ro = read_options_of(g, nd, &rp);
+    nprfx_read_options ro = read_options_of(nd, &rp);
     return nprfx_io_rows_open(nd->ctx, file, &ro, shape, rr);
 }
 
 nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
-                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0, int y1,
-                                      nprfx_plate *out)
+                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
+                                      int y1, nprfx_plate *out)
 {
     gnode *n = &g->nodes[node];
     memset(out, 0, sizeof *out);
@@ -257,7 +262,7 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
     read_pick rp = {g, node};
-    nprfx_read_options ro = read_options_of(g, n, &rp);
+    nprfx_read_options ro = read_options_of(n, &rp);
     if ((r = nprfx_io_read_ex(n->ctx, file, &ro, &plate))) return r;
     if ((r = finish_plate(g, n, file, &plate))) {
         nprfx_plate_free(&plate);

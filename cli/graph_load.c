@@ -238,8 +238,7 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
                 int idx = -1;
                 if (earlier_same_key(e->child, in))
                     return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
-                                       "node '%s': input '%s' is given twice", n->name,
-                                       in->string);
+                                       "node '%s': input '%s' is given twice", n->name, in->string);
                 if (n->kind == GK_NODE)
                     idx = nprfx_node_input_index(n->desc, in->string);
                 else if (n->kind == GK_WRITE && !strcmp(in->string, "image"))
@@ -263,8 +262,7 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const cJSON *j)
             for (const cJSON *pv = e->child; pv; pv = pv->next) {
                 if (earlier_same_key(e->child, pv))
                     return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
-                                       "node '%s': param '%s' is given twice", n->name,
-                                       pv->string);
+                                       "node '%s': param '%s' is given twice", n->name, pv->string);
                 int pi = nprfx_node_param_index(n->desc, pv->string);
                 if (pi < 0)
                     return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_PARAM,
@@ -415,8 +413,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         if ((!strcmp(e->string, "frames") && g->frames_text) ||
             (!strcmp(e->string, "ocio") && g->ocio) ||
             (!strcmp(e->string, "format") && g->fmt_text)) {
-            r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry '%s' is given twice",
-                            e->string);
+            r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry '%s' is given twice", e->string);
             goto done;
         }
         if (!strcmp(e->string, "frames") && cJSON_IsString(e))

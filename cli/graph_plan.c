@@ -165,8 +165,8 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
     if (motion && internal_graph_motion_sources(g, n, "", names, nc, src, sign)) return -1;
     for (int k = 0; k < motion; k++)
         keep[src[k]] = 1;
-    int have_rgb = n->colorspace && nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad,
-                                                          sizeof bad, &amb) == 3;
+    int have_rgb = n->colorspace &&
+                   nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad, sizeof bad, &amb) == 3;
     for (int c = 0; have_rgb && c < 3; c++)
         keep[rgb[c]] = 1;
     int m = 0;
@@ -509,9 +509,10 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         /* The read delivers only the channels it picks (eval_read), then appends the motion
          * channels; the trim drops what only those were read for. */
         int pick[1024], nread = info.nchannels;
-        int m = info.nchannels <= 1024 ? internal_graph_read_pick(g, i, (const char *const *)info.names,
-                                                                  info.nchannels, pick)
-                                       : -1;
+        int m = info.nchannels <= 1024
+                    ? internal_graph_read_pick(g, i, (const char *const *)info.names,
+                                               info.nchannels, pick)
+                    : -1;
         if (m > 0)
             nread = m;
         else

@@ -22,12 +22,12 @@
 /* One node of the chain, as a strip render needs it. */
 typedef struct snode {
     int node;
-    int channels;   /* of its result */
-    char **names;   /* of its result (owned) */
-    int footprint;  /* rows its render reads beyond its window (nodes) */
+    int channels;    /* of its result */
+    char **names;    /* of its result (owned) */
+    int footprint;   /* rows its render reads beyond its window (nodes) */
     int in_channels; /* the channels its inputs select, together (nodes) */
-    int margin;     /* rows above and below a strip its readers need of it */
-    int uses, left; /* readers in the chain (edges), and those still to render in this strip */
+    int margin;      /* rows above and below a strip its readers need of it */
+    int uses, left;  /* readers in the chain (edges), and those still to render in this strip */
     nprfx_rect display;
     float pixel_aspect;
     unsigned char *types; /* a read's per-channel file types (owned), NULL for nodes */
@@ -133,8 +133,7 @@ int internal_graph_strips_possible(nprfx_graph *g, int node, char *why, size_t n
         for (int k = 0; k < nd->ninputs && ok; k++) {
             if (nd->inputs[k].src < 0) continue;
             if (d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) {
-                WHY("node '%s' (%s): input '%s' is read whole", nd->name, d->id,
-                    d->inputs[k].name);
+                WHY("node '%s' (%s): input '%s' is read whole", nd->name, d->id, d->inputs[k].name);
                 ok = 0;
             }
             aligned = 1;
@@ -322,8 +321,8 @@ static nprfx_result select_rows(strips *st, const gnode *reader, int k, snode *i
         return NPRFX_OK;
     }
     char what[600];
-    snprintf(what, sizeof what, "node '%s': input %d (channels from '%s'), a strip",
-             reader->name, k, g->nodes[in->node].name);
+    snprintf(what, sizeof what, "node '%s': input %d (channels from '%s'), a strip", reader->name,
+             k, g->nodes[in->node].name);
     if ((r = internal_graph_frame_alloc(g, reader - g->nodes, what, in->buf.bounds, count,
                                         scratch)))
         return r;
@@ -472,7 +471,8 @@ uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int row
     /* As if every chain node's strip were held at once (most go back before the next renders):
      * its rows, the channel selections its inputs pack, and for a read the plate before its
      * motion channels are appended and one block of 64 rows it decodes. */
-    const uint64_t w = (uint64_t)nprfx_rect_width(st.frame), fh = (uint64_t)nprfx_rect_height(st.frame);
+    const uint64_t w = (uint64_t)nprfx_rect_width(st.frame),
+                   fh = (uint64_t)nprfx_rect_height(st.frame);
     uint64_t need = 0;
     for (int i = 0; i < st.n; i++) {
         const snode *s = &st.s[i];

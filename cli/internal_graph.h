@@ -123,8 +123,8 @@ struct nprfx_graph {
     nprfx_graph_node_stats *stats; /* per node */
     nprfx_render_hook hook;
     int has_hook;
-    int variant;              /* nprfx_graph_variant */
-    int progress;             /* nprfx_graph_options.progress */
+    int variant;  /* nprfx_graph_variant */
+    int progress; /* nprfx_graph_options.progress */
     void (*notice)(void *user, const char *message);
     void *notice_user;
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
@@ -160,8 +160,7 @@ int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *n
  * appended), the sources of its motion channels and its R,G,B when it converts colour, as
  * indices into names in file order into pick (room for nc); -1 to read them all: nothing to
  * leave out, no plan, or a selection that would come out otherwise on the channels read. */
-int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc,
-                             int *pick);
+int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *pick);
 /* Keep only the channels of plate node's result (im, names, and meta's per-channel types when it
  * has them) that its readers take, when every reader then selects the very same channels
  * (internal_graph_plate_channels); whether it did. */
@@ -229,8 +228,8 @@ nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, 
 /* Rows [y0, y1) of it as a plate of their own (malloc'd), with the motion channels and the
  * colour conversion eval_read applies to a whole plate. */
 nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
-                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0, int y1,
-                                      nprfx_plate *out);
+                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
+                                      int y1, nprfx_plate *out);
 /* Write node w would overwrite one of the graph's inputs at frame with out: the error. */
 nprfx_result internal_graph_check_not_input(nprfx_graph *g, const gnode *w, const char *out,
                                             int frame);

@@ -639,7 +639,8 @@ void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, 
     flo = fhi = ulo = uhi = -1;
     for (const chan &c : rd.sel) {
         if (c.p != p) continue;
-        int &lo = c.type == NPRFX_PIXEL_UINT ? ulo : flo, &hi = c.type == NPRFX_PIXEL_UINT ? uhi : fhi;
+        int &lo = c.type == NPRFX_PIXEL_UINT ? ulo : flo,
+            &hi = c.type == NPRFX_PIXEL_UINT ? uhi : fhi;
         if (lo < 0 || c.c < lo) lo = c.c;
         if (hi < 0 || c.c > hi) hi = c.c;
     }
@@ -653,8 +654,8 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
     rd.chosen = o.channels || o.pick || rows;
     /* Damaged files are refused before OIIO allocates anything (io_validate.h). A read of chosen
      * channels is held to the memory limit by what it delivers, checked once they are known. */
-    if (nprfx_result g = nprfx_io_guard(ctx, path, rd.chosen ? NPRFX_GUARD_READ_CHOSEN
-                                                             : NPRFX_GUARD_READ))
+    if (nprfx_result g =
+            nprfx_io_guard(ctx, path, rd.chosen ? NPRFX_GUARD_READ_CHOSEN : NPRFX_GUARD_READ))
         return g;
     nprfx_result r = scan(ctx, path, rd.in, rd.h);
     if (r) return r;
@@ -719,8 +720,8 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
         for (const part *p : rd.ch.group) {
             int flo, fhi, ulo, uhi;
             part_spans(rd, p, flo, fhi, ulo, uhi);
-            uint64_t span = (uint64_t)(flo < 0 ? 0 : fhi - flo + 1) +
-                            (uint64_t)(ulo < 0 ? 0 : uhi - ulo + 1);
+            uint64_t span =
+                (uint64_t)(flo < 0 ? 0 : fhi - flo + 1) + (uint64_t)(ulo < 0 ? 0 : uhi - ulo + 1);
             uint64_t rows = rd.blocks ? (uint64_t)block_rows(*p) : (ulo < 0 ? 0 : first.height);
             uint64_t b = rows * (uint64_t)first.width * span * 4u;
             if (b > scratch) scratch = b;
@@ -771,10 +772,11 @@ nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1, float 
                 /* EXR uint channels (object ids) are read as integers and cast, since a float
                  * read would normalise them to [0,1]. */
                 const TypeDesc type = as_uint ? TypeDesc::UINT : TypeDesc::FLOAT;
-                bool ok = p->spec.tile_width > 0
-                              ? rd.in->read_tiles(p->index, 0, p->spec.x, p->spec.x + p->spec.width,
-                                                  by, be, 0, 1, lo, hi + 1, type, buf)
-                              : rd.in->read_scanlines(p->index, 0, by, be, 0, lo, hi + 1, type, buf);
+                bool ok =
+                    p->spec.tile_width > 0
+                        ? rd.in->read_tiles(p->index, 0, p->spec.x, p->spec.x + p->spec.width, by,
+                                            be, 0, 1, lo, hi + 1, type, buf)
+                        : rd.in->read_scanlines(p->index, 0, by, be, 0, lo, hi + 1, type, buf);
                 if (nprfx_io_deadline_passed()) {
                     oiio_error(rd.in.get());
                     return nprfx_io_deadline_error(ctx, rd.path.c_str());
@@ -1124,69 +1126,69 @@ nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds,
                         const nprfx_write_options &o, ImageSpec &spec,
                         std::vector<TypeDesc> &formats)
 {
-        std::vector<std::string> cn;
-        if (names) {
-            std::set<std::string> seen;
-            for (int c = 0; c < channels; c++) {
-                if (!names[c] || !*names[c])
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': channel %d has no name", path, c);
-                if (!seen.insert(names[c]).second)
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': channel name '%s' appears twice", path,
-                                       names[c]);
-                cn.push_back(names[c]);
-            }
-        } else {
-            cn = default_names(channels);
-        }
-        const int w = nprfx_rect_width(bounds), h = nprfx_rect_height(bounds);
-        spec = ImageSpec(w, h, channels, o.half ? TypeDesc::HALF : TypeDesc::FLOAT);
-        spec.x = bounds.x0;
-        spec.y = bounds.y0;
-        nprfx_rect d = display ? *display : bounds;
-        spec.full_x = d.x0;
-        spec.full_y = d.y0;
-        spec.full_width = nprfx_rect_width(d);
-        spec.full_height = nprfx_rect_height(d);
-        spec.channelnames = cn;
-        spec.alpha_channel = -1;
-        for (int c = 0; c < channels; c++)
-            if (cn[c] == "A" || cn[c] == "Alpha") spec.alpha_channel = c;
-        std::string lower = std::filesystem::path(path).extension().string();
-        for (char &ch : lower)
-            ch = (char)std::tolower((unsigned char)ch);
-        if (lower == ".exr" && !valid_exr_compression(o.compression))
-            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                               "cannot write '%s': unknown EXR compression '%s' (none, rle, zips, "
-                               "zip, piz, pxr24, b44, b44a, dwaa, dwab)",
-                               path, o.compression);
-        spec.attribute("compression", o.compression);
-        for (int i = 0; o.attributes && i < o.nattributes; i++) {
-            const nprfx_attribute &a = o.attributes[i];
-            if (!a.name || !*a.name || !a.value)
+    std::vector<std::string> cn;
+    if (names) {
+        std::set<std::string> seen;
+        for (int c = 0; c < channels; c++) {
+            if (!names[c] || !*names[c])
                 return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                   "cannot write '%s': attribute %d has no name or value", path, i);
-            char *end = nullptr;
-            if (a.type == NPRFX_ATTR_INT) {
-                long v = std::strtol(a.value, &end, 10);
-                if (end == a.value || *end)
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': attribute %s: '%s' is not an integer",
-                                       path, a.name, a.value);
-                spec.attribute(a.name, (int)v);
-            } else if (a.type == NPRFX_ATTR_FLOAT) {
-                float v = std::strtof(a.value, &end);
-                if (end == a.value || *end)
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': attribute %s: '%s' is not a number",
-                                       path, a.name, a.value);
-                spec.attribute(a.name, v);
-            } else {
-                spec.attribute(a.name, a.value);
-            }
+                                   "cannot write '%s': channel %d has no name", path, c);
+            if (!seen.insert(names[c]).second)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': channel name '%s' appears twice", path,
+                                   names[c]);
+            cn.push_back(names[c]);
         }
-        if (o.pixel_aspect > 0.0f) spec.attribute("PixelAspectRatio", o.pixel_aspect);
+    } else {
+        cn = default_names(channels);
+    }
+    const int w = nprfx_rect_width(bounds), h = nprfx_rect_height(bounds);
+    spec = ImageSpec(w, h, channels, o.half ? TypeDesc::HALF : TypeDesc::FLOAT);
+    spec.x = bounds.x0;
+    spec.y = bounds.y0;
+    nprfx_rect d = display ? *display : bounds;
+    spec.full_x = d.x0;
+    spec.full_y = d.y0;
+    spec.full_width = nprfx_rect_width(d);
+    spec.full_height = nprfx_rect_height(d);
+    spec.channelnames = cn;
+    spec.alpha_channel = -1;
+    for (int c = 0; c < channels; c++)
+        if (cn[c] == "A" || cn[c] == "Alpha") spec.alpha_channel = c;
+    std::string lower = std::filesystem::path(path).extension().string();
+    for (char &ch : lower)
+        ch = (char)std::tolower((unsigned char)ch);
+    if (lower == ".exr" && !valid_exr_compression(o.compression))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "cannot write '%s': unknown EXR compression '%s' (none, rle, zips, "
+                           "zip, piz, pxr24, b44, b44a, dwaa, dwab)",
+                           path, o.compression);
+    spec.attribute("compression", o.compression);
+    for (int i = 0; o.attributes && i < o.nattributes; i++) {
+        const nprfx_attribute &a = o.attributes[i];
+        if (!a.name || !*a.name || !a.value)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "cannot write '%s': attribute %d has no name or value", path, i);
+        char *end = nullptr;
+        if (a.type == NPRFX_ATTR_INT) {
+            long v = std::strtol(a.value, &end, 10);
+            if (end == a.value || *end)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': attribute %s: '%s' is not an integer", path,
+                                   a.name, a.value);
+            spec.attribute(a.name, (int)v);
+        } else if (a.type == NPRFX_ATTR_FLOAT) {
+            float v = std::strtof(a.value, &end);
+            if (end == a.value || *end)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': attribute %s: '%s' is not a number", path,
+                                   a.name, a.value);
+            spec.attribute(a.name, v);
+        } else {
+            spec.attribute(a.name, a.value);
+        }
+    }
+    if (o.pixel_aspect > 0.0f) spec.attribute("PixelAspectRatio", o.pixel_aspect);
     bool mixed = false;
     for (int c = 0; o.types && c < channels; c++)
         mixed |= o.types[c] != NPRFX_PIXEL_FLOAT;
@@ -1333,7 +1335,8 @@ struct nprfx_row_writer {
     std::vector<TypeDesc> formats;
     std::vector<unsigned char> buf;
     nprfx_rect bounds;
-    int next_y = 0, dy = 0; /* the next row to write; file row = row + dy (formats without origin) */
+    int next_y = 0,
+        dy = 0; /* the next row to write; file row = row + dy (formats without origin) */
 };
 
 namespace
@@ -1353,8 +1356,7 @@ void rows_discard(nprfx_row_writer *w)
 extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path,
                                              nprfx_rect bounds, int channels,
                                              const char *const *names, const nprfx_rect *display,
-                                             const nprfx_write_options *opt,
-                                             nprfx_row_writer **out)
+                                             const nprfx_write_options *opt, nprfx_row_writer **out)
 {
     namespace fs = std::filesystem;
     if (!path || !out)
@@ -1369,7 +1371,8 @@ extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *pat
     try {
         std::unique_ptr<nprfx_row_writer> w(new nprfx_row_writer);
         ImageSpec spec;
-        nprfx_result r = write_spec(ctx, path, bounds, channels, names, display, o, spec, w->formats);
+        nprfx_result r =
+            write_spec(ctx, path, bounds, channels, names, display, o, spec, w->formats);
         if (r) return r;
         fs::path target(path);
         if (target.filename().empty())
@@ -1454,8 +1457,9 @@ extern "C" nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_write
     if (!w) return NPRFX_OK;
     if (!keep || w->next_y != w->bounds.y1) {
         rows_discard(w);
-        return keep ? nprfx_error(ctx, NPRFX_ERR_INTERNAL, "a strip write ended before its last row")
-                    : NPRFX_OK;
+        return keep
+                   ? nprfx_error(ctx, NPRFX_ERR_INTERNAL, "a strip write ended before its last row")
+                   : NPRFX_OK;
     }
     std::string path = w->path, err;
     try {
@@ -1463,8 +1467,8 @@ extern "C" nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_write
         if (!ok) err = oiio_error(w->out.get());
         w->out.reset();
         if (ok && std::rename(w->tmp.c_str(), path.c_str()) != 0)
-            err = std::string("cannot rename the temporary file into place: ") +
-                  std::strerror(errno);
+            err =
+                std::string("cannot rename the temporary file into place: ") + std::strerror(errno);
     } catch (const std::exception &e) {
         err = e.what();
     }
