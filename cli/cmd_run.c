@@ -12,6 +12,14 @@
 
 static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
 {
+    /* The nodes that render by rows, from their descriptors. */
+    char rows[512] = "";
+    for (int i = 0, n = 0; i < nprfx_node_count(); i++) {
+        const nprfx_node_desc *d = nprfx_node_at(i);
+        if (!(d->flags & NPRFX_NODE_ROWS)) continue;
+        size_t len = strlen(rows);
+        snprintf(rows + len, sizeof rows - len, "%s%s", n++ ? ", " : "", d->id);
+    }
     fprintf(
         f,
         "usage: %s run GRAPH.json [GRAPH.json ...] [options]\n\n"
@@ -42,8 +50,8 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  --no-pool           no frame-buffer pool and no memory plan (every frame calloc'd\n"
         "                      and freed, plates whole, results kept until --cache-mb evicts\n"
         "                      them): the pixels are the same, for checking that\n"
-        "  --strip-rows N      render a write whose whole chain renders by rows (reads of\n"
-        "                      EXRs, and blend, threshold-map, morphology) N rows at a time,\n"
+        "  --strip-rows N      render a write whose whole chain renders by rows (EXR reads,\n"
+        "                      and nodes %s) N rows at a time,\n"
         "                      reading and writing only those rows (plus the margins the\n"
         "                      filters need), so memory follows N, not the frame; the pixels\n"
         "                      are the same. 0 (default): by strips of 64 rows only when whole\n"
@@ -75,7 +83,7 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "beside it; across hosts only where the file system supports locks, e.g. NFSv4) and\n"
         "removes what a killed run left there. See 'nprfx list' and 'nprfx help NODE' for the\n"
         "node types.\n",
-        prog, ext && ext->options_usage ? ext->options_usage : "");
+        prog, rows, ext && ext->options_usage ? ext->options_usage : "");
 }
 
 static double now_seconds(void)
