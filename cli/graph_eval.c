@@ -245,6 +245,11 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
     }
     out->nchannels = nc;
+    /* The read's note on parts and views goes out with its first strip, as with a whole plate. */
+    if (!n->noted && shape->note) {
+        out->note = internal_graph_strdup(shape->note);
+        out->note_is_warning = shape->note_is_warning;
+    }
     nprfx_result r = nprfx_io_rows_read(n->ctx, rr, y0, y1, out->pixels);
     if (!r) r = finish_plate(g, n, file, out);
     if (r) nprfx_plate_free(out);
