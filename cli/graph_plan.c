@@ -784,9 +784,24 @@ static nprfx_result plan_strips(nprfx_graph *g, int frame, int over, nprfx_graph
             all = 0;
             continue;
         }
-        int known = 0;
-        uint64_t b = internal_graph_strip_need(g, i, frame, rows, &known);
-        if (!known) return NPRFX_OK; /* the render reports what is wrong */
+        nprfx_result err = NPRFX_OK;
+        uint64_t b = internal_graph_strip_need(g, i, frame, rows, &err);
+        /* A plate's block above the limit: even strips do not fit (the message says so). Any
+         * other problem: whole frames, and the render reports it. */
+        if (err == NPRFX_ERR_OUT_OF_MEMORY) {
+            char why_strips[1024], wb[32];
+            nprfx_context_last_error(g->ctx, why_strips, sizeof why_strips);
+            nprfx_format_bytes(wb, sizeof wb, out->whole_need);
+            g->strip_rows = 0;
+            return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
+                               "frame %d needs %s of frames whole, and strips of %d rows do not "
+                               "fit either: %s; nothing was rendered",
+                               frame, wb, rows, why_strips);
+        }
+        if (err) {
+            g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
+            return NPRFX_OK;
+        }
         if (b > need) {
             need = b;
             writer = i;

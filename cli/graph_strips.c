@@ -463,11 +463,11 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame)
     return r;
 }
 
-uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows, int *known)
+uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows,
+                                   nprfx_result *err)
 {
     strips st;
-    *known = 0;
-    if (strips_prepare(g, write, frame, &st)) return 0;
+    if ((*err = strips_prepare(g, write, frame, &st))) return 0;
     /* As if every chain node's strip were held at once (most go back before the next renders):
      * its rows, the channel selections its inputs pack, and for a read the plate before its
      * motion channels are appended and one block of 64 rows it decodes. */
@@ -485,6 +485,5 @@ uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int row
     need += w * (uint64_t)(rows < (int)fh ? rows : (int)fh) * (uint64_t)st.s[st.n - 1].channels *
             sizeof(float); /* the write's packed rows */
     strips_free(&st);
-    *known = 1;
     return need;
 }

@@ -240,8 +240,10 @@ int internal_graph_strips_possible(nprfx_graph *g, int node, char *why, size_t n
 /* Render write node `node` at frame by strips of g->strip_rows rows (graph_strips.c). */
 nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame);
 /* The bytes a strip render of write node `write` at frame holds at most with strips of `rows`
- * rows (the plates' headers are read); *known 0 when it cannot be told without rendering. */
-uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows, int *known);
+ * rows (the plates' headers are read); *err: why it cannot be told (raised on g's context), a
+ * plate's block of rows above the memory limit (NPRFX_ERR_OUT_OF_MEMORY) among them. */
+uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows,
+                                   nprfx_result *err);
 
 /* The cache entry of node at frame, evaluated (and its inputs) when not cached. */
 nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out);

@@ -715,21 +715,28 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
                            rd.h.format.c_str());
     if (rd.chosen) {
         /* What this read allocates: its channels, and one block per part (or the uint scratch
-         * of a read by channel runs). */
+         * of a read by channel runs); a read by rows only the blocks (the caller holds its rows).
+         */
         uint64_t scratch = 0;
+        int block_h = 0, block_ch = 0;
         for (const part *p : rd.ch.group) {
             int flo, fhi, ulo, uhi;
             part_spans(rd, p, flo, fhi, ulo, uhi);
-            uint64_t span =
-                (uint64_t)(flo < 0 ? 0 : fhi - flo + 1) + (uint64_t)(ulo < 0 ? 0 : uhi - ulo + 1);
-            uint64_t rows = rd.blocks ? (uint64_t)block_rows(*p) : (ulo < 0 ? 0 : first.height);
-            uint64_t b = rows * (uint64_t)first.width * span * 4u;
-            if (b > scratch) scratch = b;
+            int span = (flo < 0 ? 0 : fhi - flo + 1) + (ulo < 0 ? 0 : uhi - ulo + 1);
+            int h = rd.blocks ? block_rows(*p) : (ulo < 0 ? 0 : first.height);
+            uint64_t b = (uint64_t)h * (uint64_t)first.width * (uint64_t)span * 4u;
+            if (b > scratch) {
+                scratch = b;
+                block_h = h;
+                block_ch = span;
+            }
         }
-        /* A read by rows holds its blocks only; the caller's strips are the caller's. */
-        std::string what = "'" + std::string(path) + "': data window";
-        if ((r = nprfx_image_limit_check(ctx, what.c_str(), first.width, rows ? 0 : first.height,
-                                         (int64_t)nch, scratch)))
+        std::string what =
+            "'" + std::string(path) + (rows ? "': a block of rows" : "': data window");
+        if ((r = rows
+                     ? nprfx_image_limit_check(ctx, what.c_str(), first.width, block_h, block_ch, 0)
+                     : nprfx_image_limit_check(ctx, what.c_str(), first.width, first.height,
+                                               (int64_t)nch, scratch)))
             return r;
     }
     rd.umax.assign(nch, 0);

@@ -100,6 +100,11 @@ rc=$?
 grep -Eq "frame 1 needs 1\.[0-9] GiB of frames whole, and still [0-9.]+ MiB in strips of 64 rows \(write node 'w' and the nodes it reads, 7680x4320\): above the 20 MiB memory limit \(--mem-limit\); nothing was rendered" r8.err && pass ||
   fail "8K under 20M: $(cat r8.err)"
 [ ! -e r8 ] && pass || fail "8K under 20M wrote something"
+# Below even one block of rows of the plate (7680x64 of 4 floats, 7.5 MiB).
+"$NPRFX" run g8k.json -q --output-dir r1 --mem-limit 1M 2> r1.err
+rc=$?
+[ $rc -eq 2 ] && grep -q "and strips of 64 rows do not fit either: .*'p8k/p.0001.exr': a block of rows 7680x64 with 4 channels needs 7.5 MiB, above the 1 MiB memory limit (--mem-limit); nothing was rendered" r1.err &&
+  pass || fail "8K under 1M: exit $rc: $(cat r1.err)"
 cat > noise.json <<'EOF'
 {"frames": "1", "nodes": {
  "plate": {"node": "read", "path": "plates/o.####.exr"},
