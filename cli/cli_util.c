@@ -134,4 +134,10 @@ void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
             "frames held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
             "resident %.0f MiB\n",
             peak, est, need, lim, nprfx_cli_peak_mib());
+    if (plan && plan->strip_rows > 0) {
+        char whole[32];
+        nprfx_format_bytes(whole, sizeof whole, plan->whole_need);
+        fprintf(f, "rendered by strips of %d rows (whole frames: %s in use at once)\n",
+                plan->strip_rows, whole);
+    }
 }

@@ -153,12 +153,72 @@ static int info_file(nprfx_context *ctx, const char *path)
  *   convert IN OUT FROM TO [--ocio CFG]               convert the first 3 channels, write EXR
  *   channel IN NAME                                   print the channel's index (-1: absent)
  *   view IN FIRST COUNT                               print a plate view's shape, or "absent"
- *   damaged LIST                                      a verdict for each file (cli/io_check.c) */
+ *   damaged LIST                                      a verdict for each file (cli/io_check.c)
+ *   channels IN OUT A,B,...                           read only channels A, B, ... (in that
+ *                                                     order), write them with their file types
+ *   rows IN OUT N                                     the same, all channels, N rows at a time
+ *                                                     in both (nprfx_io_rows_*) */
+static int io_test_channels(nprfx_context *ctx, const char *in, const char *out, const char *list,
+                            int rows)
+{
+    char buf[4096], *names[256];
+    int n = 0;
+    snprintf(buf, sizeof buf, "%s", list ? list : "");
+    for (char *t = strtok(buf, ","); t && n < 256; t = strtok(NULL, ","))
+        names[n++] = t;
+    nprfx_read_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.size = sizeof ro;
+    ro.channels = list ? (const char *const *)names : NULL;
+    ro.nchannels = n;
+    nprfx_plate plate;
+    nprfx_result r;
+    if (!rows) {
+        if ((r = nprfx_io_read_ex(ctx, in, &ro, &plate))) return INFO_FILE_ERROR;
+        nprfx_image all = {plate.pixels, plate.nchannels,
+                           (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels,
+                           plate.nchannels, plate.bounds};
+        nprfx_write_options wo = {sizeof wo, NULL, 0};
+        wo.types = plate.types;
+        wo.pixel_aspect = plate.pixel_aspect;
+        r = nprfx_io_write(ctx, out, &all, (const char *const *)plate.names, &plate.display, &wo);
+        nprfx_plate_free(&plate);
+        return r ? INFO_FILE_ERROR : INFO_OK;
+    }
+    nprfx_row_reader *rr = NULL;
+    nprfx_row_writer *w = NULL;
+    if (nprfx_io_rows_open(ctx, in, &ro, &plate, &rr)) return INFO_FILE_ERROR;
+    nprfx_write_options wo = {sizeof wo, NULL, 0};
+    wo.types = plate.types;
+    wo.pixel_aspect = plate.pixel_aspect;
+    const int width = nprfx_rect_width(plate.bounds), nc = plate.nchannels;
+    float *px = malloc((size_t)width * (size_t)rows * (size_t)nc * sizeof(float));
+    r = px ? nprfx_io_rows_create(ctx, out, plate.bounds, nc, (const char *const *)plate.names,
+                                  &plate.display, &wo, &w)
+           : NPRFX_ERR_OUT_OF_MEMORY;
+    for (int y = plate.bounds.y0; !r && y < plate.bounds.y1; y += rows) {
+        int y1 = y + rows < plate.bounds.y1 ? y + rows : plate.bounds.y1;
+        nprfx_image im = {px, nc, (ptrdiff_t)width * nc, nc,
+                          nprfx_rect_make(plate.bounds.x0, y, plate.bounds.x1, y1)};
+        r = nprfx_io_rows_read(ctx, rr, y, y1, px);
+        if (!r) r = nprfx_io_rows_write(ctx, w, &im);
+    }
+    nprfx_result f = nprfx_io_rows_finish(ctx, w, !r);
+    free(px);
+    nprfx_io_rows_close(rr);
+    nprfx_plate_free(&plate);
+    return r || f ? INFO_FILE_ERROR : INFO_OK;
+}
+
 static int io_test(nprfx_context *ctx, int argc, char **argv)
 {
     if (argc < 3) return INFO_USAGE;
     const char *op = argv[1], *in = argv[2];
     if (!strcmp(op, "damaged")) return nprfx_io_check_damaged(in);
+    if (!strcmp(op, "channels") && argc >= 5) return io_test_channels(ctx, in, argv[3], argv[4], 0);
+    if (!strcmp(op, "rows") && argc >= 5)
+        return atoi(argv[4]) > 0 ? io_test_channels(ctx, in, argv[3], NULL, atoi(argv[4]))
+                                 : INFO_USAGE;
     nprfx_plate plate;
     if (nprfx_io_read(ctx, in, &plate)) return INFO_FILE_ERROR;
     /* The whole plate as one view (may exceed NPRFX_MAX_CHANNELS, which the writer allows). */

@@ -114,6 +114,17 @@ static void print_node(FILE *f, const nprfx_node_desc *d, int md)
         print_markdown(f, d->help);
     else
         print_wrapped(f, d->help, 2, 96);
+    /* NPRFX_NODE_ROWS: what lets `nprfx run` render a frame by strips (docs/design.md §1). */
+    if (d->flags & NPRFX_NODE_ROWS) {
+        const char *rows = "Renders by rows: the runner can render a frame through it a strip of "
+                           "rows at a time, in bounded memory (`nprfx run --strip-rows`).";
+        if (md) {
+            fprintf(f, "\n%s\n", rows);
+        } else {
+            fputc('\n', f);
+            print_wrapped(f, rows, 2, 96);
+        }
+    }
     fprintf(f, md ? "\n### Inputs\n\n| input | channels | looks for | |\n|---|---|---|---|\n"
                   : "\nInputs:\n");
     for (int i = 0; i < d->num_inputs; i++) {

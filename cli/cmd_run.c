@@ -12,6 +12,14 @@
 
 static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
 {
+    /* The nodes that render by rows, from their descriptors. */
+    char rows[512] = "";
+    for (int i = 0, n = 0; i < nprfx_node_count(); i++) {
+        const nprfx_node_desc *d = nprfx_node_at(i);
+        if (!(d->flags & NPRFX_NODE_ROWS)) continue;
+        size_t len = strlen(rows);
+        snprintf(rows + len, sizeof rows - len, "%s%s", n++ ? ", " : "", d->id);
+    }
     fprintf(
         f,
         "usage: %s run GRAPH.json [GRAPH.json ...] [options]\n\n"
@@ -42,6 +50,12 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "  --no-pool           no frame-buffer pool and no memory plan (every frame calloc'd\n"
         "                      and freed, plates whole, results kept until --cache-mb evicts\n"
         "                      them): the pixels are the same, for checking that\n"
+        "  --strip-rows N      render a write whose whole chain renders by rows (EXR reads,\n"
+        "                      and nodes %s) N rows at a time,\n"
+        "                      reading and writing only those rows (plus the margins the\n"
+        "                      filters need), so memory follows N, not the frame; the pixels\n"
+        "                      are the same. 0 (default): by strips of 64 rows only when whole\n"
+        "                      frames would pass --mem-limit; -1: never\n"
         "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
         "  --keep-going        render the remaining frames after a failed one, exit 1\n"
         "  --wait              when another run is writing one of the graph's sequences,\n"
@@ -72,7 +86,7 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         "beside it; across hosts only where the file system supports locks, e.g. NFSv4) and\n"
         "removes what a killed run left there. See 'nprfx list' and 'nprfx help NODE' for the\n"
         "node types.\n",
-        prog, ext && ext->options_usage ? ext->options_usage : "");
+        prog, rows, ext && ext->options_usage ? ext->options_usage : "");
 }
 
 static double now_seconds(void)
@@ -261,7 +275,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     int ngraphs = 0;
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
-    int no_pool = 0, check = 0, shared_lock = 0;
+    int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0;
     const char *mem_limit = NULL;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
@@ -280,6 +294,8 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
             threads = atoi(argv[++i]);
         else if (!strcmp(a, "--tile") && has)
             tile = atoi(argv[++i]);
+        else if (!strcmp(a, "--strip-rows") && has)
+            strip_rows = atoi(argv[++i]);
         else if (!strcmp(a, "--cache-mb") && has)
             cache_mb = atol(argv[++i]);
         else if (!strcmp(a, "--output-dir") && has)
@@ -322,6 +338,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
     opt.progress = !quiet;
     opt.no_pool = no_pool;
+    opt.strip_rows = strip_rows;
     int status = 0;
     run_opts ro = {prog,  frames,      shot, sets,  nsets, keep_going,
                    quiet, ngraphs > 1, wait, stats, check, shared_lock};

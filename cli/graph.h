@@ -53,6 +53,11 @@ typedef struct nprfx_graph_options {
      * freed, and results stay in the cache until evicted (--no-pool; the pixels must not
      * change). */
     int no_pool;
+    /* Appended. Write nodes whose whole chain renders by rows (NPRFX_NODE_ROWS) are rendered a
+     * strip of this many rows at a time, reading and writing only those rows (plus the margins
+     * the footprints need): > 0 always, 0 only when whole frames would pass the memory limit
+     * (nprfx_graph_plan chooses), < 0 never (--strip-rows). */
+    int strip_rows;
 } nprfx_graph_options;
 
 /* What one node of a graph cost since it loaded (nprfx run --stats, bench-graph). */
@@ -73,6 +78,10 @@ typedef struct nprfx_graph_plan_info {
     uint64_t limit;        /* the memory limit (UINT64_MAX: none) */
     int width, height;     /* the frame size the estimate is for */
     const char *peak_node; /* the node whose output frame makes the peak */
+    /* Appended: > 0 when the frames render a strip of this many rows at a time; need is then
+     * what strips hold at once (whole_need: what whole frames would). */
+    int strip_rows;
+    uint64_t whole_need;
 } nprfx_graph_plan_info;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write

@@ -154,6 +154,108 @@ static nprfx_result gather_wants(nprfx_graph *g)
     return NPRFX_OK;
 }
 
+typedef struct read_pick {
+    nprfx_graph *g;
+    int node;
+} read_pick;
+
+static int pick_channels(void *user, const char *const *names, int n, int *pick)
+{
+    const read_pick *rp = user;
+    return internal_graph_read_pick(rp->g, rp->node, names, n, pick);
+}
+
+/* What a read makes of the channels it read, the same for a whole plate and a strip of rows:
+ * the note on parts and views (once per node), the motion channels, the colour conversion. */
+static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, nprfx_plate *plate)
+{
+    nprfx_result r = NPRFX_OK;
+    if (plate->note && !n->noted && g->notice) {
+        char msg[4600];
+        snprintf(msg, sizeof msg, "%s: read '%s': %s", plate->note_is_warning ? "warning" : "note",
+                 n->name, plate->note);
+        g->notice(g->notice_user, msg);
+    }
+    n->noted = 1;
+    if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, plate)))
+        return r;
+    if (n->colorspace) {
+        int idx[3], amb;
+        char bad[64];
+        if (nprfx_channels_select((const char *const *)plate->names, plate->nchannels, "R,G,B", idx,
+                                  3, bad, sizeof bad, &amb) == 3 &&
+            idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
+            nprfx_image rgb = nprfx_plate_view(plate, idx[0], 3);
+            nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
+            r = nprfx_context_create_scoped(n->ctx, file, &fctx);
+            if (!r)
+                r = nprfx_io_convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+            nprfx_context_destroy(fctx);
+        }
+    }
+    return r;
+}
+
+static nprfx_read_options read_options_of(gnode *n, read_pick *rp)
+{
+    nprfx_read_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.size = sizeof ro;
+    ro.part = n->part;
+    ro.view = n->read_view;
+    ro.want = (const char *const *)n->wants;
+    ro.nwant = n->nwants;
+    /* Only the channels the graph uses are read (the plan picks them from the names the read
+     * would deliver): a renderer's plate has 23-56, a graph reads a dozen. */
+    ro.pick = pick_channels;
+    ro.pick_user = rp;
+    return ro;
+}
+
+nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, char *file,
+                                           size_t n, nprfx_plate *shape, nprfx_row_reader **rr)
+{
+    gnode *nd = &g->nodes[node];
+    internal_graph_resolve_path(g, g->base_dir, nd->path, frame, file, n);
+    nprfx_result r = nd->wants_known ? NPRFX_OK : gather_wants(g);
+    if (r) return r;
+    read_pick rp = {g, node};
+    nprfx_read_options ro = read_options_of(nd, &rp);
+    return nprfx_io_rows_open(nd->ctx, file, &ro, shape, rr);
+}
+
+nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
+                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
+                                      int y1, nprfx_plate *out)
+{
+    gnode *n = &g->nodes[node];
+    memset(out, 0, sizeof *out);
+    int w = nprfx_rect_width(shape->bounds), nc = shape->nchannels;
+    out->bounds = nprfx_rect_make(shape->bounds.x0, y0, shape->bounds.x1, y1);
+    out->display = shape->display;
+    out->pixel_aspect = shape->pixel_aspect;
+    out->pixels = malloc((size_t)w * (size_t)(y1 - y0) * (size_t)nc * sizeof(float));
+    out->names = internal_graph_names_dup((const char *const *)shape->names, nc);
+    if (!out->pixels || !out->names) {
+        free(out->pixels);
+        for (int c = 0; out->names && c < nc; c++)
+            free(out->names[c]);
+        free(out->names);
+        memset(out, 0, sizeof *out);
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
+    }
+    out->nchannels = nc;
+    /* The read's note on parts and views goes out with its first strip, as with a whole plate. */
+    if (!n->noted && shape->note) {
+        out->note = internal_graph_strdup(shape->note);
+        out->note_is_warning = shape->note_is_warning;
+    }
+    nprfx_result r = nprfx_io_rows_read(n->ctx, rr, y0, y1, out->pixels);
+    if (!r) r = finish_plate(g, n, file, out);
+    if (r) nprfx_plate_free(out);
+    return r;
+}
+
 static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
                               gmeta *meta)
 {
@@ -164,37 +266,12 @@ static nprfx_result eval_read(nprfx_graph *g, int node, int frame, nprfx_image *
     memset(&plate, 0, sizeof plate);
     nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
-    nprfx_read_options ro = {sizeof ro, n->part, n->read_view, (const char *const *)n->wants,
-                             n->nwants};
+    read_pick rp = {g, node};
+    nprfx_read_options ro = read_options_of(n, &rp);
     if ((r = nprfx_io_read_ex(n->ctx, file, &ro, &plate))) return r;
-    if (plate.note && !n->noted && g->notice) {
-        char msg[4600];
-        snprintf(msg, sizeof msg, "%s: read '%s': %s", plate.note_is_warning ? "warning" : "note",
-                 n->name, plate.note);
-        g->notice(g->notice_user, msg);
-    }
-    n->noted = 1;
-    if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, &plate))) {
+    if ((r = finish_plate(g, n, file, &plate))) {
         nprfx_plate_free(&plate);
         return r;
-    }
-    if (n->colorspace) {
-        int idx[3], amb;
-        char bad[64];
-        if (nprfx_channels_select((const char *const *)plate.names, plate.nchannels, "R,G,B", idx,
-                                  3, bad, sizeof bad, &amb) == 3 &&
-            idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
-            nprfx_image rgb = nprfx_plate_view(&plate, idx[0], 3);
-            nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
-            r = nprfx_context_create_scoped(n->ctx, file, &fctx);
-            if (!r)
-                r = nprfx_io_convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
-            nprfx_context_destroy(fctx);
-            if (r) {
-                nprfx_plate_free(&plate);
-                return r;
-            }
-        }
     }
     im->data = plate.pixels;
     im->channels = plate.nchannels;

@@ -390,6 +390,9 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     }
     if (opt && opt->size >= offsetof(nprfx_graph_options, no_pool) + sizeof opt->no_pool)
         g->no_pool = opt->no_pool;
+    if (opt && opt->size >= offsetof(nprfx_graph_options, strip_rows) + sizeof opt->strip_rows)
+        g->strip_option = opt->strip_rows;
+    g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
     g->pool = nprfx_frame_pool_create(g->no_pool);
     if (!g->pool) {
         cJSON_Delete(root);

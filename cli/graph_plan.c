@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "channels.h"
 #include "internal_graph.h"
 #include "io.h"
 #include "io_limits.h"
@@ -111,6 +112,87 @@ int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *n
             }
     }
     return kept;
+}
+
+/* Whether input k of reader selects from names (nc) the channels that `whole` (nw) gives it,
+ * through map (index in names -> index in whole). */
+static int same_selection(nprfx_graph *g, const gnode *reader, int k, const char *const *whole,
+                          int nw, const char *const *names, int nc, const int *map)
+{
+    int a[256], b[256], ca = 0, cb = 0;
+    if (internal_graph_input_channels(g, reader, k, whole, nw, a, &ca) ||
+        internal_graph_input_channels(g, reader, k, names, nc, b, &cb) || ca != cb)
+        return 0;
+    for (int c = 0; c < ca; c++)
+        if (map[b[c]] != a[c]) return 0;
+    return 1;
+}
+
+/* Whether `sel` picks from names (nc) the channels it picks from whole (nw), through map. */
+static int same_pick(const char *sel, const char *const *whole, int nw, const char *const *names,
+                     int nc, const int *map)
+{
+    int a[8], b[8], amb;
+    char bad[64];
+    int ca = nprfx_channels_select(whole, nw, sel, a, 8, bad, sizeof bad, &amb);
+    int cb = nprfx_channels_select(names, nc, sel, b, 8, bad, sizeof bad, &amb);
+    if (ca != cb) return 0;
+    for (int c = 0; c < ca; c++)
+        if (map[b[c]] != a[c]) return 0;
+    return 1;
+}
+
+int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *pick)
+{
+    const gnode *n = &g->nodes[node];
+    int motion = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
+    if (nc < 1 || nc + motion > 1024) return -1; /* wider plates are read whole */
+    const char *all[1024], *sub[1024];
+    unsigned char keep[1024];
+    int map[1024];
+    for (int c = 0; c < nc; c++)
+        all[c] = names[c];
+    for (int k = 0; k < motion; k++)
+        all[nc + k] = internal_graph_motion_names[k];
+    int na = nc + motion;
+    if (internal_graph_plate_channels(g, node, all, na, keep) <= 0) return -1;
+    /* What the read makes of its plate needs its sources: the channels the motion channels are
+     * made of (the read fails without them), and R,G,B when it converts colour (OCIO may mix
+     * them), so the channels read are converted exactly as in the whole plate. */
+    int src[4] = {0}, rgb[3], amb;
+    double sign[4];
+    char bad[64];
+    if (motion && internal_graph_motion_sources(g, n, "", names, nc, src, sign)) return -1;
+    for (int k = 0; k < motion; k++)
+        keep[src[k]] = 1;
+    int have_rgb = n->colorspace &&
+                   nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad, sizeof bad, &amb) == 3;
+    for (int c = 0; have_rgb && c < 3; c++)
+        keep[rgb[c]] = 1;
+    int m = 0;
+    for (int c = 0; c < nc; c++)
+        if (keep[c]) {
+            map[m] = c;
+            sub[m] = names[c];
+            pick[m++] = c;
+        }
+    if (m == nc) return -1;
+    for (int k = 0; k < motion; k++) {
+        map[m + k] = nc + k;
+        sub[m + k] = all[nc + k];
+    }
+    /* Every choice made on the plate must come out the same on the channels read (a suffix
+     * ambiguous in the whole plate could become unique); else the whole plate is read. */
+    for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++)
+        if (!same_selection(g, &g->nodes[g->plan_readers[r][0]], g->plan_readers[r][1], all, na,
+                            sub, m + motion, map))
+            return -1;
+    int sub_src[4];
+    if (motion && internal_graph_motion_sources(g, n, "", sub, m, sub_src, sign)) return -1;
+    for (int k = 0; k < motion; k++)
+        if (map[sub_src[k]] != src[k]) return -1;
+    if (n->colorspace && !same_pick("R,G,B", all, na, sub, m + motion, map)) return -1;
+    return m;
 }
 
 int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta)
@@ -424,14 +506,26 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         memset(&info, 0, sizeof info);
         if (nprfx_io_info(g->ctx, file, &info)) return 1;
         int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
-        sh->names = calloc((size_t)(info.nchannels + extra), sizeof *sh->names);
-        for (int c = 0; sh->names && c < info.nchannels; c++)
-            sh->names[c] = internal_graph_strdup(info.names[c]);
+        /* The read delivers only the channels it picks (eval_read), then appends the motion
+         * channels; the trim drops what only those were read for. */
+        int pick[1024], nread = info.nchannels;
+        int m = info.nchannels <= 1024
+                    ? internal_graph_read_pick(g, i, (const char *const *)info.names,
+                                               info.nchannels, pick)
+                    : -1;
+        if (m > 0)
+            nread = m;
+        else
+            for (int c = 0; c < nread; c++)
+                pick[c] = c;
+        sh->names = calloc((size_t)(nread + extra), sizeof *sh->names);
+        for (int c = 0; sh->names && c < nread; c++)
+            sh->names[c] = internal_graph_strdup(info.names[pick[c]]);
         for (int c = 0; sh->names && c < extra; c++)
-            sh->names[info.nchannels + c] = internal_graph_strdup(internal_graph_motion_names[c]);
+            sh->names[nread + c] = internal_graph_strdup(internal_graph_motion_names[c]);
         sh->w = nprfx_rect_width(info.bounds);
         sh->h = nprfx_rect_height(info.bounds);
-        sh->channels = info.nchannels + extra;
+        sh->channels = nread + extra;
         nprfx_file_info_free(&info);
         if (!sh->names) return 1;
         sh->known = 1;
@@ -602,7 +696,9 @@ static int sim_eval(sim *s, int root)
         }
         uint64_t b = shape_bytes(sh), extra = s->scratch[node];
         int plate = n->kind == GK_READ || n->kind == GK_SYNTH;
-        if (plate && extra) { /* the whole plate, then its trim (internal_graph_trim_plate) */
+        /* the plate as made (a read's picked channels, a synth's all), then its trim
+         * (internal_graph_trim_plate) */
+        if (plate && extra) {
             if (n->kind == GK_SYNTH)
                 sim_alloc(s, extra);
             else
@@ -665,6 +761,78 @@ static int sim_frame(sim *s)
     return 0;
 }
 
+/* Rows per strip when the plan chooses strips itself (a graph over the memory limit): a few
+ * chunks of most EXR compressions, small against any frame worth striping. */
+#define PLAN_STRIP_ROWS 64
+
+/* Strips (graph_strips.c) instead of whole frames: always with --strip-rows N, and when whole
+ * frames would pass the limit (over) and every write can render by rows. out->need becomes what
+ * the strips hold; a limit even strips pass is refused here. Otherwise why says what keeps the
+ * graph from strips (for the whole-frame refusal). */
+static nprfx_result plan_strips(nprfx_graph *g, int frame, int over, nprfx_graph_plan_info *out,
+                                char *why, size_t n)
+{
+    g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
+    if (g->strip_option < 0 || (g->strip_option == 0 && !over) || g->no_pool) return NPRFX_OK;
+    int rows = g->strip_option > 0 ? g->strip_option : PLAN_STRIP_ROWS;
+    uint64_t need = 0;
+    int writer = -1, writes = 0, all = 1;
+    for (int i = 0; i < g->count; i++) {
+        if (g->nodes[i].kind != GK_WRITE) continue;
+        writes++;
+        if (!internal_graph_strips_possible(g, i, why, n)) {
+            all = 0;
+            continue;
+        }
+        nprfx_result err = NPRFX_OK;
+        uint64_t b = internal_graph_strip_need(g, i, frame, rows, &err);
+        /* A plate's block above the limit: even strips do not fit (the message says so). Any
+         * other problem: whole frames, and the render reports it. */
+        if (err == NPRFX_ERR_OUT_OF_MEMORY) {
+            char why_strips[1024], wb[32];
+            nprfx_context_last_error(g->ctx, why_strips, sizeof why_strips);
+            nprfx_format_bytes(wb, sizeof wb, out->whole_need);
+            g->strip_rows = 0;
+            return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
+                               "frame %d needs %s of frames whole, and strips of %d rows do not "
+                               "fit either: %s; nothing was rendered",
+                               frame, wb, rows, why_strips);
+        }
+        if (err) {
+            g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
+            return NPRFX_OK;
+        }
+        if (b > need) {
+            need = b;
+            writer = i;
+        }
+    }
+    /* Some writes whole, some by strips: only with --strip-rows, and the whole-frame estimate
+     * (all writes) stands. */
+    if (!writes || (!all && g->strip_option == 0)) return NPRFX_OK;
+    if (!all) {
+        g->strip_rows = rows;
+        return NPRFX_OK;
+    }
+    g->strip_rows = rows;
+    out->strip_rows = rows;
+    out->need = need;
+    out->peak = need;
+    out->peak_node = writer >= 0 ? g->nodes[writer].name : out->peak_node;
+    if (g->mem_limit == UINT64_MAX || need <= g->mem_limit) return NPRFX_OK;
+    g->strip_rows = 0;
+    char nb[32], wb[32], lim[32];
+    nprfx_format_bytes(nb, sizeof nb, need);
+    nprfx_format_bytes(wb, sizeof wb, out->whole_need);
+    nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
+    return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
+                       "frame %d needs %s of frames whole, and still %s in strips of %d rows "
+                       "(write node '%s' and the nodes it reads, %dx%d): above the %s memory "
+                       "limit (%s); nothing was rendered (fewer rows: --strip-rows)",
+                       frame, wb, nb, rows, g->nodes[writer].name, out->width, out->height, lim,
+                       nprfx_mem_limit_origin());
+}
+
 nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out)
 {
     memset(out, 0, sizeof *out);
@@ -693,7 +861,13 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
         out->width = sh->w;
         out->height = sh->h;
         out->peak_node = g->nodes[s.peak_node].name;
-        if (g->mem_limit != UINT64_MAX && s.need > g->mem_limit) {
+        out->whole_need = s.need;
+        int over = g->mem_limit != UINT64_MAX && s.need > g->mem_limit;
+        char why[600] = "";
+        r = plan_strips(g, frame, over, out, why, sizeof why);
+        if (r || out->strip_rows > 0) {
+            over = 0; /* strips decided, or refused with their own message */
+        } else if (over) {
             char need[32], lim[32], one[32];
             nprfx_format_bytes(need, sizeof need, s.need);
             nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
@@ -702,9 +876,10 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
                 g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                 "frame %d needs %s of frames at its peak, at node '%s' (its %dx%d frame "
                 "with %d channel%s, %s, joins the frames still held): above the %s "
-                "memory limit (%s); nothing was rendered",
+                "memory limit (%s); nothing was rendered%s%s%s",
                 frame, need, g->nodes[s.peak_node].name, sh->w, sh->h, sh->channels,
-                sh->channels == 1 ? "" : "s", one, lim, nprfx_mem_limit_origin());
+                sh->channels == 1 ? "" : "s", one, lim, nprfx_mem_limit_origin(),
+                why[0] ? " (nor can it render by strips of rows: " : "", why, why[0] ? ")" : "");
         }
     }
     for (int i = 0; s.shapes && i < g->count; i++)

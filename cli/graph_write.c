@@ -45,7 +45,8 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
 
 /* Refuse to write over a file some read node of the graph takes as input at this frame: inputs
  * are never overwritten, even by a graph that names the same sequence twice. */
-static nprfx_result check_not_input(nprfx_graph *g, const gnode *w, const char *out, int frame)
+nprfx_result internal_graph_check_not_input(nprfx_graph *g, const gnode *w, const char *out,
+                                            int frame)
 {
     char in[4096], rin[PATH_MAX], rout[PATH_MAX];
     if (!realpath(out, rout)) return NPRFX_OK; /* does not exist yet: cannot be an input */
@@ -93,7 +94,7 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
     char path[4096];
     if (!r) {
         internal_graph_resolve_path(g, g->out_dir, n->path, frame, path, sizeof path);
-        r = check_not_input(g, n, path, frame);
+        r = internal_graph_check_not_input(g, n, path, frame);
     }
     /* A plate as read keeps each channel's file type (uint ids stay uint, half stays half); a
      * node's result is float, or half with "half". Windows and pixel aspect go back as read. */
@@ -118,7 +119,7 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         nprfx_image pv;
         float *pscratch = NULL;
         internal_graph_resolve_path(g, g->out_dir, n->preview, frame, path, sizeof path);
-        r = check_not_input(g, n, path, frame);
+        r = internal_graph_check_not_input(g, n, path, frame);
         if (!r) r = preview_view(g, &view, names, &pv, &pscratch);
         if (!r) {
             nprfx_preview_options po = {sizeof po,  g->ocio, n->colorspace,
@@ -145,7 +146,12 @@ static nprfx_result render_frame(nprfx_graph *g, int frame, int files, int *writ
     internal_graph_frame_begin(g, frame);
     for (int i = 0; !r && i < g->count; i++) {
         if (g->nodes[i].kind != GK_WRITE) continue;
-        if (!(r = write_node(g, i, frame, files))) (*written)++;
+        /* Strips where the plan chose them (a graph over the memory limit, or --strip-rows). */
+        if (files && g->strip_rows > 0 && internal_graph_strips_possible(g, i, NULL, 0))
+            r = internal_graph_write_strips(g, i, frame);
+        else
+            r = write_node(g, i, frame, files);
+        if (!r) (*written)++;
     }
     /* What the next frame will not read goes now, not when the byte bound is reached. */
     internal_graph_frame_sweep(g);

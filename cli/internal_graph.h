@@ -8,6 +8,7 @@
 
 #include "frame_pool.h"
 #include "graph.h"
+#include "io.h"
 #include "nprfx/nprfx.h"
 
 typedef enum gkind { GK_NODE, GK_READ, GK_SYNTH, GK_WRITE } gkind;
@@ -103,6 +104,9 @@ struct nprfx_graph {
      * to check that pooling never changes a pixel). */
     nprfx_frame_pool *pool;
     int no_pool;
+    /* Strip renders (graph_strips.c): the option (nprfx_graph_options.strip_rows), and the rows
+     * per strip the plan chose (0: whole frames). */
+    int strip_option, strip_rows;
     int plan_ready;
     int *plan_uses;               /* per node: inputs reading it at the same frame */
     unsigned char *plan_temporal; /* per node: some temporal node reads it at other frames */
@@ -121,8 +125,8 @@ struct nprfx_graph {
     nprfx_graph_node_stats *stats; /* per node */
     nprfx_render_hook hook;
     int has_hook;
-    int variant;              /* nprfx_graph_variant */
-    int progress;             /* nprfx_graph_options.progress */
+    int variant;  /* nprfx_graph_variant */
+    int progress; /* nprfx_graph_options.progress */
     void (*notice)(void *user, const char *message);
     void *notice_user;
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
@@ -155,6 +159,12 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
  * nprfx_graph_eval, who sees all of it. Only a planned graph trims plates. */
 int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *names, int nc,
                                   unsigned char *keep);
+/* The channels read node `node` reads of a file whose whole read would deliver names (nc):
+ * those its readers take (internal_graph_plate_channels on names with the motion channels
+ * appended), the sources of its motion channels and its R,G,B when it converts colour, as
+ * indices into names in file order into pick (room for nc); -1 to read them all: nothing to
+ * leave out, no plan, or a selection that would come out otherwise on the channels read. */
+int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *pick);
 /* Keep only the channels of plate node's result (im, names, and meta's per-channel types when it
  * has them) that its readers take, when every reader then selects the very same channels
  * (internal_graph_plate_channels); whether it did. */
@@ -215,6 +225,30 @@ void internal_graph_variant_plate(const nprfx_graph *g, nprfx_image *im, char **
 /* NPRFX_VARIANT_WHITE: the params node n renders frame with (its own, or *copy altered). */
 const nprfx_value *internal_graph_variant_params(const nprfx_graph *g, const gnode *n, int frame,
                                                  nprfx_value *copy);
+/* Strip renders (graph_strips.c): read node `node`'s file at frame (its path into file, n bytes)
+ * opened for rows with the channels eval_read would read; *shape describes the plate. */
+nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, char *file,
+                                           size_t n, nprfx_plate *shape, nprfx_row_reader **rr);
+/* Rows [y0, y1) of it as a plate of their own (malloc'd), with the motion channels and the
+ * colour conversion eval_read applies to a whole plate. */
+nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
+                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
+                                      int y1, nprfx_plate *out);
+/* Write node w would overwrite one of the graph's inputs at frame with out: the error. */
+nprfx_result internal_graph_check_not_input(nprfx_graph *g, const gnode *w, const char *out,
+                                            int frame);
+/* Whether write node `node` can be rendered a strip of rows at a time (graph_strips.c): every
+ * node it depends on is a read of an EXR or a node with NPRFX_NODE_ROWS and a footprint >= 0,
+ * none temporal; no preview. When not, why names the node in the way. */
+int internal_graph_strips_possible(nprfx_graph *g, int node, char *why, size_t n);
+/* Render write node `node` at frame by strips of g->strip_rows rows (graph_strips.c). */
+nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame);
+/* The bytes a strip render of write node `write` at frame holds at most with strips of `rows`
+ * rows (the plates' headers are read); *err: why it cannot be told (raised on g's context), a
+ * plate's block of rows above the memory limit (NPRFX_ERR_OUT_OF_MEMORY) among them. */
+uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows,
+                                   nprfx_result *err);
+
 /* The cache entry of node at frame, evaluated (and its inputs) when not cached. */
 nprfx_result internal_graph_eval(nprfx_graph *g, int node, int frame, centry **out);
 

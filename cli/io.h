@@ -51,6 +51,18 @@ typedef struct nprfx_read_options {
      * the first group of parts (same data and display window) of the view that holds them all. */
     const char *const *want;
     int nwant;
+    /* Appended (read when size covers them). The channels to read, by the names a whole read
+     * gives them (nprfx_plate.names), in the order the plate should have them; NULL: all. Only
+     * these are decoded into the plate (EXR: a block of whole chunks at a time, converting only
+     * the span of a part's channels that holds them) and counted against the memory limit. */
+    const char *const *channels;
+    int nchannels;
+    /* Without `channels`: chosen once the names are known, from the same look at the header.
+     * Called with the n names a whole read would deliver, in order, before any pixel is read;
+     * fills pick (room for n) with indices into names and returns how many, or 0 or less for
+     * all of them. */
+    int (*pick)(void *user, const char *const *names, int n, int *pick);
+    void *pick_user;
 } nprfx_read_options;
 
 /* Read a file's default part group: the first part of the default view and every other part
@@ -61,6 +73,19 @@ nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *ou
 /* The same with a part, a view and the channels wanted (opt NULL: as nprfx_io_read). */
 nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path, const nprfx_read_options *opt,
                               nprfx_plate *out);
+
+/* A plate a strip of rows at a time (EXR), for the runner's strip renders (docs/design.md §1
+ * "Memory"): opened with the same options as nprfx_io_read_ex, *shape gets the plate's
+ * description (everything but pixels); then any rows [y0, y1) of the data window, in any order,
+ * are decoded into dst (shape's nchannels floats per pixel, rows of the window's width), a block
+ * of whole chunks at a time, so the read never holds more than its block. The memory limit
+ * counts the block, not the plate. Other formats: NPRFX_ERR_UNSUPPORTED. */
+typedef struct nprfx_row_reader nprfx_row_reader;
+nprfx_result nprfx_io_rows_open(nprfx_context *ctx, const char *path, const nprfx_read_options *opt,
+                                nprfx_plate *shape, nprfx_row_reader **out);
+nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader *r, int y0, int y1,
+                                float *dst);
+void nprfx_io_rows_close(nprfx_row_reader *r);
 
 /* One part (subimage) of a file, for `nprfx info`. */
 typedef struct nprfx_part_info {
@@ -130,6 +155,18 @@ void nprfx_attributes_free(char **names, char **values, int count);
 nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
                             const char *const *names, const nprfx_rect *display,
                             const nprfx_write_options *opt);
+
+/* An image written a strip of rows at a time, top to bottom: as nprfx_io_write (same header,
+ * types and options, a temporary name beside path), but each nprfx_io_rows_write gives the next
+ * rows (full width of bounds), and nprfx_io_rows_finish with keep renames the file into place
+ * once every row is written; without keep (or on any error) the temporary file is removed. The
+ * writer is freed by finish. */
+typedef struct nprfx_row_writer nprfx_row_writer;
+nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path, nprfx_rect bounds,
+                                  int channels, const char *const *names, const nprfx_rect *display,
+                                  const nprfx_write_options *opt, nprfx_row_writer **out);
+nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer *w, const nprfx_image *rows);
+nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_writer *w, int keep);
 
 /* Write an 8-bit PNG preview of a scene-linear image. 1 channel: grey; 2: R,G (B = 0); 3: RGB;
  * 4: RGBA. With an OCIO config (ocio_config path, or $OCIO when NULL) the image goes from

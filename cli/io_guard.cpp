@@ -81,7 +81,8 @@ extern "C" nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int
         double now = nprfx_limits_now();
         read_deadline = timeout > 0 ? now + timeout : 0;
         if (nprfx_io_is_exr(path)) return nprfx_io_validate_exr(ctx, path, mode, read_deadline);
-        if (mode == NPRFX_GUARD_READ) return guard_other(ctx, path);
+        /* Other formats decode every channel whatever a read keeps: all of them count. */
+        if (mode != NPRFX_GUARD_HEADER) return guard_other(ctx, path);
         return NPRFX_OK;
     } catch (const std::exception &e) {
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());

@@ -4,6 +4,7 @@
  * (a C caller cannot unwind through it) and reports through nprfx_error, naming the file and,
  * where one is at fault, the channel. */
 #include "io.h"
+#include "io_limits.h"
 #include "io_validate.h"
 
 extern "C" {
@@ -595,6 +596,328 @@ nprfx_read_options read_options(const nprfx_read_options *opt)
 /* The largest integer float32 holds exactly, with every integer below it. */
 const uint32_t float_exact_max = 1u << 24;
 
+/* Rows an EXR part stores per chunk (a tile's height when tiled): reads in blocks of whole chunks
+ * decode each chunk once. From the compression, as OpenEXR defines it. */
+int chunk_rows(const part &p)
+{
+    if (p.spec.tile_width > 0 && p.spec.tile_height > 0) return p.spec.tile_height;
+    std::string c = p.spec.get_string_attribute("compression");
+    c = c.substr(0, c.find(':'));
+    if (c.empty() || c == "none" || c == "rle" || c == "zips") return 1;
+    if (c == "zip" || c == "pxr24") return 16;
+    if (c == "dwab") return 256;
+    return 32; /* piz, b44, b44a, dwaa */
+}
+
+/* Rows a block read of part p decodes at once: at least 64 (fewer calls), whole chunks. */
+int block_rows(const part &p)
+{
+    int cr = chunk_rows(p);
+    return cr >= 64 ? cr : (64 + cr - 1) / cr * cr;
+}
+
+/* An open read: the file, the parts and view chosen, and the channels it delivers. */
+struct reading {
+    std::string path;
+    std::unique_ptr<ImageInput> in;
+    header h;
+    choice ch;
+    std::vector<chan> sel; /* what the read delivers, in order: ch.chans or the caller's choice */
+    bool chosen = false;   /* the caller named or picked the channels */
+    /* EXR with chosen channels: decoded a block of whole chunks at a time, converting only the
+     * span between a part's first and last delivered channel, so no more than the delivered
+     * channels and one block is ever held; any rows can be read (strip renders). */
+    bool blocks = false;
+    std::vector<uint32_t> umax; /* per delivered uint channel: the largest value read */
+    std::vector<float> fbuf;
+    std::vector<uint32_t> ubuf;
+};
+
+/* The spans [lo, hi] of the delivered float (or half) and uint channels of part p; -1: none. */
+void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, int &uhi)
+{
+    flo = fhi = ulo = uhi = -1;
+    for (const chan &c : rd.sel) {
+        if (c.p != p) continue;
+        int &lo = c.type == NPRFX_PIXEL_UINT ? ulo : flo,
+            &hi = c.type == NPRFX_PIXEL_UINT ? uhi : fhi;
+        if (lo < 0 || c.c < lo) lo = c.c;
+        if (hi < 0 || c.c > hi) hi = c.c;
+    }
+}
+
+/* Guard, header, choice of parts and view, and the channels to deliver: everything but pixels. */
+nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read_options &o,
+                          reading &rd, bool rows = false)
+{
+    rd.path = path;
+    rd.chosen = o.channels || o.pick || rows;
+    /* Damaged files are refused before OIIO allocates anything (io_validate.h). A read of chosen
+     * channels is held to the memory limit by what it delivers, checked once they are known. */
+    if (nprfx_result g =
+            nprfx_io_guard(ctx, path, rd.chosen ? NPRFX_GUARD_READ_CHOSEN : NPRFX_GUARD_READ))
+        return g;
+    nprfx_result r = scan(ctx, path, rd.in, rd.h);
+    if (r) return r;
+    failure f = choose(path, rd.h, o, rd.ch);
+    if (f.code) return nprfx_error(ctx, f.code, "%s", f.message.c_str());
+    const std::string where = part_label(*rd.ch.group[0]) + " of '" + path + "'";
+    rd.sel = rd.ch.chans;
+    if (o.channels) {
+        std::vector<chan> sel;
+        std::set<std::string> seen;
+        for (int i = 0; i < o.nchannels; i++) {
+            const char *want = o.channels[i] ? o.channels[i] : "";
+            auto it = std::find_if(rd.ch.chans.begin(), rd.ch.chans.end(),
+                                   [&](const chan &c) { return c.name == want; });
+            if (it == rd.ch.chans.end())
+                return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "%s has no channel '%s'",
+                                   where.c_str(), want);
+            if (!seen.insert(want).second)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "reading %s: channel '%s' is asked for twice", where.c_str(),
+                                   want);
+            sel.push_back(*it);
+        }
+        if (sel.empty())
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "reading %s: an empty list of channels", where.c_str());
+        rd.sel = sel;
+    } else if (o.pick) {
+        std::vector<const char *> names;
+        for (const chan &c : rd.ch.chans)
+            names.push_back(c.name.c_str());
+        std::vector<int> idx(names.size());
+        int k = o.pick(o.pick_user, names.data(), (int)names.size(), idx.data());
+        if (k > 0 && k <= (int)names.size()) {
+            std::vector<char> used(names.size(), 0);
+            std::vector<chan> sel;
+            for (int i = 0; i < k; i++) {
+                if (idx[i] < 0 || idx[i] >= (int)names.size() || used[(size_t)idx[i]])
+                    return nprfx_error(ctx, NPRFX_ERR_INTERNAL,
+                                       "reading %s: channel choice %d of %d is %d", where.c_str(),
+                                       i, k, idx[i]);
+                used[(size_t)idx[i]] = 1;
+                sel.push_back(rd.ch.chans[(size_t)idx[i]]);
+            }
+            rd.sel = sel;
+        }
+    }
+    const ImageSpec &first = rd.ch.group[0]->spec;
+    const size_t nch = rd.sel.size();
+    if ((size_t)first.width * (size_t)first.height == 0)
+        return nprfx_error(ctx, NPRFX_ERR_IO, "%s holds an empty image (%dx%d, %zu channels)",
+                           where.c_str(), first.width, first.height, nch);
+    rd.blocks = rd.chosen && rd.h.format == "openexr";
+    if (rows && !rd.blocks)
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
+                           "'%s' is %s: only EXR files can be read a strip of rows at a time", path,
+                           rd.h.format.c_str());
+    if (rd.chosen) {
+        /* What this read allocates: its channels, and one block per part (or the uint scratch
+         * of a read by channel runs); a read by rows only the blocks (the caller holds its rows).
+         */
+        uint64_t scratch = 0;
+        int block_h = 0, block_ch = 0;
+        for (const part *p : rd.ch.group) {
+            int flo, fhi, ulo, uhi;
+            part_spans(rd, p, flo, fhi, ulo, uhi);
+            int span = (flo < 0 ? 0 : fhi - flo + 1) + (ulo < 0 ? 0 : uhi - ulo + 1);
+            int h = rd.blocks ? block_rows(*p) : (ulo < 0 ? 0 : first.height);
+            uint64_t b = (uint64_t)h * (uint64_t)first.width * (uint64_t)span * 4u;
+            if (b > scratch) {
+                scratch = b;
+                block_h = h;
+                block_ch = span;
+            }
+        }
+        std::string what =
+            "'" + std::string(path) + (rows ? "': a block of rows" : "': data window");
+        if ((r = rows
+                     ? nprfx_image_limit_check(ctx, what.c_str(), first.width, block_h, block_ch, 0)
+                     : nprfx_image_limit_check(ctx, what.c_str(), first.width, first.height,
+                                               (int64_t)nch, scratch)))
+            return r;
+    }
+    rd.umax.assign(nch, 0);
+    return NPRFX_OK;
+}
+
+nprfx_result channels_error(nprfx_context *ctx, const reading &rd, const chan &a, const chan &b)
+{
+    std::string e = oiio_error(rd.in.get());
+    return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read channels %s..%s of %s of '%s': %s",
+                       a.name.c_str(), b.name.c_str(), part_label(*a.p).c_str(), rd.path.c_str(),
+                       e.c_str());
+}
+
+/* Rows [y0, y1) of the delivered channels into dst (all of them per pixel, rows of the data
+ * window's width, row y0 first), part by part, a block of whole chunks at a time. */
+nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1, float *dst)
+{
+    const ImageSpec &first = rd.ch.group[0]->spec;
+    const size_t w = (size_t)first.width, nsel = rd.sel.size();
+    for (const part *p : rd.ch.group) {
+        int flo, fhi, ulo, uhi;
+        part_spans(rd, p, flo, fhi, ulo, uhi);
+        if (flo < 0 && ulo < 0) continue;
+        const int step = block_rows(*p), py0 = p->spec.y, py1 = p->spec.y + p->spec.height;
+        for (int by = py0 + (y0 - py0) / step * step; by < y1; by += step) {
+            const int be = std::min(by + step, py1), r0 = std::max(by, y0), r1 = std::min(be, y1);
+            for (int as_uint = 0; as_uint < 2; as_uint++) {
+                const int lo = as_uint ? ulo : flo, hi = as_uint ? uhi : fhi, n = hi - lo + 1;
+                if (lo < 0) continue;
+                const size_t count = (size_t)(be - by) * w * (size_t)n;
+                void *buf;
+                if (as_uint) {
+                    rd.ubuf.resize(count);
+                    buf = rd.ubuf.data();
+                } else {
+                    rd.fbuf.resize(count);
+                    buf = rd.fbuf.data();
+                }
+                /* EXR uint channels (object ids) are read as integers and cast, since a float
+                 * read would normalise them to [0,1]. */
+                const TypeDesc type = as_uint ? TypeDesc::UINT : TypeDesc::FLOAT;
+                bool ok =
+                    p->spec.tile_width > 0
+                        ? rd.in->read_tiles(p->index, 0, p->spec.x, p->spec.x + p->spec.width, by,
+                                            be, 0, 1, lo, hi + 1, type, buf)
+                        : rd.in->read_scanlines(p->index, 0, by, be, 0, lo, hi + 1, type, buf);
+                if (nprfx_io_deadline_passed()) {
+                    oiio_error(rd.in.get());
+                    return nprfx_io_deadline_error(ctx, rd.path.c_str());
+                }
+                const chan *a = nullptr, *b = nullptr;
+                for (const chan &c : rd.sel)
+                    if (c.p == p && (c.type == NPRFX_PIXEL_UINT) == (as_uint != 0)) {
+                        if (!a) a = &c;
+                        b = &c;
+                    }
+                if (!ok) return channels_error(ctx, rd, *a, *b);
+                for (size_t k = 0; k < nsel; k++) {
+                    const chan &c = rd.sel[k];
+                    if (c.p != p || (c.type == NPRFX_PIXEL_UINT) != (as_uint != 0)) continue;
+                    uint32_t most = rd.umax[k];
+                    for (int y = r0; y < r1; y++) {
+                        const size_t src = ((size_t)(y - by) * w) * (size_t)n + (size_t)(c.c - lo);
+                        float *d = dst + (size_t)(y - y0) * w * nsel + k;
+                        if (as_uint) {
+                            const uint32_t *s = rd.ubuf.data() + src;
+                            for (size_t x = 0; x < w; x++) {
+                                uint32_t v = s[x * (size_t)n];
+                                d[x * nsel] = (float)v;
+                                if (v > most) most = v;
+                            }
+                        } else {
+                            const float *s = rd.fbuf.data() + src;
+                            for (size_t x = 0; x < w; x++)
+                                d[x * nsel] = s[x * (size_t)n];
+                        }
+                    }
+                    rd.umax[k] = most;
+                }
+            }
+        }
+    }
+    return NPRFX_OK;
+}
+
+/* The whole plate of the delivered channels into dst, a read_image per run of adjacent file
+ * channels of one part and kind (any format; tiled and MIP-mapped parts at level 0). */
+nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
+{
+    const ImageSpec &first = rd.ch.group[0]->spec;
+    const size_t nch = rd.sel.size(), npix = (size_t)first.width * (size_t)first.height;
+    const OIIO::stride_t xstride = (OIIO::stride_t)(nch * sizeof(float));
+    const OIIO::stride_t ystride = xstride * first.width;
+    for (size_t k0 = 0; k0 < nch;) {
+        const chan &a = rd.sel[k0];
+        const bool as_uint = a.type == NPRFX_PIXEL_UINT;
+        size_t k1 = k0 + 1;
+        while (k1 < nch && rd.sel[k1].p == a.p && rd.sel[k1].c == a.c + (int)(k1 - k0) &&
+               (rd.sel[k1].type == NPRFX_PIXEL_UINT) == as_uint)
+            k1++;
+        const int c0 = a.c, c1 = a.c + (int)(k1 - k0), n = c1 - c0;
+        float *d = dst + k0;
+        bool ok;
+        if (!as_uint) {
+            /* The read deadline (NPRFX_READ_TIMEOUT) stops OIIO between strips of rows. */
+            ok = rd.in->read_image(a.p->index, 0, c0, c1, TypeDesc::FLOAT, d, xstride, ystride,
+                                   OIIO::AutoStride, nprfx_io_read_progress, nullptr);
+        } else {
+            rd.ubuf.resize(npix * (size_t)n);
+            ok = rd.in->read_image(a.p->index, 0, c0, c1, TypeDesc::UINT, rd.ubuf.data(),
+                                   OIIO::AutoStride, OIIO::AutoStride, OIIO::AutoStride,
+                                   nprfx_io_read_progress, nullptr);
+            for (size_t i = 0; ok && i < npix; i++)
+                for (int j = 0; j < n; j++) {
+                    uint32_t v = rd.ubuf[i * n + j];
+                    d[i * nch + j] = (float)v;
+                    if (v > rd.umax[k0 + j]) rd.umax[k0 + j] = v;
+                }
+        }
+        if (nprfx_io_deadline_passed()) {
+            oiio_error(rd.in.get());
+            return nprfx_io_deadline_error(ctx, rd.path.c_str());
+        }
+        if (!ok) return channels_error(ctx, rd, rd.sel[k0], rd.sel[k1 - 1]);
+        k0 = k1;
+    }
+    return NPRFX_OK;
+}
+
+/* out's description of the plate (everything but pixels) and the read's note: which parts and
+ * view, and uint values float cannot hold (once the pixels are read). */
+nprfx_result describe(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
+{
+    const ImageSpec &first = rd.ch.group[0]->spec;
+    std::vector<std::string> names;
+    for (const chan &c : rd.sel)
+        names.push_back(c.name);
+    const size_t nch = names.size();
+    out->types = static_cast<unsigned char *>(std::malloc(nch));
+    out->names = dup_names(names);
+    out->nchannels = out->names ? (int)nch : 0;
+    if (!out->names || !out->types) {
+        nprfx_plate_free(out);
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'",
+                           rd.path.c_str());
+    }
+    out->bounds = data_rect(first);
+    out->display = display_rect(first);
+    out->pixel_aspect = first.get_float_attribute("PixelAspectRatio", 1.0f);
+    for (size_t k = 0; k < nch; k++)
+        out->types[k] = rd.sel[k].type;
+    return NPRFX_OK;
+}
+
+nprfx_result set_note(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
+{
+    std::string note = rd.ch.note, rounded;
+    bool warn = rd.ch.warn;
+    for (size_t k = 0; k < rd.sel.size(); k++)
+        if (rd.umax[k] > float_exact_max)
+            rounded += (rounded.empty() ? "" : ", ") + std::string("'") + rd.sel[k].name +
+                       "' (up to " + std::to_string(rd.umax[k]) + ")";
+    if (!rounded.empty()) {
+        note += (note.empty() ? "'" + rd.path + "': " : "; ") + "uint channels " + rounded +
+                " hold integers above 2^24 = 16777216, which float pixels cannot all hold: "
+                "they are rounded to the nearest float (distinct ids may merge)";
+        warn = true;
+    }
+    std::free(out->note);
+    out->note = nullptr;
+    if (!note.empty()) {
+        out->note = dup_cstr(note);
+        if (!out->note)
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'",
+                               rd.path.c_str());
+        out->note_is_warning = warn;
+    }
+    return NPRFX_OK;
+}
+
 } // namespace
 
 extern "C" nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path,
@@ -603,113 +926,33 @@ extern "C" nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path,
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_read: NULL argument");
     std::memset(out, 0, sizeof *out);
-    /* Damaged files are refused before OIIO allocates anything (io_validate.h). */
-    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_READ)) return g;
     const nprfx_read_options o = read_options(opt);
     try {
-        std::unique_ptr<ImageInput> in;
-        header h;
-        nprfx_result r = scan(ctx, path, in, h);
+        reading rd;
+        nprfx_result r = open_reading(ctx, path, o, rd);
         if (r) return r;
-        choice ch;
-        failure f = choose(path, h, o, ch);
-        if (f.code) return nprfx_error(ctx, f.code, "%s", f.message.c_str());
-        const ImageSpec &first = ch.group[0]->spec;
-        const std::string where = part_label(*ch.group[0]) + " of '" + path + "'";
-        std::vector<std::string> names;
-        for (const chan &c : ch.chans)
-            names.push_back(c.name);
-        size_t nch = names.size();
-        size_t npix = (size_t)first.width * (size_t)first.height;
-        if (npix == 0)
-            return nprfx_error(ctx, NPRFX_ERR_IO, "%s holds an empty image (%dx%d, %zu channels)",
-                               where.c_str(), first.width, first.height, nch);
+        const ImageSpec &first = rd.ch.group[0]->spec;
+        const size_t nch = rd.sel.size(), npix = (size_t)first.width * (size_t)first.height;
+        const std::string where = part_label(*rd.ch.group[0]) + " of '" + path + "'";
         if (npix > SIZE_MAX / sizeof(float) / nch)
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "%s is too large to read",
                                where.c_str());
+        if ((r = describe(ctx, rd, out))) return r;
         out->pixels = static_cast<float *>(std::malloc(npix * nch * sizeof(float)));
-        out->types = static_cast<unsigned char *>(std::malloc(nch));
-        out->names = dup_names(names);
-        out->nchannels = out->names ? (int)nch : 0;
-        if (!out->pixels || !out->names || !out->types) {
+        if (!out->pixels) {
             nprfx_plate_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY,
                                "out of memory reading %s (%dx%d, %zu channels)", where.c_str(),
                                first.width, first.height, nch);
         }
-        out->bounds = data_rect(first);
-        out->display = display_rect(first);
-        out->pixel_aspect = first.get_float_attribute("PixelAspectRatio", 1.0f);
-        for (size_t k = 0; k < nch; k++)
-            out->types[k] = ch.chans[k].type;
-
-        const OIIO::stride_t xstride = (OIIO::stride_t)(nch * sizeof(float));
-        const OIIO::stride_t ystride = xstride * first.width;
-        std::vector<uint32_t> ubuf;
-        std::string rounded;
-        /* Runs of adjacent file channels of one part and kind, read in one call each. EXR UINT
-         * channels (object ids) are read as integers and cast, since a float read would
-         * normalise them to [0,1]. Tiled and MIP-mapped parts are read at level 0. */
-        for (size_t k0 = 0; k0 < nch;) {
-            const chan &a = ch.chans[k0];
-            const bool as_uint = a.type == NPRFX_PIXEL_UINT;
-            size_t k1 = k0 + 1;
-            while (k1 < nch && ch.chans[k1].p == a.p && ch.chans[k1].c == a.c + (int)(k1 - k0) &&
-                   (ch.chans[k1].type == NPRFX_PIXEL_UINT) == as_uint)
-                k1++;
-            const int c0 = a.c, c1 = a.c + (int)(k1 - k0), n = c1 - c0;
-            float *dst = out->pixels + k0;
-            bool ok;
-            if (!as_uint) {
-                /* The read deadline (NPRFX_READ_TIMEOUT) stops OIIO between strips of rows. */
-                ok = in->read_image(a.p->index, 0, c0, c1, TypeDesc::FLOAT, dst, xstride, ystride,
-                                    OIIO::AutoStride, nprfx_io_read_progress, nullptr);
-            } else {
-                ubuf.resize(npix * (size_t)n);
-                ok = in->read_image(a.p->index, 0, c0, c1, TypeDesc::UINT, ubuf.data(), OIIO::AutoStride,
-                                    OIIO::AutoStride, OIIO::AutoStride, nprfx_io_read_progress,
-                                    nullptr);
-                std::vector<uint32_t> umax((size_t)n, 0);
-                for (size_t i = 0; ok && i < npix; i++)
-                    for (int j = 0; j < n; j++) {
-                        uint32_t v = ubuf[i * n + j];
-                        dst[i * nch + j] = (float)v;
-                        if (v > umax[j]) umax[j] = v;
-                    }
-                for (int j = 0; ok && j < n; j++)
-                    if (umax[j] > float_exact_max)
-                        rounded += (rounded.empty() ? "" : ", ") + std::string("'") +
-                                   ch.chans[k0 + j].name + "' (up to " + std::to_string(umax[j]) +
-                                   ")";
-            }
-            if (nprfx_io_deadline_passed()) {
-                oiio_error(in.get());
-                nprfx_plate_free(out);
-                return nprfx_io_deadline_error(ctx, path);
-            }
-            if (!ok) {
-                std::string e = oiio_error(in.get());
-                nprfx_plate_free(out);
-                return nprfx_error(ctx, NPRFX_ERR_IO,
-                                   "cannot read channels %s..%s of %s of '%s': %s",
-                                   ch.chans[k0].name.c_str(), ch.chans[k1 - 1].name.c_str(),
-                                   part_label(*a.p).c_str(), path, e.c_str());
-            }
-            k0 = k1;
+        r = rd.blocks ? read_blocks(ctx, rd, out->bounds.y0, out->bounds.y1, out->pixels)
+                      : read_runs(ctx, rd, out->pixels);
+        if (!r) r = set_note(ctx, rd, out);
+        if (r) {
+            nprfx_plate_free(out);
+            return r;
         }
-        in->close();
-        std::string note = ch.note;
-        if (!rounded.empty()) {
-            note += (note.empty() ? "'" + std::string(path) + "': " : "; ") + "uint channels " +
-                    rounded +
-                    " hold integers above 2^24 = 16777216, which float pixels cannot all hold: "
-                    "they are rounded to the nearest float (distinct ids may merge)";
-            ch.warn = true;
-        }
-        if (!note.empty()) {
-            out->note = dup_cstr(note);
-            out->note_is_warning = ch.warn;
-        }
+        rd.in->close();
         return NPRFX_OK;
     } catch (const std::exception &e) {
         nprfx_plate_free(out);
@@ -863,6 +1106,147 @@ extern "C" void nprfx_attributes_free(char **names, char **values, int count)
 
 /* ---- writing ------------------------------------------------------------------------------ */
 
+namespace
+{
+
+/* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
+nprfx_result write_options(nprfx_context *ctx, const char *path, const nprfx_write_options *opt,
+                           nprfx_write_options &o)
+{
+    o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
+    if (opt) {
+        if (opt->size < offsetof(nprfx_write_options, compression) + sizeof(const char *) ||
+            opt->size > sizeof o)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "cannot write '%s': bad nprfx_write_options size %zu", path,
+                               opt->size);
+        std::memcpy(&o, opt, opt->size);
+        if (!o.compression || !*o.compression) o.compression = "zip";
+    }
+    return NPRFX_OK;
+}
+
+/* The header of a write of `channels` channels over bounds, and the channels' own types when
+ * they differ (formats empty: all float, or all half). */
+nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds, int channels,
+                        const char *const *names, const nprfx_rect *display,
+                        const nprfx_write_options &o, ImageSpec &spec,
+                        std::vector<TypeDesc> &formats)
+{
+    std::vector<std::string> cn;
+    if (names) {
+        std::set<std::string> seen;
+        for (int c = 0; c < channels; c++) {
+            if (!names[c] || !*names[c])
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': channel %d has no name", path, c);
+            if (!seen.insert(names[c]).second)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': channel name '%s' appears twice", path,
+                                   names[c]);
+            cn.push_back(names[c]);
+        }
+    } else {
+        cn = default_names(channels);
+    }
+    const int w = nprfx_rect_width(bounds), h = nprfx_rect_height(bounds);
+    spec = ImageSpec(w, h, channels, o.half ? TypeDesc::HALF : TypeDesc::FLOAT);
+    spec.x = bounds.x0;
+    spec.y = bounds.y0;
+    nprfx_rect d = display ? *display : bounds;
+    spec.full_x = d.x0;
+    spec.full_y = d.y0;
+    spec.full_width = nprfx_rect_width(d);
+    spec.full_height = nprfx_rect_height(d);
+    spec.channelnames = cn;
+    spec.alpha_channel = -1;
+    for (int c = 0; c < channels; c++)
+        if (cn[c] == "A" || cn[c] == "Alpha") spec.alpha_channel = c;
+    std::string lower = std::filesystem::path(path).extension().string();
+    for (char &ch : lower)
+        ch = (char)std::tolower((unsigned char)ch);
+    if (lower == ".exr" && !valid_exr_compression(o.compression))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "cannot write '%s': unknown EXR compression '%s' (none, rle, zips, "
+                           "zip, piz, pxr24, b44, b44a, dwaa, dwab)",
+                           path, o.compression);
+    spec.attribute("compression", o.compression);
+    for (int i = 0; o.attributes && i < o.nattributes; i++) {
+        const nprfx_attribute &a = o.attributes[i];
+        if (!a.name || !*a.name || !a.value)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "cannot write '%s': attribute %d has no name or value", path, i);
+        char *end = nullptr;
+        if (a.type == NPRFX_ATTR_INT) {
+            long v = std::strtol(a.value, &end, 10);
+            if (end == a.value || *end)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': attribute %s: '%s' is not an integer", path,
+                                   a.name, a.value);
+            spec.attribute(a.name, (int)v);
+        } else if (a.type == NPRFX_ATTR_FLOAT) {
+            float v = std::strtof(a.value, &end);
+            if (end == a.value || *end)
+                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                                   "cannot write '%s': attribute %s: '%s' is not a number", path,
+                                   a.name, a.value);
+            spec.attribute(a.name, v);
+        } else {
+            spec.attribute(a.name, a.value);
+        }
+    }
+    if (o.pixel_aspect > 0.0f) spec.attribute("PixelAspectRatio", o.pixel_aspect);
+    bool mixed = false;
+    for (int c = 0; o.types && c < channels; c++)
+        mixed |= o.types[c] != NPRFX_PIXEL_FLOAT;
+    formats.clear();
+    if (!mixed) return NPRFX_OK;
+    /* Channels of their own types (a copy keeps each channel's file type): the pixels go out in
+     * those native types, since OIIO would scale floats into the full uint range. */
+    for (int c = 0; c < channels; c++)
+        formats.push_back(o.types[c] == NPRFX_PIXEL_UINT             ? TypeDesc::UINT
+                          : o.types[c] == NPRFX_PIXEL_HALF || o.half ? TypeDesc::HALF
+                                                                     : TypeDesc::FLOAT);
+    spec.set_format(TypeDesc::FLOAT); /* the header's default; channelformats rule */
+    spec.channelformats = formats;
+    return NPRFX_OK;
+}
+
+/* im's pixels in the channels' native types (formats), packed: uint takes the float's integer
+ * value; anything else in a uint channel is rounded. */
+void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &formats,
+                 std::vector<unsigned char> &buf)
+{
+    size_t bytes = 0;
+    for (const TypeDesc &t : formats)
+        bytes += t.size();
+    buf.resize((size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
+               bytes);
+    unsigned char *q = buf.data();
+    for (int y = im->bounds.y0; y < im->bounds.y1; y++)
+        for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
+            const float *p = nprfx_image_at(im, x, y);
+            for (int c = 0; c < im->channels; c++) {
+                float v = p[c];
+                if (formats[c] == TypeDesc::UINT) {
+                    uint32_t u = !(v > 0.0f)          ? 0u
+                                 : v >= 4294967295.0f ? 4294967295u
+                                                      : (uint32_t)std::lrint(v);
+                    std::memcpy(q, &u, 4);
+                    q += 4;
+                } else if (formats[c] == TypeDesc::HALF) {
+                    OIIO::convert_pixel_values(TypeDesc::FLOAT, &v, TypeDesc::HALF, q, 1);
+                    q += 2;
+                } else {
+                    std::memcpy(q, &v, 4);
+                    q += 4;
+                }
+            }
+        }
+}
+
+} // namespace
+
 extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
                                        const char *const *names, const nprfx_rect *display,
                                        const nprfx_write_options *opt)
@@ -874,124 +1258,20 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
         return nprfx_error(
             ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': empty image (%dx%d, %d channels)",
             path, nprfx_rect_width(im->bounds), nprfx_rect_height(im->bounds), im->channels);
-    /* Read only the option fields the caller's struct has (size-versioned). */
-    nprfx_write_options o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
-    if (opt) {
-        if (opt->size < offsetof(nprfx_write_options, compression) + sizeof(const char *) ||
-            opt->size > sizeof o)
-            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                               "cannot write '%s': bad nprfx_write_options size %zu", path,
-                               opt->size);
-        std::memcpy(&o, opt, opt->size);
-        if (!o.compression || !*o.compression) o.compression = "zip";
-    }
+    nprfx_write_options o;
+    if (nprfx_result r = write_options(ctx, path, opt, o)) return r;
     try {
-        std::vector<std::string> cn;
-        if (names) {
-            std::set<std::string> seen;
-            for (int c = 0; c < im->channels; c++) {
-                if (!names[c] || !*names[c])
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': channel %d has no name", path, c);
-                if (!seen.insert(names[c]).second)
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': channel name '%s' appears twice", path,
-                                       names[c]);
-                cn.push_back(names[c]);
-            }
-        } else {
-            cn = default_names(im->channels);
-        }
-        const int w = nprfx_rect_width(im->bounds), h = nprfx_rect_height(im->bounds);
-        ImageSpec spec(w, h, im->channels, o.half ? TypeDesc::HALF : TypeDesc::FLOAT);
-        spec.x = im->bounds.x0;
-        spec.y = im->bounds.y0;
-        nprfx_rect d = display ? *display : im->bounds;
-        spec.full_x = d.x0;
-        spec.full_y = d.y0;
-        spec.full_width = nprfx_rect_width(d);
-        spec.full_height = nprfx_rect_height(d);
-        spec.channelnames = cn;
-        spec.alpha_channel = -1;
-        for (int c = 0; c < im->channels; c++)
-            if (cn[c] == "A" || cn[c] == "Alpha") spec.alpha_channel = c;
-        std::string lower = std::filesystem::path(path).extension().string();
-        for (char &ch : lower)
-            ch = (char)std::tolower((unsigned char)ch);
-        if (lower == ".exr" && !valid_exr_compression(o.compression))
-            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                               "cannot write '%s': unknown EXR compression '%s' (none, rle, zips, "
-                               "zip, piz, pxr24, b44, b44a, dwaa, dwab)",
-                               path, o.compression);
-        spec.attribute("compression", o.compression);
-        for (int i = 0; o.attributes && i < o.nattributes; i++) {
-            const nprfx_attribute &a = o.attributes[i];
-            if (!a.name || !*a.name || !a.value)
-                return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                   "cannot write '%s': attribute %d has no name or value", path, i);
-            char *end = nullptr;
-            if (a.type == NPRFX_ATTR_INT) {
-                long v = std::strtol(a.value, &end, 10);
-                if (end == a.value || *end)
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': attribute %s: '%s' is not an integer",
-                                       path, a.name, a.value);
-                spec.attribute(a.name, (int)v);
-            } else if (a.type == NPRFX_ATTR_FLOAT) {
-                float v = std::strtof(a.value, &end);
-                if (end == a.value || *end)
-                    return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                                       "cannot write '%s': attribute %s: '%s' is not a number",
-                                       path, a.name, a.value);
-                spec.attribute(a.name, v);
-            } else {
-                spec.attribute(a.name, a.value);
-            }
-        }
-        if (o.pixel_aspect > 0.0f) spec.attribute("PixelAspectRatio", o.pixel_aspect);
-        bool mixed = false;
-        for (int c = 0; o.types && c < im->channels; c++)
-            mixed |= o.types[c] != NPRFX_PIXEL_FLOAT;
-        if (!mixed)
+        ImageSpec spec;
+        std::vector<TypeDesc> formats;
+        nprfx_result r =
+            write_spec(ctx, path, im->bounds, im->channels, names, display, o, spec, formats);
+        if (r) return r;
+        if (formats.empty())
             return write_atomic(ctx, path, spec, TypeDesc::FLOAT, im->data,
                                 (OIIO::stride_t)(im->pixel_stride * (ptrdiff_t)sizeof(float)),
                                 (OIIO::stride_t)(im->row_stride * (ptrdiff_t)sizeof(float)));
-        /* Channels of their own types (a copy keeps each channel's file type): the pixels go
-         * out in those native types, since OIIO would scale floats into the full uint range.
-         * uint takes the float's integer value; anything else in a uint channel is rounded. */
-        std::vector<TypeDesc> formats;
-        size_t bytes = 0;
-        for (int c = 0; c < im->channels; c++) {
-            TypeDesc t = o.types[c] == NPRFX_PIXEL_UINT             ? TypeDesc::UINT
-                         : o.types[c] == NPRFX_PIXEL_HALF || o.half ? TypeDesc::HALF
-                                                                    : TypeDesc::FLOAT;
-            formats.push_back(t);
-            bytes += t.size();
-        }
-        spec.set_format(TypeDesc::FLOAT); /* the header's default; channelformats rule */
-        spec.channelformats = formats;
-        std::vector<unsigned char> buf((size_t)w * (size_t)h * bytes);
-        unsigned char *q = buf.data();
-        for (int y = im->bounds.y0; y < im->bounds.y1; y++)
-            for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
-                const float *p = nprfx_image_at(im, x, y);
-                for (int c = 0; c < im->channels; c++) {
-                    float v = p[c];
-                    if (formats[c] == TypeDesc::UINT) {
-                        uint32_t u = !(v > 0.0f)          ? 0u
-                                     : v >= 4294967295.0f ? 4294967295u
-                                                          : (uint32_t)std::lrint(v);
-                        std::memcpy(q, &u, 4);
-                        q += 4;
-                    } else if (formats[c] == TypeDesc::HALF) {
-                        OIIO::convert_pixel_values(TypeDesc::FLOAT, &v, TypeDesc::HALF, q, 1);
-                        q += 2;
-                    } else {
-                        std::memcpy(q, &v, 4);
-                        q += 4;
-                    }
-                }
-            }
+        std::vector<unsigned char> buf;
+        pack_native(im, formats, buf);
         return write_atomic(ctx, path, spec, TypeDesc::UNKNOWN, buf.data(), OIIO::AutoStride,
                             OIIO::AutoStride);
     } catch (const std::exception &e) {
@@ -1000,6 +1280,212 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
 }
 
 /* ---- colour ------------------------------------------------------------------------------- */
+
+/* ---- rows: strip renders ----------------------------------------------------------------- */
+
+struct nprfx_row_reader {
+    reading rd;
+};
+
+extern "C" nprfx_result nprfx_io_rows_open(nprfx_context *ctx, const char *path,
+                                           const nprfx_read_options *opt, nprfx_plate *shape,
+                                           nprfx_row_reader **out)
+{
+    if (!path || !shape || !out)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_open: NULL argument");
+    std::memset(shape, 0, sizeof *shape);
+    *out = nullptr;
+    const nprfx_read_options o = read_options(opt);
+    try {
+        std::unique_ptr<nprfx_row_reader> r(new nprfx_row_reader);
+        nprfx_result e = open_reading(ctx, path, o, r->rd, true);
+        if (!e) e = describe(ctx, r->rd, shape);
+        if (!e) e = set_note(ctx, r->rd, shape);
+        if (e) {
+            nprfx_plate_free(shape);
+            return e;
+        }
+        *out = r.release();
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        nprfx_plate_free(shape);
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
+    }
+}
+
+extern "C" nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader *r, int y0, int y1,
+                                           float *dst)
+{
+    if (!r || !dst)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_read: NULL argument");
+    const ImageSpec &first = r->rd.ch.group[0]->spec;
+    if (y0 < first.y || y1 > first.y + first.height || y0 >= y1)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "'%s': rows %d..%d are not inside the data window's rows %d..%d",
+                           r->rd.path.c_str(), y0, y1, first.y, first.y + first.height);
+    try {
+        return read_blocks(ctx, r->rd, y0, y1, dst);
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", r->rd.path.c_str(), e.what());
+    }
+}
+
+extern "C" void nprfx_io_rows_close(nprfx_row_reader *r)
+{
+    if (r && r->rd.in) r->rd.in->close();
+    delete r;
+}
+
+struct nprfx_row_writer {
+    std::string path, tmp;
+    std::unique_ptr<ImageOutput> out;
+    std::vector<TypeDesc> formats;
+    std::vector<unsigned char> buf;
+    nprfx_rect bounds;
+    int next_y = 0,
+        dy = 0; /* the next row to write; file row = row + dy (formats without origin) */
+};
+
+namespace
+{
+
+void rows_discard(nprfx_row_writer *w)
+{
+    if (w->out) w->out->close();
+    w->out.reset();
+    std::error_code ec;
+    std::filesystem::remove(w->tmp, ec);
+    delete w;
+}
+
+} // namespace
+
+extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path,
+                                             nprfx_rect bounds, int channels,
+                                             const char *const *names, const nprfx_rect *display,
+                                             const nprfx_write_options *opt, nprfx_row_writer **out)
+{
+    namespace fs = std::filesystem;
+    if (!path || !out)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_create: NULL argument");
+    *out = nullptr;
+    if (channels < 1 || nprfx_rect_empty(bounds))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "cannot write '%s': empty image (%dx%d, %d channels)", path,
+                           nprfx_rect_width(bounds), nprfx_rect_height(bounds), channels);
+    nprfx_write_options o;
+    if (nprfx_result r = write_options(ctx, path, opt, o)) return r;
+    try {
+        std::unique_ptr<nprfx_row_writer> w(new nprfx_row_writer);
+        ImageSpec spec;
+        nprfx_result r =
+            write_spec(ctx, path, bounds, channels, names, display, o, spec, w->formats);
+        if (r) return r;
+        fs::path target(path);
+        if (target.filename().empty())
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "cannot write '%s': not a file name", path);
+        std::error_code ec;
+        if (target.has_parent_path()) {
+            fs::create_directories(target.parent_path(), ec);
+            if (ec)
+                return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
+                                   target.parent_path().string().c_str(), path,
+                                   ec.message().c_str());
+        }
+        w->out = ImageOutput::create(path);
+        if (!w->out) {
+            std::string e = OIIO::geterror();
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path,
+                               e.empty() ? "no image format for this file extension" : e.c_str());
+        }
+        if (!w->out->supports("origin")) spec.x = spec.y = 0;
+        if (!w->out->supports("displaywindow")) {
+            spec.full_x = spec.x;
+            spec.full_y = spec.y;
+            spec.full_width = spec.width;
+            spec.full_height = spec.height;
+        }
+        w->path = path;
+        w->tmp = temp_path_for(target);
+        w->bounds = bounds;
+        w->next_y = bounds.y0;
+        w->dy = spec.y - bounds.y0;
+        /* Written under a temporary name, renamed by nprfx_io_rows_finish (as every write). */
+        if (!w->out->open(w->tmp, spec)) {
+            std::string e = oiio_error(w->out.get());
+            rows_discard(w.release());
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, e.c_str());
+        }
+        *out = w.release();
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path, e.what());
+    }
+}
+
+extern "C" nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer *w,
+                                            const nprfx_image *rows)
+{
+    if (!w || !rows || !rows->data)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_write: NULL argument");
+    const nprfx_rect b = rows->bounds;
+    if (b.x0 != w->bounds.x0 || b.x1 != w->bounds.x1 || b.y0 != w->next_y || b.y1 > w->bounds.y1 ||
+        b.y1 <= b.y0)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "cannot write '%s': rows %d..%d of x %d..%d come out of order (next: "
+                           "row %d of x %d..%d)",
+                           w->path.c_str(), b.y0, b.y1, b.x0, b.x1, w->next_y, w->bounds.x0,
+                           w->bounds.x1);
+    try {
+        bool ok;
+        if (w->formats.empty()) {
+            ok = w->out->write_scanlines(
+                b.y0 + w->dy, b.y1 + w->dy, 0, TypeDesc::FLOAT, nprfx_image_at(rows, b.x0, b.y0),
+                (OIIO::stride_t)(rows->pixel_stride * (ptrdiff_t)sizeof(float)),
+                (OIIO::stride_t)(rows->row_stride * (ptrdiff_t)sizeof(float)));
+        } else {
+            pack_native(rows, w->formats, w->buf);
+            ok = w->out->write_scanlines(b.y0 + w->dy, b.y1 + w->dy, 0, TypeDesc::UNKNOWN,
+                                         w->buf.data());
+        }
+        if (!ok)
+            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", w->path.c_str(),
+                               oiio_error(w->out.get()).c_str());
+        w->next_y = b.y1;
+        return NPRFX_OK;
+    } catch (const std::exception &e) {
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", w->path.c_str(), e.what());
+    }
+}
+
+extern "C" nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_writer *w, int keep)
+{
+    if (!w) return NPRFX_OK;
+    if (!keep || w->next_y != w->bounds.y1) {
+        rows_discard(w);
+        return keep
+                   ? nprfx_error(ctx, NPRFX_ERR_INTERNAL, "a strip write ended before its last row")
+                   : NPRFX_OK;
+    }
+    std::string path = w->path, err;
+    try {
+        bool ok = w->out->close();
+        if (!ok) err = oiio_error(w->out.get());
+        w->out.reset();
+        if (ok && std::rename(w->tmp.c_str(), path.c_str()) != 0)
+            err =
+                std::string("cannot rename the temporary file into place: ") + std::strerror(errno);
+    } catch (const std::exception &e) {
+        err = e.what();
+    }
+    if (err.empty()) {
+        delete w;
+        return NPRFX_OK;
+    }
+    rows_discard(w);
+    return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path.c_str(), err.c_str());
+}
 
 extern "C" nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *path,
                                                const nprfx_image *im,

@@ -363,7 +363,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
     nprfx_result r = nprfx_image_limit(ctx, &limit);
     if (r) return r;
     int64_t total_channels = 0, x0 = 0, y0 = 0, x1 = 0, y1 = 0, uint_scratch = 0;
-    int seen = 0; /* pixel parts whose windows are in x0..y1 (deep parts are not) */
+    int seen = 0;          /* pixel parts whose windows are in x0..y1 (deep parts are not) */
     uint64_t tile_row = 0; /* the largest row of tiles the reader decodes at once, in bytes */
     uint64_t table_bytes = 0;
     for (int p = 0; p < nparts; p++) {
@@ -436,8 +436,8 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
             for (int c = 0; c < ch->num_channels; c++) {
                 const exr_attr_chlist_entry_t *e = &ch->entries[c];
                 double bytes = e->pixel_type == EXR_PIXEL_HALF ? 2.0 : 4.0;
-                decoded += bytes * ceil((double)w / e->x_sampling) *
-                           ceil((double)h / e->y_sampling);
+                decoded +=
+                    bytes * ceil((double)w / e->x_sampling) * ceil((double)h / e->y_sampling);
             }
             double most = max_ratio(comp) * (double)file_size + 65536.0;
             /* A read that would pass the memory limit is worded by the limit check below, which
@@ -505,6 +505,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         /* UINT channels are read into a scratch buffer of their own before the cast. */
         if ((int64_t)nuint * w * h > uint_scratch) uint_scratch = (int64_t)nuint * w * h;
     }
+    /* NPRFX_GUARD_READ_CHOSEN: the reader checks the channels it delivers itself. */
     if (mode == NPRFX_GUARD_READ) {
         /* What the read allocates: one float per channel per pixel of all parts' windows, and
          * the scratch of UINT channels and of a row of tiles. */
@@ -528,7 +529,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
                                exr_why(rv));
         if (st == EXR_STORAGE_DEEP_SCANLINE || st == EXR_STORAGE_DEEP_TILED) continue;
         wk.part = p;
-        wk.ratio = mode == NPRFX_GUARD_READ ? max_ratio(comp) : 0.0;
+        wk.ratio = mode != NPRFX_GUARD_HEADER ? max_ratio(comp) : 0.0;
         r = st == EXR_STORAGE_TILED ? walk_tiles(&wk) : walk_scanlines(&wk, &dw);
         if (r) return r;
     }

@@ -21,7 +21,10 @@ typedef enum nprfx_io_guard_mode {
     /* Header facts only (nprfx info, attributes): structure and names, no memory bound. */
     NPRFX_GUARD_HEADER = 0,
     /* A full read: also the decoded size against the memory bound (NPRFX_READ_LIMIT). */
-    NPRFX_GUARD_READ = 1
+    NPRFX_GUARD_READ = 1,
+    /* A read of channels the caller chooses: as NPRFX_GUARD_READ, but the decoded size is held
+     * to the memory bound by the reader, once it knows the channels it delivers. */
+    NPRFX_GUARD_READ_CHOSEN = 2
 } nprfx_io_guard_mode;
 
 /* The guard every io.h reader calls first. EXR files (by their magic number) go through

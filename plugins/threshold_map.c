@@ -190,6 +190,7 @@ const nprfx_node_desc nprfx_node_threshold_map = {
     .params = params,
     .num_params = P_COUNT,
     .output = tm_output,
+    .flags = NPRFX_NODE_ROWS, /* per pixel, or within its footprint */
     .render = tm_render,
     .params_size = sizeof(tp),
     .version_major = 1,
