@@ -34,7 +34,6 @@ mkdir -p "$C/state" "$C/spool"
 chmod 700 "$C"
 
 pids=()
-mounted_cgroup=0
 stop_daemons() {
     # The jobs first (slurmd would leave their steps running), then the daemons, whatever happened.
     [ -f "$C/slurm.conf" ] && SLURM_CONF=$C/slurm.conf scancel --quiet --user=root 2>/dev/null || true
@@ -45,7 +44,6 @@ stop_daemons() {
         for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
         kill -9 "$pid" 2>/dev/null || true
     done
-    [ "$mounted_cgroup" = 1 ] && umount /sys/fs/cgroup 2>/dev/null || true
 }
 trap stop_daemons EXIT
 trap 'exit 1' INT TERM
@@ -99,14 +97,6 @@ NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
 export SLURM_CONF=$C/slurm.conf
-# slurmd 22.05 starts its cgroup plugin whatever the proctrack and task plugins; a build root or
-# container without a cgroup file system (a CI's fresh Debian root) gets one mounted for the
-# test, and unmounted after it
-mounted_cgroup=0
-if [ ! -e /sys/fs/cgroup/cgroup.controllers ] && ! grep -qs " /sys/fs/cgroup " /proc/mounts; then
-    mkdir -p /sys/fs/cgroup 2>/dev/null || true
-    mount -t cgroup2 none /sys/fs/cgroup 2>/dev/null && mounted_cgroup=1 || true
-fi
 slurmctld -D -i -f "$C/slurm.conf" >"$C/slurmctld.out" 2>&1 &
 pids+=($!)
 slurmd -D -f "$C/slurm.conf" -N "$host" >"$C/slurmd.out" 2>&1 &
