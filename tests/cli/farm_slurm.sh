@@ -44,6 +44,10 @@ stop_daemons() {
         for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
         kill -9 "$pid" 2>/dev/null || true
     done
+    # what slurmd mounted under the test's folder
+    for m in $(awk -v d="$C/cgroup/" 'index($2, d) == 1 {print $2}' /proc/mounts 2>/dev/null); do
+        umount "$m" 2>/dev/null || true
+    done
 }
 trap stop_daemons EXIT
 trap 'exit 1' INT TERM
@@ -96,6 +100,14 @@ MinJobAge=600
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
+# slurmd 22.05 starts its cgroup plugin whatever the proctrack and task plugins use; a build root
+# or container with no cgroup file system at /sys/fs/cgroup (a CI's fresh Debian root) lets it
+# mount the v1 controllers under the test's own folder instead
+if [ ! -e /sys/fs/cgroup/cgroup.controllers ] && [ ! -d /sys/fs/cgroup/freezer ]; then
+    mkdir -p "$C/cgroup"
+    printf 'CgroupPlugin=cgroup/v1\nCgroupMountpoint=%s\nCgroupAutomount=yes\n' "$C/cgroup" \
+        >"$C/cgroup.conf"
+fi
 export SLURM_CONF=$C/slurm.conf
 slurmctld -D -i -f "$C/slurm.conf" >"$C/slurmctld.out" 2>&1 &
 pids+=($!)
