@@ -34,6 +34,8 @@ void nprfx_farm_job_free(nprfx_farm_job *job);
 /* s quoted for a POSIX shell: as is when it needs no quoting, else in single quotes. */
 void nprfx_farm_put_quoted(FILE *f, const char *s);
 
+/* The graph's arguments every command of the job repeats: --shot, each --set, --output-dir. */
+void nprfx_farm_put_graph_args(FILE *f, const nprfx_farm_job *job);
 /* "'NPRFX' run 'GRAPH' [--shot S] [--set ...] [--output-dir D]": the chunk command without its
  * frames. */
 void nprfx_farm_put_run(FILE *f, const nprfx_farm_job *job);

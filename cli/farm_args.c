@@ -41,11 +41,8 @@ void nprfx_farm_put_quoted(FILE *f, const char *s)
     fputc('\'', f);
 }
 
-void nprfx_farm_put_run(FILE *f, const nprfx_farm_job *job)
+void nprfx_farm_put_graph_args(FILE *f, const nprfx_farm_job *job)
 {
-    nprfx_farm_put_quoted(f, job->nprfx);
-    fputs(" run ", f);
-    nprfx_farm_put_quoted(f, job->graph);
     if (job->shot[0]) {
         fputs(" --shot ", f);
         nprfx_farm_put_quoted(f, job->shot);
@@ -58,6 +55,14 @@ void nprfx_farm_put_run(FILE *f, const nprfx_farm_job *job)
         fputs(" --output-dir ", f);
         nprfx_farm_put_quoted(f, job->output_dir);
     }
+}
+
+void nprfx_farm_put_run(FILE *f, const nprfx_farm_job *job)
+{
+    nprfx_farm_put_quoted(f, job->nprfx);
+    fputs(" run ", f);
+    nprfx_farm_put_quoted(f, job->graph);
+    nprfx_farm_put_graph_args(f, job);
 }
 
 int nprfx_farm_take_graph_arg(nprfx_farm_graph_args *a, const char *arg, const char *next)

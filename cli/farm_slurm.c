@@ -121,18 +121,7 @@ static int write_check(const char *path, const nprfx_farm_job *job, const nprfx_
     nprfx_farm_put_quoted(f, job->graph);
     fputs(" --frames ", f);
     nprfx_farm_put_quoted(f, job->frames);
-    if (job->shot[0]) {
-        fputs(" --shot ", f);
-        nprfx_farm_put_quoted(f, job->shot);
-    }
-    for (int i = 0; i < job->nsets; i++) {
-        fputs(" --set ", f);
-        nprfx_farm_put_quoted(f, job->sets[i]);
-    }
-    if (job->output_dir) {
-        fputs(" --output-dir ", f);
-        nprfx_farm_put_quoted(f, job->output_dir);
-    }
+    nprfx_farm_put_graph_args(f, job);
     fputc('\n', f);
     return fclose(f) ? -1 : 0;
 }
