@@ -561,6 +561,25 @@ static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_arg
     return NPRFX_OK;
 }
 
+void internal_graph_render_args(nprfx_graph *g, gnode *n, int frame, nprfx_rect frame_rect,
+                                nprfx_value *varied, nprfx_render_args *a)
+{
+    const nprfx_node_desc *d = n->desc;
+    memset(a, 0, sizeof *a);
+    a->size = sizeof *a;
+    a->ctx = n->ctx;
+    a->node = d;
+    a->time = frame;
+    a->render_scale = 1.0;
+    a->frame = frame_rect;
+    a->first_frame = g->first_frame;
+    a->last_frame = g->last_frame;
+    a->params =
+        d->num_params <= 64 ? internal_graph_variant_params(g, n, frame, varied) : n->params;
+    a->state = &n->state;
+    a->items = &g->render_items;
+}
+
 static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
                               gmeta *meta)
 {
@@ -644,23 +663,12 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     snprintf(what, sizeof what, "node '%s': output frame", n->name);
     if ((r = internal_graph_frame_alloc(g, node, what, frame_rect, oi.channels, im))) goto done;
     nprfx_render_args a;
-    memset(&a, 0, sizeof a);
-    a.size = sizeof a;
-    a.ctx = n->ctx;
-    a.node = d;
-    a.time = frame;
-    a.render_scale = 1.0;
-    a.frame = frame_rect;
-    a.first_frame = g->first_frame;
-    a.last_frame = g->last_frame;
-    a.inputs = inputs;
     nprfx_value varied[64];
-    a.params = d->num_params <= 64 ? internal_graph_variant_params(g, n, frame, varied) : n->params;
+    internal_graph_render_args(g, n, frame, frame_rect, varied, &a);
+    a.inputs = inputs;
     a.output = im;
     a.fetch = fetch_cb;
     a.fetch_user = &rf;
-    a.state = &n->state;
-    a.items = &g->render_items;
     int tile = g->tile > 0 ? g->tile : 1 << 30;
     double t0 = internal_graph_now(), c0 = internal_graph_cpu_now();
     warmup_range(g, n, a.params, frame, in_ch, &rf);

@@ -371,22 +371,13 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
         snprintf(what, sizeof what, "node '%s': output rows", nd->name);
         if (!r) r = internal_graph_frame_alloc(g, s->node, what, rows, s->channels, &s->buf);
         if (!r) {
+            /* the same arguments as a whole frame's, its params varied at this frame */
             nprfx_render_args a;
-            memset(&a, 0, sizeof a);
-            a.size = sizeof a;
-            a.ctx = nd->ctx;
-            a.node = d;
-            a.time = frame;
-            a.render_scale = 1.0;
-            a.frame = st->frame;
+            nprfx_value varied[64];
+            internal_graph_render_args(g, nd, frame, st->frame, varied, &a);
             a.window = rows;
-            a.first_frame = g->first_frame;
-            a.last_frame = g->last_frame;
             a.inputs = inputs;
-            a.params = nd->params;
             a.output = &s->buf;
-            a.state = &nd->state;
-            a.items = &g->render_items;
             double tr = internal_graph_now();
             r = nprfx_node_render(&a);
             g->render_seconds += internal_graph_now() - tr;

@@ -96,8 +96,8 @@ struct nprfx_graph {
     int tile;
     double render_seconds;
     double render_cpu_seconds; /* the process's CPU time (all threads) over the same spans */
-    long long render_items; /* what nodes counted (nprfx_render_args.items) */
-    double render_bytes;    /* the frames' bytes the renders read (inputs) and wrote (output) */
+    long long render_items;    /* what nodes counted (nprfx_render_args.items) */
+    double render_bytes;       /* the frames' bytes the renders read (inputs) and wrote (output) */
     /* Memory (issue 16, graph_plan.c): frame buffers come from the pool and go back to it; the
      * plan frees each result once its consumers at the frame have run, unless a temporal node
      * reads its node at other frames. no_pool: neither (plain calloc/free and the cache alone,
@@ -223,6 +223,12 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
 /* NPRFX_VARIANT_SHOWER_DOOR: alter a plate just read (graph_variant.c). */
 void internal_graph_variant_plate(const nprfx_graph *g, nprfx_image *im, char **names);
 /* NPRFX_VARIANT_WHITE: the params node n renders frame with (its own, or *copy altered). */
+/* The render arguments every render of node n at `frame` shares, whole frames or strips alike:
+ * its context, descriptor, time, the frame, the shot, its params at that frame (varied: room
+ * for 64, used when the params vary), state and item counter; the caller sets inputs, output,
+ * window and fetch. */
+void internal_graph_render_args(nprfx_graph *g, gnode *n, int frame, nprfx_rect frame_rect,
+                                nprfx_value *varied, nprfx_render_args *a);
 const nprfx_value *internal_graph_variant_params(const nprfx_graph *g, const gnode *n, int frame,
                                                  nprfx_value *copy);
 /* Strip renders (graph_strips.c): read node `node`'s file at frame (its path into file, n bytes)
