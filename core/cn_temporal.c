@@ -23,6 +23,7 @@ enum {
     IN_MOTION_NEXT = NPRFX_CN_IN_MOTION_NEXT,
     IN_ZVEL = NPRFX_CN_IN_ZVEL,
     IN_SOURCE = NPRFX_CN_IN_SOURCE,
+    IN_CONFIDENCE = NPRFX_CN_IN_CONFIDENCE,
     IN_COUNT = NPRFX_CN_IN_COUNT
 };
 
@@ -52,6 +53,9 @@ typedef struct cn_pass {
     int64_t depth_frame;
     uint64_t depth_fp;
     int depth_valid;
+    /* The depth a step reads at its own frame once the confidence input has gated it: +inf
+     * (background, so fresh noise) where the flow is not trusted. Allocated when first used. */
+    nprfx_image gated;
 } cn_pass;
 
 typedef struct cn_cache {
@@ -81,6 +85,7 @@ static void cn_pass_free(cn_pass *ps)
     free(ps->ring);
     nprfx_cn_state_free(&ps->scratch);
     nprfx_image_free(&ps->depth);
+    nprfx_image_free(&ps->gated);
     memset(ps, 0, sizeof *ps);
 }
 
@@ -139,6 +144,11 @@ typedef struct cn_run {
     nprfx_context *ctx;
     nprfx_cn_params p;
     int symmetric, window, have_zvel;
+    /* Footage: no depth input, only the flow's confidence. Depth then reads as unit_depth, a
+     * constant foreground, so the occlusion test never fires and confidence alone decides. */
+    int have_depth, have_conf;
+    float min_conf;
+    nprfx_image unit_depth;
     int64_t frame, start, last;
     size_t budget; /* bytes for pass states */
 } cn_run;
@@ -146,9 +156,13 @@ typedef struct cn_run {
 static nprfx_result cn_fetch(const cn_run *run, int input, int64_t frame, nprfx_image *out)
 {
     const nprfx_render_args *a = run->args;
-    static const char *const names[IN_COUNT] = {"depth", "motion_prev", "motion_next", "zvel",
-                                                "source"};
+    static const char *const names[IN_COUNT] = {"depth", "motion_prev", "motion_next",
+                                                "zvel",  "source",      "confidence"};
     memset(out, 0, sizeof *out);
+    if (input == IN_DEPTH && !run->have_depth) {
+        *out = run->unit_depth;
+        return NPRFX_OK;
+    }
     if (frame == run->frame && a->inputs[input].data) {
         /* The render call's own inputs are the inputs at this frame: no second fetch. */
         *out = a->inputs[input];
@@ -179,9 +193,10 @@ static nprfx_result cn_frame_fingerprint(const cn_run *run, int dir, int64_t f, 
     nprfx_image im;
     uint64_t h = CN_HASH_INIT;
     nprfx_result r;
-    int ins[3] = {IN_DEPTH, dir > 0 ? IN_MOTION_PREV : IN_MOTION_NEXT,
-                  run->p.noise == NPRFX_CN_NOISE_INPUT ? IN_SOURCE : -1};
-    for (int k = 0; k < 3; k++) {
+    int ins[4] = {IN_DEPTH, dir > 0 ? IN_MOTION_PREV : IN_MOTION_NEXT,
+                  run->p.noise == NPRFX_CN_NOISE_INPUT ? IN_SOURCE : -1,
+                  run->have_conf ? IN_CONFIDENCE : -1};
+    for (int k = 0; k < 4; k++) {
         if (ins[k] < 0) continue;
         if ((r = cn_fetch(run, ins[k], f, &im))) return r;
         h = cn_fingerprint(h, &im);
@@ -309,6 +324,52 @@ static void cn_pass_keep_depth(nprfx_context *ctx, cn_pass *ps, const nprfx_imag
     ps->depth_valid = 1;
 }
 
+/* Depth at a step's own frame h gated by the confidence there (channel 0 for the forward pass,
+ * which follows motion_prev; channel 1, when there is one, for the backward pass): +inf where the
+ * confidence is below min_confidence or NaN, so the step restarts the pixel as it does on
+ * background. Outside its data window confidence reads 0 (untrusted). The previous frame's depth
+ * is not gated: a pixel that restarted there holds fresh noise, which is fine to carry. */
+typedef struct cn_gate_job {
+    const nprfx_image *depth, *conf;
+    nprfx_image *out;
+    int ch;
+    float min_conf;
+} cn_gate_job;
+
+static void cn_gate_rows(void *user, int y0, int y1, int worker)
+{
+    (void)worker;
+    const cn_gate_job *j = user;
+    const nprfx_rect b = j->out->bounds, cb = j->conf->bounds;
+    for (int y = b.y0 + y0; y < b.y0 + y1; y++) {
+        float *o = nprfx_image_at(j->out, b.x0, y);
+        for (int x = b.x0; x < b.x1; x++, o += j->out->pixel_stride) {
+            float c = 0.0f;
+            if (x >= cb.x0 && x < cb.x1 && y >= cb.y0 && y < cb.y1)
+                c = nprfx_image_at(j->conf, x, y)[j->ch];
+            *o = c >= j->min_conf ? *nprfx_image_at(j->depth, x, y) : INFINITY;
+        }
+    }
+}
+
+static nprfx_result cn_gate(const cn_run *run, cn_pass *ps, int64_t h, const nprfx_image *depth,
+                            nprfx_image *out)
+{
+    nprfx_image conf;
+    nprfx_result r = cn_fetch(run, IN_CONFIDENCE, h, &conf);
+    if (r) return r;
+    if (!ps->gated.data || !nprfx_rect_equal(ps->gated.bounds, depth->bounds)) {
+        nprfx_image_free(&ps->gated);
+        if ((r = nprfx_image_alloc(run->ctx, depth->bounds, 1, &ps->gated))) return r;
+    }
+    cn_gate_job job = {depth, &conf, &ps->gated, ps->dir < 0 && conf.channels > 1 ? 1 : 0,
+                       run->min_conf};
+    nprfx_parallel_for(nprfx_context_executor(run->ctx), nprfx_rect_height(depth->bounds), 16,
+                       cn_gate_rows, &job);
+    *out = ps->gated;
+    return NPRFX_OK;
+}
+
 /* The pass's state at frame f, computed from the nearest saved state (or the origin). */
 static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const cn_slot **out)
 {
@@ -349,7 +410,14 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
             return r;
         uint64_t fp = cn_fingerprint(cn_fingerprint(CN_HASH_INIT, &depth), &motion);
         if (run->p.noise == NPRFX_CN_NOISE_INPUT) fp = cn_fingerprint(fp, &src);
-        nprfx_cn_inputs in = {&depth, &motion, run->have_zvel ? &zvel : NULL, &depth_prev, &src};
+        nprfx_image gated = depth;
+        if (run->have_conf) {
+            nprfx_image conf;
+            if ((r = cn_fetch(run, IN_CONFIDENCE, h, &conf))) return r;
+            fp = cn_fingerprint(fp, &conf);
+            if ((r = cn_gate(run, ps, h, &depth, &gated))) return r;
+        }
+        nprfx_cn_inputs in = {&gated, &motion, run->have_zvel ? &zvel : NULL, &depth_prev, &src};
         if ((r = cn_slot_ensure(run, &ps->scratch))) return r;
         if ((r = nprfx_cn_step(run->ctx, &run->p, ps->dir, h, &in, &cur->st, &ps->scratch)))
             return r;
@@ -481,6 +549,10 @@ int nprfx_coherent_noise_frames(const nprfx_coherent_noise_params *np, const npr
     case IN_MOTION_NEXT:
         if (symmetric) hi = last;
         break;
+    case IN_CONFIDENCE: /* read with depth at every step, and in the fingerprints */
+        lo = start;
+        hi = symmetric ? last : t;
+        break;
     case IN_ZVEL:
         if (start < t) lo = start + 1;
         if (symmetric && last - 1 > t) hi = last - 1;
@@ -536,9 +608,22 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
     if (!(smooth >= 0.0))
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "coherent-noise.smooth: %g is negative",
                            smooth);
-    if (!in[IN_DEPTH].data)
+    run.have_depth = in[IN_DEPTH].data != NULL;
+    run.have_conf = in[IN_CONFIDENCE].data != NULL;
+    run.min_conf = (float)np->min_confidence;
+    if (!run.have_depth && !run.have_conf)
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                           "coherent-noise: input 'depth' is not connected");
+                           "coherent-noise: connect input 'depth' (render plates) or "
+                           "'confidence' (footage: the flow node's confidence.prev)");
+    if (run.have_conf && in[IN_CONFIDENCE].channels > 2)
+        return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,
+                           "coherent-noise: input 'confidence' has %d channels; it takes 1 (of "
+                           "motion_prev) or 2 (of motion_prev, then of motion_next)",
+                           in[IN_CONFIDENCE].channels);
+    if (!(np->min_confidence >= 0.0 && np->min_confidence <= 1.0))
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
+                           "coherent-noise.min_confidence: %g is outside [0, 1]",
+                           np->min_confidence);
     if (!in[IN_MOTION_PREV].data)
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
                            "coherent-noise: input 'motion_prev' is not connected");
@@ -568,12 +653,21 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "coherent-noise: mode 'symmetric' needs the shot's frame range");
     cn_span(np, run.frame, args->first_frame, args->last_frame, &run.start, &run.last);
+    if (!run.have_depth) {
+        if ((r = nprfx_image_alloc(ctx, args->frame, 1, &run.unit_depth))) return r;
+        size_t n = (size_t)nprfx_rect_width(args->frame) * (size_t)nprfx_rect_height(args->frame);
+        for (size_t i = 0; i < n; i++)
+            run.unit_depth.data[i] = 1.0f;
+    }
     double mb = np->cache_mb;
     run.budget = (size_t)((mb > 0 ? mb : 0) * 1048576.0);
     if (run.symmetric) run.budget /= 2;
 
     cn_cache *cache = internal_state_get(args->state, sizeof *cache);
-    if (!cache) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "coherent-noise: out of memory");
+    if (!cache) {
+        nprfx_image_free(&run.unit_depth);
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "coherent-noise: out of memory");
+    }
 
     /* What the pass states depend on (not the output mapping, not the cache size). */
     uint64_t key = CN_HASH_INIT;
@@ -589,6 +683,9 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
     key = cn_hash_i64(key, (int64_t)(run.p.resample));
     key = cn_hash_f64(key, run.p.motion_scale);
     key = cn_hash_i64(key, (int64_t)(run.have_zvel));
+    key = cn_hash_i64(key, (int64_t)(run.have_depth));
+    key = cn_hash_i64(key, (int64_t)(run.have_conf));
+    if (run.have_conf) key = cn_hash_f64(key, run.min_conf);
     key = cn_hash_i64(key, (int64_t)(run.symmetric));
     key = cn_hash_i64(key, (int64_t)(run.window));
     key = cn_hash_bytes(key, &args->frame, sizeof args->frame);
@@ -677,5 +774,6 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
     cn_copy_window(args, &cache->result, 0, 0.0f);
 unlock:
     pthread_mutex_unlock(&cache->lock);
+    nprfx_image_free(&run.unit_depth);
     return r;
 }

@@ -15,6 +15,7 @@ enum {
     IN_MOTION_NEXT = NPRFX_CN_IN_MOTION_NEXT,
     IN_ZVEL = NPRFX_CN_IN_ZVEL,
     IN_SOURCE = NPRFX_CN_IN_SOURCE,
+    IN_CONFIDENCE = NPRFX_CN_IN_CONFIDENCE,
     IN_COUNT = NPRFX_CN_IN_COUNT
 };
 enum {
@@ -32,6 +33,7 @@ enum {
     P_OUTPUT,
     P_CONTRAST,
     P_CACHE_MB,
+    P_MIN_CONFIDENCE,
     P_COUNT
 };
 /* The choices' names below are in the order of core's values. */
@@ -67,8 +69,10 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
     {"depth", "Depth",
      "Depth per pixel (camera distance or view-space z, larger = farther). Background: +inf, "
      "NaN or any value >= 1e9 (Blender writes 1e10, inf in half-float files): background pixels "
-     "get fresh noise every frame. Nuke's ScanlineRender writes 1/z: invert it first.",
-     "Z|depth.Z|Depth.Z", 1, NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED, NPRFX_FETCH_UNBOUNDED},
+     "get fresh noise every frame. Nuke's ScanlineRender writes 1/z: invert it first. Footage "
+     "has none: connect confidence instead (one of the two is needed).",
+     "Z|depth.Z|Depth.Z", 1, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED,
+     NPRFX_FETCH_UNBOUNDED},
     {"motion_prev", "Motion Prev",
      "Per-pixel offset in pixels (y down) from a pixel to where the same surface point was in "
      "the previous frame. Blender Vector pass: (Vector.X, -Vector.Y). Nuke: (backward.u, "
@@ -88,6 +92,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
     {"source", "Source", "noise = input: the clip to make temporally coherent (1 to 4 channels).",
      NULL, 0, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED,
      NPRFX_FETCH_UNBOUNDED},
+    {"confidence", "Confidence",
+     "Footage: how far the motion can be trusted, per pixel, 0 to 1 (the flow node's "
+     "confidence.prev, and confidence.next for symmetric mode). Below min_confidence the pixel "
+     "restarts with fresh noise, as at a disocclusion: occlusions, disocclusions and cuts, where "
+     "the flow is wrong, get new noise instead of smeared noise. Replaces depth's occlusion "
+     "test when depth is not connected; with both, either restarts the pixel.",
+     "confidence.prev,confidence.next|confidence.prev|confidence", 0,
+     NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED, NPRFX_FETCH_UNBOUNDED},
 };
 
 typedef nprfx_coherent_noise_params cnp;
@@ -309,6 +321,22 @@ static const nprfx_param_desc params[P_COUNT] = {
      NULL,
      0,
      NPRFX_FIELD(cnp, cache_mb)},
+    {"min_confidence",
+     "Min Confidence",
+     "With the confidence input: pixels whose confidence is below this get fresh noise (a "
+     "restart). Higher restarts more (less smearing at occlusions, more boiling where the flow "
+     "is merely uncertain).",
+     NPRFX_PARAM_DOUBLE,
+     {0.5},
+     0,
+     1,
+     0,
+     1,
+     NULL,
+     NULL,
+     NULL,
+     0,
+     NPRFX_FIELD(cnp, min_confidence)},
 };
 
 static const char help[] =
@@ -327,6 +355,11 @@ static const char help[] =
     "(unit variance). Symmetric mode runs the same recursion backwards from the last frame with "
     "motion_next and outputs c_fwd + c_bwd - (1-alpha) w (Eq. 11), normalised; where both passes "
     "restart at once the weight of w is adjusted so the variance stays 1 there too.\n"
+    "\n"
+    "Footage (no depth, no render motion): take motion_prev (and motion_next) and confidence "
+    "from the flow node. A pixel whose confidence is below min_confidence is disoccluded "
+    "instead, so noise sticks to what moves and restarts where the flow fails (occlusions, "
+    "cuts).\n"
     "\n"
     "Motion convention (docs/design.md §2): motion vectors are in pixels of the full-resolution "
     "frame, y pointing down; motion_prev(x) goes from x to the same surface point in the "
@@ -368,7 +401,8 @@ static const char help[] =
     "this node does. Check whether your use needs a licence.\n"
     "\n"
     "NaN and infinities, docs/design.md §2.2: a depth that is NaN or infinite is background (fresh "
-    "noise); a NaN or infinite motion vector is a disocclusion (fresh noise); a non-finite zvel is "
+    "noise); a NaN or infinite motion vector is a disocclusion (fresh noise); a NaN confidence is "
+    "below any min_confidence (fresh noise); a non-finite zvel is "
     "ignored (z itself is predicted). noise = input: a NaN or infinite source sample is missing, "
     "and the filter carries the previous value on alone there (0 at a restart), so it never "
     "travels along the motion into other pixels or frames.";

@@ -139,6 +139,7 @@ enum {
     NPRFX_CN_IN_MOTION_NEXT, /* channels 0-1; symmetric mode */
     NPRFX_CN_IN_ZVEL,        /* channel 0; optional */
     NPRFX_CN_IN_SOURCE,      /* noise = input: 1 to 4 channels */
+    NPRFX_CN_IN_CONFIDENCE,  /* channel 0: of motion_prev; channel 1 (if any): of motion_next */
     NPRFX_CN_IN_COUNT
 };
 
@@ -170,6 +171,9 @@ typedef struct nprfx_coherent_noise_params {
     int output;    /* nprfx_cn_output; not for noise = input */
     double contrast;
     int cache_mb; /* memory bound of the per-instance state cache */
+    /* Where the confidence input is below this (or not finite), the pixel restarts as at a
+     * disocclusion: footage, whose flow says where it cannot be trusted (docs/design.md §3.1). */
+    double min_confidence;
 } nprfx_coherent_noise_params;
 
 /* Render args->window of the frame at args->time (NPRFX_NODE_TEMPORAL: other frames of the

@@ -21,7 +21,7 @@
 extern const nprfx_node_desc nprfx_node_coherent_noise;
 static const nprfx_node_desc *node = &nprfx_node_coherent_noise;
 
-enum { IN_DEPTH, IN_MPREV, IN_MNEXT, IN_ZVEL, IN_SOURCE, IN_COUNT };
+enum { IN_DEPTH, IN_MPREV, IN_MNEXT, IN_ZVEL, IN_SOURCE, IN_CONFIDENCE, IN_COUNT };
 enum { SC_TRANSLATE, SC_ROTATE, SC_ZOOM, SC_TINY, SC_SYNTH };
 
 /* ---- in-memory scenes -------------------------------------------------------------------- */
