@@ -19,16 +19,18 @@ static void usage(FILE *f)
         "                  [--connect INPUT[=CHANNELS] ...] [--threads N] [--scene NAME]\n"
         "                  [--mem-limit SIZE] [--no-pool]\n\n"
         "Times NODE on synthetic plates (nprfx synth scenes, default orbit, 1920x1080,\n"
-        "10 frames after one warm-up frame). Required inputs are connected to the plate;\n"
-        "--connect adds an optional one (CHANNELS picks synth channels, e.g.\n"
-        "--connect alpha=diffuse). Reports ms per frame (mean and best, and the CPU time of all\n"
+        "10 frames after one warm-up frame). Required inputs are connected to the plate by\n"
+        "their AOV names; one without names takes motion_prev.X,Y when it needs 2 channels\n"
+        "(warp's offset), diffuse when it needs 1. --connect adds an optional one (CHANNELS\n"
+        "picks synth channels, e.g. --connect alpha=diffuse). Reports ms per frame (mean and best, "
+        "and the CPU time of all\n"
         "threads: on a busy machine, the node's cost apart from waiting), Mpixel/s and the\n"
         "process's peak memory, and for nodes that count what they make (stipple: dots\n"
         "drawn) that count per frame and per second. File I/O and plate synthesis are not\n"
         "timed. Frames come from the runner's frame pool (--no-pool: calloc'd afresh, as\n"
         "before); --mem-limit is as for nprfx run. Then the node's memory floor: the bytes of\n"
-            "frames it reads and writes, at this machine's memcpy speed on as many threads, and how\n"
-            "many times that the node takes. 'nprfx bench-graph' times whole graphs.\n\n"
+        "frames it reads and writes, at this machine's memcpy speed on as many threads, and how\n"
+        "many times that the node takes. 'nprfx bench-graph' times whole graphs.\n\n"
         "example:\n"
         "  nprfx bench stipple --size 1920x1080 --connect uv=UV.U,UV.V --connect id=id \\\n"
         "      --set mode=radius\n");
@@ -90,6 +92,12 @@ int nprfx_cmd_bench(int argc, char **argv)
             }
         }
         if (!connect) continue;
+        /* An input that names no AOV takes the plate as it is unless it needs an exact count of
+         * channels: then channels of the synth plate that fit (warp's offset: the motion). */
+        if (!sel && !d->inputs[k].aov && d->inputs[k].channels == 2)
+            sel = "motion_prev.X,motion_prev.Y";
+        else if (!sel && !d->inputs[k].aov && d->inputs[k].channels == 1)
+            sel = "diffuse";
         len += snprintf(json + len, sizeof json - (size_t)len, "%s\"%s\": \"plate%s%s\"",
                         first ? "" : ", ", d->inputs[k].name, sel ? ":" : "", sel ? sel : "");
         first = 0;

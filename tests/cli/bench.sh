@@ -29,6 +29,8 @@ expect 0 "ms/frame" "$NPRFX" bench blend --size 500x500 --frames 1
 grep -qE "^memory floor: [0-9.]+ ms/frame \(12 MB of frames read and written at [0-9.]+ GB/s memcpy\); the node takes [0-9.]+x that$" out.txt \
   && pass || { fail "blend: no memory floor line"; cat out.txt; }
 ! grep -q "^blend:" out.txt && pass || fail "blend reports a count it does not make"
+# warp's offset names no AOV and takes 2 channels: bench connects the plate's motion to it.
+expect 0 "^warp 64x36, 1 frame" "$NPRFX" bench warp --size 64x36 --frames 1
 expect 2 "unknown node 'nope'" "$NPRFX" bench nope
 expect 2 "--size must be WxH" "$NPRFX" bench blend --size big
 expect 2 "unexpected argument" "$NPRFX" bench blend --bogus
