@@ -140,8 +140,9 @@ typedef struct sjob {
     int units_x;       /* render: units per row */
     int *row_start;    /* render: per unit, UNIT_ROWS + 1 offsets of its owner rows */
     scratch *scr;      /* one per worker */
-    internal_stencils stencils; /* render: uniform and multitone discs (cov NULL: none) */
-    internal_levels levels;     /* render: radius discs (made 0: none) */
+    internal_stencils stencils;    /* render: uniform and multitone discs (cov NULL: none) */
+    const internal_levels *levels; /* render: radius discs (NULL: drawn exactly) */
+    internal_levels own_levels;    /* ... made for this call when no sequence keeps them */
     atomic_int error;
 } sjob;
 

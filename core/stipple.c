@@ -131,6 +131,10 @@ typedef struct seq_curve {
 
 /* Curves kept per sequence: a graph rarely has more stipple looks than this. */
 #define SEQ_CURVES 8
+/* Radius-dot stencil tables kept per sequence (one per a0 at its render scale, 4.2 MB each):
+ * made once instead of every frame (5 ms of one thread at a0 = 6). Beyond this many, each render
+ * makes its own. */
+#define SEQ_LEVELS 4
 
 struct nprfx_stipple_sequence {
     pthread_mutex_t lock;        /* held while a longer version is built */
@@ -143,6 +147,13 @@ struct nprfx_stipple_sequence {
     pthread_mutex_t curve_lock;
     seq_curve curves[SEQ_CURVES];
     int num_curves, next_curve;
+    /* Radius-dot tables by their largest area, under their own lock (a curve is measured by
+     * rendering, under curve_lock); immutable once made and kept until destroy, so renders read
+     * them without a lock. */
+    pthread_mutex_t levels_lock;
+    double level_area[SEQ_LEVELS];
+    internal_levels *levels[SEQ_LEVELS];
+    int num_levels;
 };
 
 nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_sequence **out)
@@ -156,6 +167,12 @@ nprfx_result nprfx_stipple_sequence_create(nprfx_context *ctx, nprfx_stipple_seq
         return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "stipple: cannot create a mutex");
     }
     if (pthread_mutex_init(&s->curve_lock, NULL) != 0) {
+        pthread_mutex_destroy(&s->lock);
+        free(s);
+        return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "stipple: cannot create a mutex");
+    }
+    if (pthread_mutex_init(&s->levels_lock, NULL) != 0) {
+        pthread_mutex_destroy(&s->curve_lock);
         pthread_mutex_destroy(&s->lock);
         free(s);
         return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "stipple: cannot create a mutex");
@@ -176,6 +193,11 @@ void nprfx_stipple_sequence_destroy(nprfx_stipple_sequence *s)
 {
     if (!s || atomic_fetch_sub(&s->refs, 1) != 1) return;
     pthread_mutex_destroy(&s->curve_lock);
+    pthread_mutex_destroy(&s->levels_lock);
+    for (int i = 0; i < s->num_levels; i++) {
+        internal_stipple_levels_free(s->levels[i]);
+        free(s->levels[i]);
+    }
     seq_version *v = atomic_load(&s->head);
     while (v) {
         seq_version *older = v->older;
@@ -364,8 +386,8 @@ static void render_tiles(void *user, int begin, int end, int worker)
                         if (j->stencils.cov && rad == j->stencils.r)
                             internal_stipple_splat_stencil(t, rows, &j->stencils, q[i].x, q[i].y,
                                                            q[i].tone);
-                        else if (j->levels.made)
-                            internal_stipple_splat_levels(t, rows, &j->levels, q[i].x, q[i].y, rad,
+                        else if (j->levels)
+                            internal_stipple_splat_levels(t, rows, j->levels, q[i].x, q[i].y, rad,
                                                           q[i].tone);
                         else
                             internal_stipple_splat_disc(t, rows, q[i].x, q[i].y, rad, q[i].tone);
@@ -429,6 +451,36 @@ static void job_free(sjob *j)
     if (j->own_seq) nprfx_stipple_sequence_destroy(j->seq);
 }
 
+/* The radius-dot tables for the largest area amax: the sequence's (made on first use and kept),
+ * or, without a sequence or beyond SEQ_LEVELS areas, made into *own for this call. *out is NULL
+ * when the dots are too large for tables (drawn exactly). */
+static nprfx_result sequence_levels(nprfx_stipple_sequence *seq, double amax, internal_levels *own,
+                                    const internal_levels **out)
+{
+    internal_levels *kept = NULL;
+    if (seq) {
+        pthread_mutex_lock(&seq->levels_lock);
+        for (int i = 0; i < seq->num_levels; i++)
+            if (seq->level_area[i] == amax) kept = seq->levels[i];
+        if (!kept && seq->num_levels < SEQ_LEVELS && (kept = calloc(1, sizeof *kept))) {
+            if (internal_stipple_levels_init(kept, amax) < 0) {
+                free(kept);
+                kept = NULL;
+            } else {
+                seq->level_area[seq->num_levels] = amax;
+                seq->levels[seq->num_levels++] = kept;
+            }
+        }
+        pthread_mutex_unlock(&seq->levels_lock);
+    }
+    if (!kept) {
+        if (internal_stipple_levels_init(own, amax) < 0) return NPRFX_ERR_OUT_OF_MEMORY;
+        kept = own;
+    }
+    *out = kept->made ? kept : NULL;
+    return NPRFX_OK;
+}
+
 /* The stipples whose centre lies in the window's pixels (x0 - 0.5 <= x < x1 - 0.5, and so for
  * y): each stipple of a frame is counted by exactly one of the tiles that cover it. */
 static long long count_in_window(const sjob *j, int units, nprfx_rect w)
@@ -489,9 +541,8 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
                                        (double)j.radius) < 0)
         r = NPRFX_ERR_OUT_OF_MEMORY;
     /* radius dots: areas g a0 <= a0 (the float radius of a0 itself may round up: a hair more) */
-    if (r == NPRFX_OK && p->mode == NPRFX_STIPPLE_RADIUS &&
-        internal_stipple_levels_init(&j.levels, p->a0 * (1 + 1e-6)) < 0)
-        r = NPRFX_ERR_OUT_OF_MEMORY;
+    if (r == NPRFX_OK && p->mode == NPRFX_STIPPLE_RADIUS)
+        r = sequence_levels(j.seq, p->a0 * (1 + 1e-6), &j.own_levels, &j.levels);
     if (r == NPRFX_OK) {
         int tiles = ((nprfx_rect_height(window) + STRIPE_ROWS - 1) / STRIPE_ROWS) *
                     ((nprfx_rect_width(window) + TILE_COLS - 1) / TILE_COLS);
@@ -503,7 +554,7 @@ nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params
     free(j.lists);
     free(j.row_start);
     internal_stipple_stencils_free(&j.stencils);
-    internal_stipple_levels_free(&j.levels);
+    internal_stipple_levels_free(&j.own_levels);
     job_free(&j);
     if (r == NPRFX_ERR_OUT_OF_MEMORY)
         return nprfx_error(ctx, r, "stipple: out of memory rendering %dx%d pixels",
