@@ -114,6 +114,13 @@ static int advect_frames_needed(const void *params, const nprfx_frames_query *q,
     return nprfx_advect_frames(params, q, input, ranges);
 }
 
+/* A pixel's coordinates come from wherever the motion led over the frames since its restart. */
+static int advect_footprint(const void *params)
+{
+    (void)params;
+    return -1;
+}
+
 const nprfx_node_desc nprfx_node_advect = {
     .size = sizeof(nprfx_node_desc),
     .id = "advect",
@@ -147,4 +154,5 @@ const nprfx_node_desc nprfx_node_advect = {
     .params_size = sizeof(ap),
     .version_major = 1,
     .frames_needed = advect_frames_needed,
+    .footprint = advect_footprint,
 };
