@@ -35,7 +35,31 @@ nprfx_result nprfx_advect_check(nprfx_context *ctx, const nprfx_advect_params *p
     if (!isfinite(p->min_confidence))
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "advect.min_confidence: %g is not finite",
                            p->min_confidence);
+    if (p->output < 0 || p->output >= NPRFX_ADVECT_OUTPUT_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "advect.output: no option %d", p->output);
     return NPRFX_OK;
+}
+
+int nprfx_advect_output_channels(int output, const char **names)
+{
+    static const char *const all[NPRFX_ADVECT_CHANNELS] = {"a.U", "a.V", "b.U", "b.V", "mix"};
+    int first, count;
+    switch (output) {
+    case NPRFX_ADVECT_OUTPUT_ALL:
+        first = 0, count = 5;
+        break;
+    case NPRFX_ADVECT_OUTPUT_LAYERS:
+        first = 0, count = 4;
+        break;
+    case NPRFX_ADVECT_OUTPUT_MIX:
+        first = 4, count = 1;
+        break;
+    default:
+        return 0;
+    }
+    for (int c = 0; names && c < count; c++)
+        names[c] = all[first + c];
+    return count;
 }
 
 /* floor(a / b) for b > 0: frames before the origin belong to the period that holds them. */
@@ -339,6 +363,7 @@ typedef struct adv_run {
     const nprfx_advect_params *p;
     int have_conf;
     double plane;
+    int t; /* the frame rendered: args->time rounded, whose inputs are args->inputs */
 } adv_run;
 
 static nprfx_result adv_fetch(const adv_run *run, int input, int frame, nprfx_image *out)
@@ -346,14 +371,14 @@ static nprfx_result adv_fetch(const adv_run *run, int input, int frame, nprfx_im
     const nprfx_render_args *a = run->a;
     static const char *const names[2] = {"motion_prev", "confidence"};
     memset(out, 0, sizeof *out);
-    if (frame == (int)a->time) {
+    if (frame == run->t) {
         *out = a->inputs[input]; /* the call's own inputs: no second fetch */
     } else {
         if (!a->fetch)
             return nprfx_error(run->ctx, NPRFX_ERR_UNSUPPORTED,
                                "advect: frame %d needs input '%s' at frame %d, but the host "
                                "cannot fetch other frames",
-                               (int)a->time, names[input], frame);
+                               run->t, names[input], frame);
         nprfx_result r = a->fetch(a->fetch_user, input, (double)frame, out);
         if (r)
             return nprfx_error(run->ctx, r, "advect: could not fetch input '%s' at frame %d",
@@ -433,13 +458,15 @@ fail:
     return r;
 }
 
-static void copy_window(const nprfx_image *src, nprfx_rect window, nprfx_image *out)
+/* The window of the whole 5-channel result, the channels [first, first + count) of it. */
+static void copy_window(const nprfx_image *src, nprfx_rect window, int first, int count,
+                        nprfx_image *out)
 {
     for (int y = window.y0; y < window.y1; y++)
         for (int x = window.x0; x < window.x1; x++) {
-            const float *s = nprfx_image_at(src, x, y);
+            const float *s = nprfx_image_at(src, x, y) + first;
             float *o = nprfx_image_at(out, x, y);
-            for (int k = 0; k < NPRFX_ADVECT_CHANNELS; k++)
+            for (int k = 0; k < count; k++)
                 o[k] = s[k];
         }
 }
@@ -452,9 +479,10 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
     nprfx_context *ctx = args->ctx;
     nprfx_result r = nprfx_advect_check(ctx, p);
     if (r) return r;
-    if (args->output->channels != NPRFX_ADVECT_CHANNELS)
+    int out_channels = nprfx_advect_output_channels(p->output, NULL);
+    if (args->output->channels != out_channels)
         return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH, "advect: output has %d channels, not %d",
-                           args->output->channels, NPRFX_ADVECT_CHANNELS);
+                           args->output->channels, out_channels);
     if (!args->inputs[IN_MOTION].data)
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
                            "advect: input 'motion_prev' is not connected");
@@ -468,9 +496,9 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
     window = nprfx_rect_intersect(window, frame);
     if (nprfx_rect_empty(frame) || nprfx_rect_empty(window)) return NPRFX_OK;
     double scale = args->render_scale > 0 ? args->render_scale : 1.0;
-    adv_run run = {args, ctx, p, args->inputs[IN_CONF].data != NULL,
-                   NPRFX_ADVECT_PLANE_PIXELS * scale};
     int t = (int)floor(args->time + 0.5);
+    adv_run run = {
+        args, ctx, p, args->inputs[IN_CONF].data != NULL, NPRFX_ADVECT_PLANE_PIXELS * scale, t};
 
     adv_cache local, *c = &local;
     memset(&local, 0, sizeof local);
@@ -480,7 +508,10 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
     }
     /* What the layer states depend on besides their inputs. */
     uint64_t key = HASH_INIT;
-    key = hash_bytes(key, p, sizeof *p);
+    key = hash_bytes(key, &p->layers, sizeof p->layers);
+    key = hash_bytes(key, &p->period, sizeof p->period);
+    key = hash_bytes(key, &p->max_distortion, sizeof p->max_distortion);
+    key = hash_bytes(key, &p->min_confidence, sizeof p->min_confidence);
     key = hash_bytes(key, &frame, sizeof frame);
     key = hash_bytes(key, &scale, sizeof scale);
     key = hash_bytes(key, &args->first_frame, sizeof args->first_frame);
@@ -527,7 +558,8 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
         c->result_frame = t;
         c->result_fp = fp;
     }
-    copy_window(&c->result, window, args->output);
+    copy_window(&c->result, window, p->output == NPRFX_ADVECT_OUTPUT_MIX ? 4 : 0, out_channels,
+                args->output);
 done:
     if (c != &local)
         pthread_mutex_unlock(&c->lock);

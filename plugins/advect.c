@@ -13,7 +13,8 @@ enum {
     IN_CONFIDENCE = NPRFX_ADVECT_IN_CONFIDENCE,
     IN_COUNT = NPRFX_ADVECT_IN_COUNT
 };
-enum { P_LAYERS, P_PERIOD, P_MAX_DISTORTION, P_MIN_CONFIDENCE, P_COUNT };
+enum { P_LAYERS, P_PERIOD, P_MAX_DISTORTION, P_MIN_CONFIDENCE, P_OUTPUT, P_COUNT };
+enum { OUTPUT_COUNT = NPRFX_ADVECT_OUTPUT_COUNT };
 typedef nprfx_advect_params ap;
 
 static const nprfx_input_desc inputs[IN_COUNT] = {
@@ -38,6 +39,16 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .fetch_before = NPRFX_FETCH_UNBOUNDED,
      .fetch_after = 0},
 };
+
+/* Same order as nprfx_advect_output. */
+static const char *const output_names[] = {"all", "layers", "mix", NULL};
+static const char *const output_help[] = {
+    "a.U, a.V, b.U, b.V, mix: everything a graph needs from one node (the runner; an OpenFX "
+    "host carries four channels, so there b.V is lost: use layers and mix)",
+    "a.U, a.V, b.U, b.V: the two layers' coordinates, for a host (R, G, B, A)",
+    "mix: the weight of layer a, for a host's blend", NULL};
+_Static_assert(sizeof output_names / sizeof output_names[0] == OUTPUT_COUNT + 1,
+               "advect: output names must follow nprfx_advect_output");
 
 static const nprfx_param_desc params[P_COUNT] = {
     {.name = "layers",
@@ -89,17 +100,24 @@ static const nprfx_param_desc params[P_COUNT] = {
      .soft_max = 1,
      .hard_min = 0,
      .hard_max = 1},
+    {.name = "output",
+     NPRFX_FIELD(ap, output),
+     .label = "Output",
+     .help = "The channels output. An OpenFX host carries at most four (R, G, B and the last one "
+             "in alpha), so in a host use one instance with layers and one with mix; the values "
+             "are the same as all's.",
+     .type = NPRFX_PARAM_CHOICE,
+     .def = {NPRFX_ADVECT_OUTPUT_ALL},
+     NPRFX_CHOICE_RANGE(OUTPUT_COUNT),
+     .choices = output_names,
+     .choice_help = output_help},
 };
 
 static nprfx_result advect_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
 {
-    (void)pv;
     (void)ich;
-    static const char *const names[NPRFX_ADVECT_CHANNELS] = {"a.U", "a.V", "b.U", "b.V", "mix"};
-    out->channels = NPRFX_ADVECT_CHANNELS;
-    for (int c = 0; c < NPRFX_ADVECT_CHANNELS; c++)
-        out->names[c] = names[c];
-    return NPRFX_OK;
+    out->channels = nprfx_advect_output_channels((int)pv[P_OUTPUT].v[0], out->names);
+    return out->channels ? NPRFX_OK : NPRFX_ERR_OUT_OF_RANGE;
 }
 
 static nprfx_result advect_render(const nprfx_render_args *a, const void *params)
@@ -136,9 +154,10 @@ const nprfx_node_desc nprfx_node_advect = {
         "confidence are re-seeded. Outputs a.U, a.V, b.U, b.V and mix = w_a / (w_a + w_b), "
         "with w = 1 - |2 age / period - 1| (0 at a restart) times a factor that falls as the "
         "layer stretches beyond max_distortion. Render a look twice, on a.U,a.V and on b.U,b.V, "
-        "and blend the first over the second with alpha = mix. Any frame depends only on the "
-        "frames since its layers' last restarts, so it renders the same alone (a farm chunk) "
-        "as in order."
+        "and blend the first over the second with alpha = mix (in an OpenFX host, which carries "
+        "four channels, from two instances: output layers and output mix). Any frame depends "
+        "only on the frames since its layers' last restarts, so it renders the same alone (a "
+        "farm chunk) as in order."
         "\n\nNaN and infinities (docs/design.md §2.2): motion_prev and confidence: missing "
         "(the pixel is re-seeded: a fresh coordinate, as disoccluded content). The output is "
         "always finite.",

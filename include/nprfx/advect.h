@@ -31,13 +31,28 @@ enum { NPRFX_ADVECT_IN_MOTION_PREV = 0, NPRFX_ADVECT_IN_CONFIDENCE = 1, NPRFX_AD
  * node gives an image without a uv input (NPRFX_STIPPLE_PLANE_PIXELS). */
 #define NPRFX_ADVECT_PLANE_PIXELS 1024.0
 
+/* Which channels the node outputs (its `output` param). An OpenFX host carries at most four
+ * channels (R, G, B and the last one in alpha, docs/design.md §1), so a host takes `layers` and
+ * `mix` from two instances; the runner takes `all` from one. */
+typedef enum nprfx_advect_output {
+    NPRFX_ADVECT_OUTPUT_ALL = 0,    /* a.U, a.V, b.U, b.V, mix */
+    NPRFX_ADVECT_OUTPUT_LAYERS = 1, /* a.U, a.V, b.U, b.V */
+    NPRFX_ADVECT_OUTPUT_MIX = 2,    /* mix */
+    NPRFX_ADVECT_OUTPUT_COUNT
+} nprfx_advect_output;
+
 /* The node's params (its descriptor binds each one here by offset). */
 typedef struct nprfx_advect_params {
     int layers;            /* 1 or 2 */
     int period;            /* frames between two restarts of a layer (2 layers) */
     double max_distortion; /* stretch ratio s1/s2 of dX/dx where a layer's weight starts to fall */
     double min_confidence; /* below it (or NaN) a pixel is re-seeded */
+    int output;            /* nprfx_advect_output */
 } nprfx_advect_params;
+
+/* The output's channel count and names for an nprfx_advect_output (0 and NULL when there is no
+ * such option); names[] has room for NPRFX_ADVECT_CHANNELS. */
+NPRFX_API int nprfx_advect_output_channels(int output, const char **names);
 
 /* Where layer `layer` (0: a, 1: b) stands at frame `time` of the shot [first_frame, last_frame]
  * (last < first: unknown; frames are then counted from 0). */
@@ -47,7 +62,8 @@ typedef struct nprfx_advect_layer_time {
     double tri;  /* temporal weight 1 - |2 age / period - 1|: 0 at a restart (2 layers); 1 (1) */
 } nprfx_advect_layer_time;
 
-/* Params in range: layers 1 or 2, period >= 2, max_distortion >= 1, min_confidence finite. */
+/* Params in range: layers 1 or 2, period >= 2, max_distortion >= 1, min_confidence finite, an
+ * output option. */
 NPRFX_API nprfx_result nprfx_advect_check(nprfx_context *ctx, const nprfx_advect_params *p);
 
 /* The restart schedule. With 2 layers, layer a restarts at frames first + k * period, layer b at
@@ -90,7 +106,8 @@ NPRFX_API nprfx_result nprfx_advect_combine(nprfx_context *ctx, const nprfx_adve
                                             const nprfx_advect_layer_time *tb, nprfx_rect window,
                                             nprfx_image *out);
 
-/* Render args->window of the node at args->time: inputs NPRFX_ADVECT_IN_*, other frames through
+/* Render args->window of the node at args->time (the channels p->output picks): inputs
+ * NPRFX_ADVECT_IN_*, other frames through
  * args->fetch. args->state (may be NULL) keeps the latest layer states and result, so in-order
  * rendering costs one step per layer and frame; results never depend on it. */
 NPRFX_API nprfx_result nprfx_advect_render(const nprfx_render_args *args,

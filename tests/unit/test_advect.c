@@ -20,7 +20,7 @@
 #define MAX_FRAMES 64
 
 static const nprfx_node_desc *node;
-static int P_LAYERS, P_PERIOD, P_MAXD, P_MINC, I_MOTION, I_CONF;
+static int P_LAYERS, P_PERIOD, P_MAXD, P_MINC, P_OUTPUT, I_MOTION, I_CONF;
 
 /* A sequence of inputs by frame (1..MAX_FRAMES-1), read by the fetch callback, which records
  * which frames it was asked for. */
@@ -434,6 +434,49 @@ static void test_order_tiles(nprfx_context *ctx, nprfx_context *par)
     seq_free(&s);
 }
 
+/* output layers and mix (for OpenFX hosts, four channels at most) are channels 0-3 and 4 of all,
+ * bit for bit, from one state as from fresh ones. */
+static void test_outputs(nprfx_context *ctx)
+{
+    enum { w = 33, h = 21, T = 11 };
+    seq s;
+    memset(&s, 0, sizeof s);
+    s.first = 1;
+    s.last = 20;
+    s.have_conf = 1;
+    make_varying(&s, w, h, 1, T);
+    nprfx_value v[8];
+    defaults(v, 2, 6);
+    nprfx_image all = th_image(w, h, 5, NULL), lay = th_image(w, h, 4, NULL);
+    nprfx_image mix = th_image(w, h, 1, NULL);
+    void *state = NULL;
+    CHECK_OK(render(ctx, &s, v, T, &state, all.bounds, &all, 1));
+    th_set_choice(node, v, "output", "layers");
+    CHECK_OK(render(ctx, &s, v, T, &state, lay.bounds, &lay, 1));
+    th_set_choice(node, v, "output", "mix");
+    CHECK_OK(render(ctx, &s, v, T, NULL, mix.bounds, &mix, 1));
+    int same = 1;
+    for (int i = 0; i < w * h; i++) {
+        same &= memcmp(&all.data[5 * i], &lay.data[4 * i], 4 * sizeof(float)) == 0;
+        same &= all.data[5 * i + 4] == mix.data[i];
+    }
+    CHECK(same);
+    int ich[2] = {2, 1};
+    nprfx_output_info oi;
+    CHECK_OK(nprfx_node_output_info(ctx, node, v, ich, &oi));
+    CHECK(oi.channels == 1 && !strcmp(oi.names[0], "mix"));
+    th_set_choice(node, v, "output", "layers");
+    CHECK_OK(nprfx_node_output_info(ctx, node, v, ich, &oi));
+    CHECK(oi.channels == 4 && !strcmp(oi.names[3], "b.V"));
+    /* a 5-channel output for a 4-channel option is refused */
+    CHECK(render(ctx, &s, v, T, NULL, all.bounds, &all, 1) != NPRFX_OK);
+    free_state(&state);
+    nprfx_image_free(&all);
+    nprfx_image_free(&lay);
+    nprfx_image_free(&mix);
+    seq_free(&s);
+}
+
 static void test_errors(nprfx_context *ctx)
 {
     enum { w = 8, h = 6 };
@@ -629,6 +672,7 @@ int main(void)
     P_PERIOD = th_param(node, "period");
     P_MAXD = th_param(node, "max_distortion");
     P_MINC = th_param(node, "min_confidence");
+    P_OUTPUT = th_param(node, "output");
     I_MOTION = th_input(node, "motion_prev");
     I_CONF = th_input(node, "confidence");
     CHECK(I_MOTION == NPRFX_ADVECT_IN_MOTION_PREV && I_CONF == NPRFX_ADVECT_IN_CONFIDENCE);
@@ -648,6 +692,7 @@ int main(void)
     test_translation(ctx);
     test_reseed(ctx);
     test_order_tiles(ctx, par);
+    test_outputs(ctx);
     test_errors(ctx);
     test_coherence(par);
     nprfx_context_destroy(par);
