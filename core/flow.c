@@ -314,6 +314,42 @@ static void solve_range(void *user, int begin, int end, int worker)
     }
 }
 
+double nprfx_flow_cut_gate(double consistent)
+{
+    double s = (consistent - 0.6) / 0.25;
+    s = s < 0 ? 0 : s > 1 ? 1 : s;
+    return s * s * (3 - 2 * s);
+}
+
+/* The whole frame's confidence in blocks of rows, counting the pixels at 0.5 or more. */
+enum { CONF_BLOCK_ROWS = 16 };
+typedef struct conf_rows {
+    const float *fwd, *back;
+    const flow_frame *a, *b;
+    int w, h;
+    double inv_fb, inv_ph;
+    float *conf;
+    long long *good;
+} conf_rows;
+
+static void conf_range(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    conf_rows *c = user;
+    for (int blk = begin; blk < end; blk++) {
+        long long n = 0;
+        int y1 = (blk + 1) * CONF_BLOCK_ROWS < c->h ? (blk + 1) * CONF_BLOCK_ROWS : c->h;
+        for (int y = blk * CONF_BLOCK_ROWS; y < y1; y++)
+            for (int x = 0; x < c->w; x++) {
+                float v = confidence_at(c->fwd, c->back, c->a->lum, c->b->lum, c->a->ok, c->b->ok,
+                                        c->w, c->h, c->inv_fb, c->inv_ph, x, y);
+                c->conf[(size_t)y * c->w + x] = v;
+                n += v >= 0.5f;
+            }
+        c->good[blk] = n;
+    }
+}
+
 static nprfx_result frame_load(nprfx_context *ctx, const nprfx_image *im, int t, flow_frame *f)
 {
     int w = nprfx_rect_width(im->bounds), h = nprfx_rect_height(im->bounds);
@@ -426,28 +462,44 @@ nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
                     pairs[k]->used = 1;
             }
     }
+    float *conf = NULL;
+    if (!r && !(conf = malloc((size_t)w * (size_t)h * sizeof *conf)))
+        r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "flow: out of memory at %dx%d", w, h);
     if (!r) {
-        double inv_fb = 1 / (2 * p->consistency * p->consistency);
-        double inv_ph = p->photometric > 0 ? 1 / (2 * p->photometric * p->photometric) : 0;
         nprfx_rect ow = nprfx_rect_intersect(window, b);
         for (int k = 0; k < 2; k++) {
             if (!pairs[k]) continue;
             /* motion_prev = flow t -> t-1, the pair's b to a; motion_next = t -> t+1, a to b. */
-            const float *fwd = k == 0 ? pairs[k]->fba : pairs[k]->fab;
-            const float *back = k == 0 ? pairs[k]->fab : pairs[k]->fba;
-            const flow_frame *o = &nb[k];
+            conf_rows cr = {pairs[k]->fba, pairs[k]->fab, &cur, &nb[k], w, h, 0, 0, conf, NULL};
+            if (k == 1) cr.fwd = pairs[k]->fab, cr.back = pairs[k]->fba;
+            cr.inv_fb = 1 / (2 * p->consistency * p->consistency);
+            cr.inv_ph = p->photometric > 0 ? 1 / (2 * p->photometric * p->photometric) : 0;
+            /* The whole frame's confidence, for the cut gate; rows in blocks, counts summed in
+             * block order (integers: the order changes nothing anyway). */
+            int blocks = (h + CONF_BLOCK_ROWS - 1) / CONF_BLOCK_ROWS;
+            long long *good = calloc((size_t)blocks, sizeof *good);
+            if (!good) {
+                r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "flow: out of memory");
+                break;
+            }
+            cr.good = good;
+            nprfx_parallel_for(nprfx_context_executor(ctx), blocks, 1, conf_range, &cr);
+            long long total = 0;
+            for (int i = 0; i < blocks; i++)
+                total += good[i];
+            free(good);
+            float gate = (float)nprfx_flow_cut_gate((double)total / ((double)w * h));
             for (int y = ow.y0; y < ow.y1; y++)
                 for (int x = ow.x0; x < ow.x1; x++) {
-                    int i = x - b.x0, j = y - b.y0;
-                    size_t q = (size_t)j * w + i;
+                    size_t q = (size_t)(y - b.y0) * w + (size_t)(x - b.x0);
                     float *px = nprfx_image_at(out, x, y);
-                    px[2 * k] = fwd[2 * q];
-                    px[2 * k + 1] = fwd[2 * q + 1];
-                    px[NPRFX_FLOW_CONF_PREV + k] = confidence_at(fwd, back, cur.lum, o->lum, cur.ok,
-                                                                 o->ok, w, h, inv_fb, inv_ph, i, j);
+                    px[2 * k] = cr.fwd[2 * q];
+                    px[2 * k + 1] = cr.fwd[2 * q + 1];
+                    px[NPRFX_FLOW_CONF_PREV + k] = conf[q] * gate;
                 }
         }
     }
+    free(conf);
     if (cache) pthread_mutex_unlock(&cache->lock);
     pair_clear(&owned[0]);
     pair_clear(&owned[1]);

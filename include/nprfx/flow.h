@@ -92,6 +92,11 @@ NPRFX_API void nprfx_flow_confidence(const float *f_ab, const float *f_ba, const
                                      const unsigned char *ok_b, int w, int h, double consistency,
                                      double photometric, float *conf);
 
+/* The cut gate: every confidence of a direction is multiplied by it, from the share of the
+ * frame's pixels whose confidence is at least 0.5: smoothstep from 0 at a share of 0.6 (much of
+ * the frame has no match: a cut) to 1 at 0.85 and above (docs/design.md §3.15). */
+NPRFX_API double nprfx_flow_cut_gate(double consistent);
+
 /* Render `window` of out (NPRFX_FLOW_CHANNELS channels) at frame `time` of the shot
  * [first_frame, last_frame]: the flows to the previous and next frames (fetched through
  * fetch(fetch_user, input, t, &view)) in the motion convention of docs/design.md §2, with their

@@ -57,6 +57,14 @@ static void test_confidence(void)
     CHECK(conf[1] == 0.0f && conf[2] == 0.0f && conf[0] == 1.0f);
 }
 
+static void test_cut_gate(void)
+{
+    CHECK(nprfx_flow_cut_gate(0.3) == 0.0 && nprfx_flow_cut_gate(0.6) == 0.0);
+    CHECK(nprfx_flow_cut_gate(0.85) == 1.0 && nprfx_flow_cut_gate(1.0) == 1.0);
+    CHECK_NEAR(nprfx_flow_cut_gate(0.725), 0.5, 1e-12); /* smoothstep's middle */
+    CHECK_NEAR(nprfx_flow_cut_gate(0.65), 0.2 * 0.2 * (3 - 0.4), 1e-12);
+}
+
 static void test_luminance(void)
 {
     float px[8] = {1, 1, 1, 0.5f, NAN, 0, 0, 1};
@@ -431,6 +439,7 @@ static void test_metrics(void)
 int main(void)
 {
     test_confidence();
+    test_cut_gate();
     test_luminance();
     test_scale();
     test_node();
