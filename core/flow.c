@@ -190,8 +190,13 @@ typedef struct flow_pair {
     int w, h, preset;
     double scale;
     uint64_t ha, hb;
-    float *la, *lb;   /* the luminances they were solved from: a hit compares them whole */
-    float *fab, *fba; /* a to b, b to a */
+    float *la, *lb;           /* the luminances they were solved from: a hit compares them whole */
+    unsigned char *oka, *okb; /* and which pixels were missing (the confidences depend on it) */
+    float *fab, *fba;         /* a to b, b to a */
+    /* The gated confidences of fab (over a's pixels) and fba (over b's), once computed, for
+     * these thresholds: tiles of one frame, and the next frame's prev, reuse them. */
+    float *conf[2];
+    double conf_c[2], conf_p[2];
     unsigned long long stamp;
 } flow_pair;
 
@@ -206,7 +211,8 @@ typedef struct flow_cache {
 
 static void pair_clear(flow_pair *p)
 {
-    free(p->la), free(p->lb), free(p->fab), free(p->fba);
+    free(p->la), free(p->lb), free(p->oka), free(p->okb), free(p->fab), free(p->fba);
+    free(p->conf[0]), free(p->conf[1]);
     memset(p, 0, sizeof *p);
 }
 
@@ -253,7 +259,8 @@ static nprfx_result find_pair(nprfx_context *ctx, flow_cache *cache, const nprfx
             if (q->used && q->w == w && q->h == h && q->preset == p->preset &&
                 q->scale == p->scale && q->ha == a->hash && q->hb == b->hash &&
                 !memcmp(q->la, a->lum, n * sizeof(float)) &&
-                !memcmp(q->lb, b->lum, n * sizeof(float))) {
+                !memcmp(q->lb, b->lum, n * sizeof(float)) && !memcmp(q->oka, a->ok, n) &&
+                !memcmp(q->okb, b->ok, n)) {
                 q->stamp = ++cache->clock;
                 *out = q;
                 return NPRFX_OK;
@@ -273,13 +280,17 @@ static nprfx_result find_pair(nprfx_context *ctx, flow_cache *cache, const nprfx
     q->lb = malloc(n * sizeof(float));
     q->fab = malloc(2 * n * sizeof(float));
     q->fba = malloc(2 * n * sizeof(float));
-    if (!q->la || !q->lb || !q->fab || !q->fba) {
+    q->oka = malloc(n);
+    q->okb = malloc(n);
+    if (!q->la || !q->lb || !q->fab || !q->fba || !q->oka || !q->okb) {
         pair_clear(q);
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "flow: out of memory for %dx%d flows", w,
                            h);
     }
     memcpy(q->la, a->lum, n * sizeof(float));
     memcpy(q->lb, b->lum, n * sizeof(float));
+    memcpy(q->oka, a->ok, n);
+    memcpy(q->okb, b->ok, n);
     q->w = w, q->h = h, q->preset = p->preset, q->scale = p->scale;
     q->ha = a->hash, q->hb = b->hash;
     q->stamp = cache ? ++cache->clock : 0;
@@ -324,8 +335,8 @@ double nprfx_flow_cut_gate(double consistent)
 /* The whole frame's confidence in blocks of rows, counting the pixels at 0.5 or more. */
 enum { CONF_BLOCK_ROWS = 16 };
 typedef struct conf_rows {
-    const float *fwd, *back;
-    const flow_frame *a, *b;
+    const float *fwd, *back, *la, *lb;
+    const unsigned char *oka, *okb;
     int w, h;
     double inv_fb, inv_ph;
     float *conf;
@@ -341,13 +352,57 @@ static void conf_range(void *user, int begin, int end, int worker)
         int y1 = (blk + 1) * CONF_BLOCK_ROWS < c->h ? (blk + 1) * CONF_BLOCK_ROWS : c->h;
         for (int y = blk * CONF_BLOCK_ROWS; y < y1; y++)
             for (int x = 0; x < c->w; x++) {
-                float v = confidence_at(c->fwd, c->back, c->a->lum, c->b->lum, c->a->ok, c->b->ok,
-                                        c->w, c->h, c->inv_fb, c->inv_ph, x, y);
+                float v = confidence_at(c->fwd, c->back, c->la, c->lb, c->oka, c->okb, c->w, c->h,
+                                        c->inv_fb, c->inv_ph, x, y);
                 c->conf[(size_t)y * c->w + x] = v;
                 n += v >= 0.5f;
             }
         c->good[blk] = n;
     }
+}
+
+/* The gated confidence of one direction of a pair (dir 0: fab over a's pixels, 1: fba over
+ * b's), computed over the whole frame once for these thresholds and kept with the pair. */
+static nprfx_result pair_confidence(nprfx_context *ctx, flow_pair *q, int dir,
+                                    const nprfx_flow_params *p, const float **out)
+{
+    if (q->conf[dir] && q->conf_c[dir] == p->consistency && q->conf_p[dir] == p->photometric) {
+        *out = q->conf[dir];
+        return NPRFX_OK;
+    }
+    int w = q->w, h = q->h, blocks = (h + CONF_BLOCK_ROWS - 1) / CONF_BLOCK_ROWS;
+    if (!q->conf[dir]) q->conf[dir] = malloc((size_t)w * (size_t)h * sizeof(float));
+    long long *good = calloc((size_t)blocks, sizeof *good);
+    if (!q->conf[dir] || !good) {
+        free(good);
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "flow: out of memory at %dx%d", w, h);
+    }
+    q->conf_c[dir] = NAN; /* not valid until done */
+    conf_rows cr = {dir ? q->fba : q->fab,
+                    dir ? q->fab : q->fba,
+                    dir ? q->lb : q->la,
+                    dir ? q->la : q->lb,
+                    dir ? q->okb : q->oka,
+                    dir ? q->oka : q->okb,
+                    w,
+                    h,
+                    1 / (2 * p->consistency * p->consistency),
+                    p->photometric > 0 ? 1 / (2 * p->photometric * p->photometric) : 0,
+                    q->conf[dir],
+                    good};
+    nprfx_parallel_for(nprfx_context_executor(ctx), blocks, 1, conf_range, &cr);
+    long long total = 0;
+    for (int i = 0; i < blocks; i++)
+        total += good[i];
+    free(good);
+    float gate = (float)nprfx_flow_cut_gate((double)total / ((double)w * h));
+    if (gate != 1.0f)
+        for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
+            q->conf[dir][i] *= gate;
+    q->conf_c[dir] = p->consistency;
+    q->conf_p[dir] = p->photometric;
+    *out = q->conf[dir];
+    return NPRFX_OK;
 }
 
 static nprfx_result frame_load(nprfx_context *ctx, const nprfx_image *im, int t, flow_frame *f)
@@ -462,44 +517,25 @@ nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
                     pairs[k]->used = 1;
             }
     }
-    float *conf = NULL;
-    if (!r && !(conf = malloc((size_t)w * (size_t)h * sizeof *conf)))
-        r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "flow: out of memory at %dx%d", w, h);
     if (!r) {
         nprfx_rect ow = nprfx_rect_intersect(window, b);
-        for (int k = 0; k < 2; k++) {
+        for (int k = 0; k < 2 && !r; k++) {
             if (!pairs[k]) continue;
             /* motion_prev = flow t -> t-1, the pair's b to a; motion_next = t -> t+1, a to b. */
-            conf_rows cr = {pairs[k]->fba, pairs[k]->fab, &cur, &nb[k], w, h, 0, 0, conf, NULL};
-            if (k == 1) cr.fwd = pairs[k]->fab, cr.back = pairs[k]->fba;
-            cr.inv_fb = 1 / (2 * p->consistency * p->consistency);
-            cr.inv_ph = p->photometric > 0 ? 1 / (2 * p->photometric * p->photometric) : 0;
-            /* The whole frame's confidence, for the cut gate; rows in blocks, counts summed in
-             * block order (integers: the order changes nothing anyway). */
-            int blocks = (h + CONF_BLOCK_ROWS - 1) / CONF_BLOCK_ROWS;
-            long long *good = calloc((size_t)blocks, sizeof *good);
-            if (!good) {
-                r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "flow: out of memory");
-                break;
-            }
-            cr.good = good;
-            nprfx_parallel_for(nprfx_context_executor(ctx), blocks, 1, conf_range, &cr);
-            long long total = 0;
-            for (int i = 0; i < blocks; i++)
-                total += good[i];
-            free(good);
-            float gate = (float)nprfx_flow_cut_gate((double)total / ((double)w * h));
-            for (int y = ow.y0; y < ow.y1; y++)
+            int dir = k == 0 ? 1 : 0;
+            const float *fwd = dir ? pairs[k]->fba : pairs[k]->fab;
+            const float *conf = NULL;
+            r = pair_confidence(ctx, pairs[k], dir, p, &conf);
+            for (int y = ow.y0; y < ow.y1 && !r; y++)
                 for (int x = ow.x0; x < ow.x1; x++) {
                     size_t q = (size_t)(y - b.y0) * w + (size_t)(x - b.x0);
                     float *px = nprfx_image_at(out, x, y);
-                    px[2 * k] = cr.fwd[2 * q];
-                    px[2 * k + 1] = cr.fwd[2 * q + 1];
-                    px[NPRFX_FLOW_CONF_PREV + k] = conf[q] * gate;
+                    px[2 * k] = fwd[2 * q];
+                    px[2 * k + 1] = fwd[2 * q + 1];
+                    px[NPRFX_FLOW_CONF_PREV + k] = conf[q];
                 }
         }
     }
-    free(conf);
     if (cache) pthread_mutex_unlock(&cache->lock);
     pair_clear(&owned[0]);
     pair_clear(&owned[1]);
