@@ -325,6 +325,20 @@ static void solve_range(void *user, int begin, int end, int worker)
     }
 }
 
+int nprfx_flow_output_channels(int output, int *which)
+{
+    static const int sets[NPRFX_FLOW_OUTPUT_COUNT][NPRFX_FLOW_CHANNELS + 1] = {
+        {6, NPRFX_FLOW_PREV_X, NPRFX_FLOW_PREV_Y, NPRFX_FLOW_NEXT_X, NPRFX_FLOW_NEXT_Y,
+         NPRFX_FLOW_CONF_PREV, NPRFX_FLOW_CONF_NEXT},
+        {3, NPRFX_FLOW_PREV_X, NPRFX_FLOW_PREV_Y, NPRFX_FLOW_CONF_PREV},
+        {3, NPRFX_FLOW_NEXT_X, NPRFX_FLOW_NEXT_Y, NPRFX_FLOW_CONF_NEXT},
+        {4, NPRFX_FLOW_PREV_X, NPRFX_FLOW_PREV_Y, NPRFX_FLOW_NEXT_X, NPRFX_FLOW_NEXT_Y}};
+    if (output < 0 || output >= NPRFX_FLOW_OUTPUT_COUNT) return 0;
+    for (int i = 0; which && i < sets[output][0]; i++)
+        which[i] = sets[output][i + 1];
+    return sets[output][0];
+}
+
 double nprfx_flow_cut_gate(double consistent)
 {
     double s = (consistent - 0.6) / 0.25;
@@ -430,8 +444,14 @@ nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
                                int last_frame, nprfx_fetch_fn fetch, void *fetch_user, int input,
                                void **state, nprfx_rect window, nprfx_image *out)
 {
-    if (!p || !out || !out->data || out->channels != NPRFX_FLOW_CHANNELS)
+    int which[NPRFX_FLOW_CHANNELS];
+    int nch = p ? nprfx_flow_output_channels(p->output, which) : 0;
+    if (!p || !out || !out->data || nch < 1 || out->channels != nch)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "flow: no params or output");
+    /* at[c]: the output channel of flow channel c, -1 when this output leaves it out */
+    int at[NPRFX_FLOW_CHANNELS] = {-1, -1, -1, -1, -1, -1};
+    for (int i = 0; i < nch; i++)
+        at[which[i]] = i;
     if (!image || !image->data)
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "flow: input 'image' is not connected");
     if (p->preset < 0 || p->preset >= NPRFX_FLOW_PRESET_COUNT)
@@ -442,12 +462,16 @@ nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
     window = nprfx_rect_intersect(window, out->bounds);
     if (nprfx_rect_empty(window)) return NPRFX_OK;
     nprfx_image win = nprfx_image_crop(out, window);
-    float zero[NPRFX_FLOW_CHANNELS] = {0};
+    float zero[NPRFX_FLOW_CHANNELS] = {0}; /* nch of them */
     nprfx_image_fill(&win, zero);
 
     int t = (int)floor(time + 0.5);
     int known = first_frame <= last_frame;
-    int has_prev = !known || t - 1 >= first_frame, has_next = !known || t + 1 <= last_frame;
+    /* A direction no output channel shows is not solved (nor its neighbour fetched). */
+    int want_prev = at[NPRFX_FLOW_PREV_X] >= 0 || at[NPRFX_FLOW_CONF_PREV] >= 0;
+    int want_next = at[NPRFX_FLOW_NEXT_X] >= 0 || at[NPRFX_FLOW_CONF_NEXT] >= 0;
+    int has_prev = want_prev && (!known || t - 1 >= first_frame);
+    int has_next = want_next && (!known || t + 1 <= last_frame);
     nprfx_rect b = image->bounds;
     int w = nprfx_rect_width(b), h = nprfx_rect_height(b);
     if (w < 1 || h < 1 || (!has_prev && !has_next)) return NPRFX_OK;
@@ -530,9 +554,10 @@ nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
                 for (int x = ow.x0; x < ow.x1; x++) {
                     size_t q = (size_t)(y - b.y0) * w + (size_t)(x - b.x0);
                     float *px = nprfx_image_at(out, x, y);
-                    px[2 * k] = fwd[2 * q];
-                    px[2 * k + 1] = fwd[2 * q + 1];
-                    px[NPRFX_FLOW_CONF_PREV + k] = conf[q];
+                    if (at[2 * k] >= 0) px[at[2 * k]] = fwd[2 * q];
+                    if (at[2 * k + 1] >= 0) px[at[2 * k + 1]] = fwd[2 * q + 1];
+                    if (at[NPRFX_FLOW_CONF_PREV + k] >= 0)
+                        px[at[NPRFX_FLOW_CONF_PREV + k]] = conf[q];
                 }
         }
     }

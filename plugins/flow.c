@@ -10,7 +10,7 @@
 #include "nprfx/node.h"
 
 enum { IN_IMAGE, IN_COUNT };
-enum { P_PRESET, P_SCALE, P_CONSISTENCY, P_PHOTOMETRIC, P_COUNT };
+enum { P_PRESET, P_SCALE, P_CONSISTENCY, P_PHOTOMETRIC, P_OUTPUT, P_COUNT };
 typedef nprfx_flow_params fp;
 
 /* Same order as nprfx_flow_preset. */
@@ -21,6 +21,16 @@ static const char *const preset_help[] = {
     "DIS's most accurate: denser patches and more refinement, several times slower", NULL};
 _Static_assert(sizeof preset_names / sizeof preset_names[0] == NPRFX_FLOW_PRESET_COUNT + 1,
                "flow: preset names must follow nprfx_flow_preset");
+
+/* Same order as nprfx_flow_output. */
+static const char *const output_names[] = {"all", "prev", "next", "vectors", NULL};
+static const char *const output_help[] = {
+    "motion_prev.X/Y, motion_next.X/Y, confidence.prev, confidence.next",
+    "motion_prev.X/Y and confidence.prev (RGB in a host); only the previous frame is solved",
+    "motion_next.X/Y and confidence.next (RGB in a host); only the next frame is solved",
+    "motion_prev.X/Y and motion_next.X/Y (RGBA in a host, as Nuke's motion vectors)", NULL};
+_Static_assert(sizeof output_names / sizeof output_names[0] == NPRFX_FLOW_OUTPUT_COUNT + 1,
+               "flow: output names must follow nprfx_flow_output");
 
 static const nprfx_input_desc inputs[IN_COUNT] = {
     {.name = "image",
@@ -79,20 +89,32 @@ static const nprfx_param_desc params[P_COUNT] = {
      .soft_max = 0.5,
      .hard_min = 0,
      .hard_max = 1000},
+    {.name = "output",
+     NPRFX_FIELD(fp, output),
+     .label = "Output",
+     .help = "Which channels to output. An OpenFX host image holds four channels, so in a host "
+             "choose one direction or the vectors alone.",
+     .type = NPRFX_PARAM_CHOICE,
+     .def = {NPRFX_FLOW_OUT_ALL},
+     NPRFX_CHOICE_RANGE(NPRFX_FLOW_OUTPUT_COUNT),
+     .choices = output_names,
+     .choice_help = output_help},
 };
 
+/* Indexed by NPRFX_FLOW_PREV_X ... */
 static const char *const out_names[NPRFX_FLOW_CHANNELS] = {"motion_prev.X",   "motion_prev.Y",
                                                            "motion_next.X",   "motion_next.Y",
                                                            "confidence.prev", "confidence.next"};
 
 static nprfx_result flow_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
 {
-    (void)pv, (void)ich;
+    (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = NPRFX_FLOW_CHANNELS;
-    for (int c = 0; c < NPRFX_FLOW_CHANNELS; c++)
-        out->names[c] = out_names[c];
-    return NPRFX_OK;
+    int which[NPRFX_FLOW_CHANNELS];
+    out->channels = nprfx_flow_output_channels((int)pv[P_OUTPUT].v[0], which);
+    for (int c = 0; c < out->channels; c++)
+        out->names[c] = out_names[which[c]];
+    return out->channels ? NPRFX_OK : NPRFX_ERR_OUT_OF_RANGE;
 }
 
 static nprfx_result flow_render(const nprfx_render_args *a, const void *params)
@@ -106,10 +128,12 @@ static nprfx_result flow_render(const nprfx_render_args *a, const void *params)
 static int flow_frames_needed(const void *params, const nprfx_frames_query *q, int input,
                               nprfx_frame_range *ranges)
 {
-    (void)params, (void)input;
+    (void)input;
+    const fp *p = params;
     int known = q->first_frame <= q->last_frame;
-    ranges[0].first = known && q->time - 1 < q->first_frame ? q->time : q->time - 1;
-    ranges[0].last = known && q->time + 1 > q->last_frame ? q->time : q->time + 1;
+    int prev = p->output != NPRFX_FLOW_OUT_NEXT, next = p->output != NPRFX_FLOW_OUT_PREV;
+    ranges[0].first = !prev || (known && q->time - 1 < q->first_frame) ? q->time : q->time - 1;
+    ranges[0].last = !next || (known && q->time + 1 > q->last_frame) ? q->time : q->time + 1;
     return 1;
 }
 

@@ -52,9 +52,10 @@ typedef struct nprfx_flow_params {
     double scale;       /* solve at this fraction of the resolution, (0, 1] */
     double consistency; /* forward-backward threshold in pixels (the Gaussian's sigma) */
     double photometric; /* luminance difference threshold (sigma), 0: no photometric term */
+    int output;         /* nprfx_flow_output: which channels */
 } nprfx_flow_params;
 
-/* The output: six channels, in this order. */
+/* The flow channels, in the order the whole output (NPRFX_FLOW_OUT_ALL) has them. */
 enum {
     NPRFX_FLOW_PREV_X = 0,
     NPRFX_FLOW_PREV_Y = 1,
@@ -64,6 +65,20 @@ enum {
     NPRFX_FLOW_CONF_NEXT = 5,
     NPRFX_FLOW_CHANNELS = 6
 };
+
+/* Which channels the node outputs. An OpenFX host image carries at most four, so a host takes
+ * one direction or the vectors alone; a direction no channel shows is not solved. */
+typedef enum nprfx_flow_output {
+    NPRFX_FLOW_OUT_ALL = 0,     /* the six channels above */
+    NPRFX_FLOW_OUT_PREV = 1,    /* motion_prev.X/Y, confidence.prev */
+    NPRFX_FLOW_OUT_NEXT = 2,    /* motion_next.X/Y, confidence.next */
+    NPRFX_FLOW_OUT_VECTORS = 3, /* motion_prev.X/Y, motion_next.X/Y */
+    NPRFX_FLOW_OUTPUT_COUNT = 4
+} nprfx_flow_output;
+
+/* The flow channels (NPRFX_FLOW_PREV_X ...) output `output` has, in order, into which (up to
+ * NPRFX_FLOW_CHANNELS; may be NULL); returns how many, 0 for no such output. */
+NPRFX_API int nprfx_flow_output_channels(int output, int *which);
 
 /* Luminance of an image, as the flow sees it: Rec. 709 luma for 3 or 4 channels, else channel
  * 0; then x / (1 + x) for x >= 0 (scene-linear highlights compress into [0, 1) so that a flow
@@ -97,8 +112,8 @@ NPRFX_API void nprfx_flow_confidence(const float *f_ab, const float *f_ba, const
  * the frame has no match: a cut) to 1 at 0.85 and above (docs/design.md §3.15). */
 NPRFX_API double nprfx_flow_cut_gate(double consistent);
 
-/* Render `window` of out (NPRFX_FLOW_CHANNELS channels) at frame `time` of the shot
- * [first_frame, last_frame]: the flows to the previous and next frames (fetched through
+/* Render `window` of out (the channels of p->output, nprfx_flow_output_channels) at frame `time` of
+ * the shot [first_frame, last_frame]: the flows to the previous and next frames (fetched through
  * fetch(fetch_user, input, t, &view)) in the motion convention of docs/design.md §2, with their
  * confidences. At the shot's first frame the prev channels are 0, at its last the next ones.
  * `state`: NULL, or the node's instance slot, where the last pair of flows is cached (the result

@@ -282,6 +282,41 @@ static void test_node(void)
     n->state_free(state);
     state = NULL;
 
+    /* one direction alone: its three channels, half the solves, the same values */
+    nprfx_image full = th_image(W, H, 6, NULL);
+    CHECK_OK(render_at(ctx, &s, pv, 3, FIRST, LAST, NULL, &full, full.bounds));
+    static const char *const outs[] = {"prev", "next", "vectors"};
+    static const int chans[3][4] = {{0, 1, 4, -1}, {2, 3, 5, -1}, {0, 1, 2, 3}};
+    for (int o = 0; o < 3; o++) {
+        th_set_choice(n, pv, "output", outs[o]);
+        CHECK_OK(nprfx_node_output_info(ctx, n, pv, ich, &oi));
+        int nc = o == 2 ? 4 : 3;
+        CHECK(oi.channels == nc && !strcmp(oi.names[nc - 1], o == 0   ? "confidence.prev"
+                                                             : o == 1 ? "confidence.next"
+                                                                      : "motion_next.Y"));
+        nprfx_image part = th_image(W, H, nc, NULL);
+        calls = d.calls;
+        CHECK_OK(render_at(ctx, &s, pv, 3, FIRST, LAST, NULL, &part, part.bounds));
+        CHECK(d.calls - calls == (o == 2 ? 4 : 2));
+        int same_vals = 1;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++)
+                for (int c = 0; c < nc; c++)
+                    same_vals &=
+                        nprfx_image_at(&part, x, y)[c] == nprfx_image_at(&full, x, y)[chans[o][c]];
+        CHECK(same_vals);
+        /* frames: one neighbour for one direction */
+        nprfx_frames_query fq = {3, FIRST, LAST, ich};
+        nprfx_frame_range rg[NPRFX_MAX_FRAME_RANGES];
+        int nr = 0;
+        CHECK_OK(nprfx_node_frames_needed(ctx, n, pv, &fq, 0, rg, &nr));
+        CHECK(nr == 1 && rg[0].first == (o == 1 ? 3 : 2) && rg[0].last == (o == 0 ? 3 : 4));
+        nprfx_image_free(&part);
+    }
+    nprfx_image_free(&full);
+    nprfx_node_defaults(n, pv);
+    pv[th_param(n, "photometric")].v[0] = 0;
+
     /* the photometric term: the ramp moves under the shift, so it lowers the confidence */
     nprfx_node_defaults(n, pv);
     CHECK_OK(render_at(ctx, &s, pv, 3, FIRST, LAST, NULL, &out, out.bounds));
