@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "cli_util.h"
+#include "flow_opencv.h"
 #include "graph.h"
 #include "io_limits.h"
 
@@ -59,6 +60,7 @@ int nprfx_cli_env_init(nprfx_cli_env *env, int threads)
     init.executor = nprfx_pool_executor(env->pool);
     char dir[4096];
     init.data_dir = nprfx_cli_data_dir(dir, sizeof dir);
+    init.flow = nprfx_flow_opencv(); /* NULL without OpenCV: the flow node says so */
     if (nprfx_context_create(&init, &env->ctx)) {
         nprfx_pool_destroy(env->pool);
         fprintf(stderr, "nprfx: out of memory\n");

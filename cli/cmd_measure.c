@@ -58,6 +58,8 @@ static void usage(FILE *f)
         "                   (with --matte), away from silhouettes where a look mixes in paper\n"
         "  --set N.P=V      override a param, as in nprfx run\n"
         "  --threads N      worker threads\n\n"
+        "nprfx measure flow ESTIMATE TRUTH --frames SPEC: an optical flow sequence against a\n"
+        "synthetic plate's exact motion (nprfx measure flow --help).\n\n"
         "example:\n"
         "  nprfx measure samples/graphs/hatching.json --node ink --matte matte --paper paper \\\n"
         "      --light plate:DiffDir.G --variant shower-door\n");
@@ -354,6 +356,8 @@ done:
 
 int nprfx_cmd_measure(int argc, char **argv)
 {
+    /* `nprfx measure flow`: an optical flow sequence against exact motion (cmd_measure_flow.c). */
+    if (argc > 1 && !strcmp(argv[1], "flow")) return nprfx_cmd_measure_flow(argc - 1, argv + 1);
     measure_opts o;
     memset(&o, 0, sizeof o);
     for (int i = 1; i < argc; i++) {

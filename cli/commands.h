@@ -22,6 +22,7 @@ int nprfx_cmd_bench_graph(int argc, char **argv);
 int nprfx_cmd_docs(int argc, char **argv);
 int nprfx_cmd_ivs(int argc, char **argv);
 int nprfx_cmd_measure(int argc, char **argv);
+int nprfx_cmd_measure_flow(int argc, char **argv); /* nprfx measure flow */
 int nprfx_cmd_host_project(int argc, char **argv);
 int nprfx_cmd_pam(int argc, char **argv);
 int nprfx_cmd_farm(int argc, char **argv);

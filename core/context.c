@@ -13,6 +13,7 @@ struct nprfx_context {
     void *user;
     const nprfx_executor *executor;
     char *data_dir;
+    const nprfx_flow_provider *flow;
     nprfx_context *parent; /* scoped contexts: where messages go on, with `prefix` before them */
     char *prefix;
     pthread_mutex_t lock; /* guards last_*: render threads may raise errors concurrently */
@@ -36,6 +37,7 @@ nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context 
     ctx->handler = in.error_handler;
     ctx->user = in.error_user;
     ctx->executor = in.executor;
+    ctx->flow = in.flow;
     if (in.data_dir) {
         size_t n = strlen(in.data_dir) + 1;
         if (!(ctx->data_dir = malloc(n))) {
@@ -96,6 +98,14 @@ const char *nprfx_context_data_dir(const nprfx_context *ctx)
     while (ctx && ctx->parent)
         ctx = ctx->parent;
     return ctx ? ctx->data_dir : NULL;
+}
+
+const nprfx_flow_provider *nprfx_context_flow(const nprfx_context *ctx)
+{
+    /* Scoped contexts hold none of their own: the root's is the one the front end gave. */
+    while (ctx && ctx->parent)
+        ctx = ctx->parent;
+    return ctx ? ctx->flow : NULL;
 }
 
 const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx)

@@ -13,6 +13,9 @@
 extern "C" {
 #endif
 
+/* A dense optical flow solver handed in by the front end (nprfx/flow.h). */
+typedef struct nprfx_flow_provider nprfx_flow_provider;
+
 typedef struct nprfx_context_init {
     size_t size;                       /* sizeof(nprfx_context_init) */
     nprfx_error_handler error_handler; /* NULL: messages are only kept (nprfx_context_last_error) */
@@ -22,11 +25,15 @@ typedef struct nprfx_context_init {
      * NULL, or a file missing there: what the file holds is generated when first needed, which
      * gives the same results, only later. */
     const char *data_dir;
+    /* The optical flow solver the flow node calls (nprfx/flow.h; not copied: it must outlive the
+     * context). NULL: none, and the flow node fails with a message saying how to get one.
+     * Appended: older callers' shorter structs read as NULL here. */
+    const nprfx_flow_provider *flow;
 } nprfx_context_init;
 
 #define NPRFX_CONTEXT_INIT_DEFAULT                                                                 \
     {                                                                                              \
-        sizeof(nprfx_context_init), NULL, NULL, NULL, NULL                                         \
+        sizeof(nprfx_context_init), NULL, NULL, NULL, NULL, NULL                                   \
     }
 
 NPRFX_API nprfx_result nprfx_context_create(const nprfx_context_init *init, nprfx_context **out);
@@ -41,6 +48,9 @@ NPRFX_API nprfx_result nprfx_context_create_scoped(nprfx_context *parent, const 
 
 /* The data directory given at creation, or NULL. */
 NPRFX_API const char *nprfx_context_data_dir(const nprfx_context *ctx);
+
+/* The flow provider given at creation (scoped contexts: their root's), or NULL. */
+NPRFX_API const nprfx_flow_provider *nprfx_context_flow(const nprfx_context *ctx);
 
 /* The executor given at creation (never NULL: a serial one when none was given). */
 NPRFX_API const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);

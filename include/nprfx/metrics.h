@@ -66,6 +66,26 @@ NPRFX_API nprfx_result nprfx_warp_compare(nprfx_context *ctx, const nprfx_image 
                                           const nprfx_image *motion_prev, const nprfx_image *mask,
                                           nprfx_warp_error *out);
 
+/* Optical flow against ground truth (the flow node's accuracy, docs/design.md §3.15). Mean
+ * endpoint error |est(p) - truth(p)| (2 channels each, pixels) over the pixels of est's bounds
+ * inside truth's where `valid` (1 channel, may be NULL) is > 0.5 and all four values are finite;
+ * *count: how many (0: *mean is 0). */
+NPRFX_API nprfx_result nprfx_metric_epe(nprfx_context *ctx, const nprfx_image *est,
+                                        const nprfx_image *truth, const nprfx_image *valid,
+                                        double *mean, long long *count);
+
+/* Which pixels of frame i were visible at frame i-1, from exact motion: pixel p with
+ * q = round(p + motion_prev(p)) is visible when q lies in the previous frame's bounds, its id
+ * there equals id(p) (when both ids are given) and |motion_prev(p) + motion_next_prev(q)| <=
+ * tol pixels (the point comes back). motion_prev (2 channels) and id (1, may be NULL) are frame
+ * i's; motion_next_prev and id_prev frame i-1's. visible (1 channel, bounds of motion_prev)
+ * receives 1 or 0. Non-finite vectors are not visible. */
+NPRFX_API nprfx_result nprfx_motion_visible(nprfx_context *ctx, const nprfx_image *motion_prev,
+                                            const nprfx_image *id,
+                                            const nprfx_image *motion_next_prev,
+                                            const nprfx_image *id_prev, double tol,
+                                            nprfx_image *visible);
+
 #ifdef __cplusplus
 }
 #endif

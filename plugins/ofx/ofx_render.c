@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flow_opencv.h"
 #include "ofx_internal.h"
 
 #define G nprfx_ofx_g
@@ -437,6 +438,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     ci.executor = &host_executor;
     ci.data_dir = nprfx_ofx_g.data_dir[0] ? nprfx_ofx_g.data_dir : NULL;
+    ci.flow = nprfx_flow_opencv(); /* the flow node's solver; NULL without OpenCV */
     render_call rc;
     memset(&rc, 0, sizeof rc);
     rc.inst = inst;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "flow_test_provider.h"
 #include "node_harness.h"
 #include "nprfx/node.h"
 
@@ -201,6 +202,24 @@ static void time_offset(nprfx_context *ctx)
     CHECK((d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) != 0);
 }
 
+/* flow: the neighbours within the shot, one at its ends. */
+static void flow(nprfx_context *ctx)
+{
+    const nprfx_node_desc *d = nprfx_node_find("flow");
+    nprfx_value v[8];
+    nprfx_frame_range rg[NPRFX_MAX_FRAME_RANGES];
+    int n = 0;
+    const char *img[] = {"image", NULL};
+    nprfx_node_defaults(d, v);
+    run_case(ctx, "flow", d, v, img, 5, "image", rg, &n);
+    CHECK(n == 1 && rg[0].first == 4 && rg[0].last == 6);
+    run_case(ctx, "flow at the first frame", d, v, img, SHOT_FIRST, "image", rg, &n);
+    CHECK(n == 1 && rg[0].first == SHOT_FIRST && rg[0].last == SHOT_FIRST + 1);
+    run_case(ctx, "flow at the last frame", d, v, img, SHOT_LAST, "image", rg, &n);
+    CHECK(n == 1 && rg[0].first == SHOT_LAST - 1 && rg[0].last == SHOT_LAST);
+    CHECK((d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) != 0);
+}
+
 /* The default rule, for a node without its own answer, and errors. */
 static void defaults(nprfx_context *ctx)
 {
@@ -234,10 +253,13 @@ static void defaults(nprfx_context *ctx)
 int main(void)
 {
     nprfx_context *ctx = NULL;
-    CHECK_OK(nprfx_context_create(NULL, &ctx));
+    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
+    init.flow = &th_flow_zero; /* the flow node's solver (no OpenCV in unit tests) */
+    CHECK_OK(nprfx_context_create(&init, &ctx));
     coherent_noise(ctx);
     tone(ctx);
     time_offset(ctx);
+    flow(ctx);
     defaults(ctx);
     nprfx_context_destroy(ctx);
     return check_finish();
