@@ -10,9 +10,11 @@ STYLE_PLATE_SIZE=192x108
 STYLE_PLATE_FRAMES=1-8
 STYLE_GOLDEN_FRAMES=2-3
 
-# The style graphs under source dir $1, one path per line.
+# The style graphs under source dir $1, one path per line: those with "look" and "matte" (the
+# footage graphs, samples/graphs/footage_*.json, have no matte: footage has no depth or ids, and
+# they are tested on footage by tests/cli/footage.sh).
 style_graphs() {
-  grep -l '"look": *{' "$1"/samples/graphs/*.json
+  grep -l '"look": *{' "$1"/samples/graphs/*.json | xargs grep -l '"matte": *{'
 }
 
 # style_plates NPRFX DIR: the synthetic plates, DIR/dolly.####.exr.
