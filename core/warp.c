@@ -8,7 +8,7 @@ typedef struct warp_job {
     const nprfx_image *image, *offset;
     nprfx_image *out;
     nprfx_rect window;
-    double amount;
+    double amount, reach;
     int bicubic;
     nprfx_border border;
 } warp_job;
@@ -27,12 +27,15 @@ static void warp_rows(void *user, int begin, int end, int worker)
                 dx = o[0];
                 dy = o[1];
             }
-            double sx = x + j->amount * dx, sy = y + j->amount * dy;
+            double mx = j->amount * dx, my = j->amount * dy;
             float *dst = nprfx_image_at(j->out, x, y);
-            if (!(sx == sx) || !(sy == sy)) { /* NaN offset: leave the pixel where it is */
-                sx = x;
-                sy = y;
+            if (!(mx == mx) || !(my == my)) /* NaN offset: leave the pixel where it is */
+                mx = my = 0.0;
+            if (j->reach > 0.0) { /* bounded: what a strip of rows can be rendered from */
+                mx = mx < -j->reach ? -j->reach : mx > j->reach ? j->reach : mx;
+                my = my < -j->reach ? -j->reach : my > j->reach ? j->reach : my;
             }
+            double sx = x + mx, sy = y + my;
             if (j->bicubic)
                 nprfx_sample_bicubic(j->image, sx, sy, j->border, tmp);
             else
@@ -64,6 +67,8 @@ nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
         return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,
                            "warp: output has %d channels, input 'image' %d", out->channels,
                            image->channels);
+    if (!(p->reach >= 0.0))
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "warp.reach: %g is negative", p->reach);
     if (nprfx_rect_empty(image->bounds))
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "warp: input 'image' is empty");
     warp_job j = {image,
@@ -71,6 +76,7 @@ nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
                   out,
                   window,
                   p->amount,
+                  p->reach,
                   p->filter == NPRFX_WARP_BICUBIC,
                   (nprfx_border)p->border};
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(window), 8, warp_rows, &j);

@@ -1,13 +1,14 @@
 /* The warp node: displaces an image by two channels, out(p) = image(p + amount * offset(p)) — the
  * local image-plane warp of Kass & Pesare's Figure 3a, driven by two channels of coherent noise.
  * The warp lives in core/warp.c; this file is the descriptor and the call into it. */
+#include <math.h>
 #include <stddef.h>
 
 #include "nprfx/filter.h"
 #include "nprfx/node.h"
 
 enum { IN_IMAGE, IN_OFFSET, IN_COUNT };
-enum { P_AMOUNT, P_FILTER, P_BORDER, P_COUNT };
+enum { P_AMOUNT, P_FILTER, P_BORDER, P_REACH, P_COUNT };
 enum { FILTER_COUNT = NPRFX_WARP_FILTER_COUNT, BORDER_COUNT = 2 };
 typedef nprfx_warp_params wp;
 
@@ -68,6 +69,21 @@ static const nprfx_param_desc params[P_COUNT] = {
      NPRFX_CHOICE_RANGE(BORDER_COUNT),
      .choices = border_names,
      .choice_help = border_help},
+    {.name = "reach",
+     NPRFX_FIELD(wp, reach),
+     .label = "Reach",
+     .help = "The farthest the warp moves a pixel, per axis: each component of amount * offset "
+             "is clamped to [-reach, reach]. 0: unbounded. A reach lets the runner render the "
+             "warp a strip of rows at a time, reading only the rows within reach (bounded memory "
+             "on 4K and 8K frames, docs/design.md §1 \"Memory\"); set it to the largest "
+             "displacement the look needs, e.g. amount for offsets in [-1, 1].",
+     .type = NPRFX_PARAM_DOUBLE,
+     .def = {0},
+     .soft_min = 0,
+     .soft_max = 64,
+     .hard_min = 0,
+     .hard_max = 4096,
+     .flags = NPRFX_PARAM_PIXELS},
 };
 
 static nprfx_result warp_render(const nprfx_render_args *a, const void *params)
@@ -76,11 +92,12 @@ static nprfx_result warp_render(const nprfx_render_args *a, const void *params)
                              a->output);
 }
 
-/* Where the image is read depends on the offset input's values, not on params. */
+/* Without a reach, where the image is read depends on the offset input's values: anywhere.
+ * With one, within the reach plus the bicubic filter's taps (two pixels beyond the floor). */
 static int warp_footprint(const void *params)
 {
-    (void)params;
-    return -1;
+    const wp *p = params;
+    return p->reach > 0 ? (int)ceil(p->reach) + 2 : -1;
 }
 
 const nprfx_node_desc nprfx_node_warp = {
@@ -95,7 +112,7 @@ const nprfx_node_desc nprfx_node_warp = {
             "\n\nNaN and infinities (docs/design.md §2.2): "
             "image passes through: a NaN or infinity shows wherever the filter's taps read it, "
             "which the offsets decide. A NaN offset leaves the pixel where it is; an infinite one "
-            "reads outside, which the border decides.",
+            "reads outside, which the border decides (with a reach, it reads reach pixels away).",
     .inputs = inputs,
     .num_inputs = IN_COUNT,
     .params = params,
@@ -103,6 +120,7 @@ const nprfx_node_desc nprfx_node_warp = {
     .output_channels = 0, /* as many as image */
     .render = warp_render,
     .footprint = warp_footprint,
+    .flags = NPRFX_NODE_ROWS, /* with a reach; without one its footprint is -1: whole frames */
     .params_size = sizeof(wp),
     .version_major = 1,
 };

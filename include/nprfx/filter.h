@@ -80,13 +80,18 @@ typedef struct nprfx_warp_params {
     double amount; /* displacement in pixels per unit of offset */
     int filter;    /* nprfx_warp_filter */
     int border;    /* nprfx_border: what lookups outside the image read */
+    /* > 0: each component of the displacement is clamped to [-reach, reach] pixels, so the warp
+     * reads the image no farther than that (plus the filter's taps) and can render a strip of
+     * rows from the rows around it; 0: unbounded. */
+    double reach;
 } nprfx_warp_params;
 
 /* Warp `window` of out (which has image's channels): out(p) = image(p + amount * offset(p)),
- * with p a pixel centre, offset's channels 0 and 1 giving (x, y; y down). Outside its data
- * window the offset reads as 0 (no displacement); a NaN displacement leaves the pixel in place.
- * The image must not be empty; offset needs at least 2 channels. Runs on ctx's executor;
- * bit-identical for any thread count and window split. */
+ * each displacement component clamped to +-reach when reach > 0, with p a pixel centre, offset's
+ * channels 0 and 1 giving (x, y; y down). Outside its data window the offset reads as 0 (no
+ * displacement); a NaN displacement leaves the pixel in place. The image must not be empty; offset
+ * needs at least 2 channels. Runs on ctx's executor; bit-identical for any thread count and window
+ * split. */
 NPRFX_API nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
                                          const nprfx_image *image, const nprfx_image *offset,
                                          nprfx_rect window, nprfx_image *out);

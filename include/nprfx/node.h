@@ -159,8 +159,8 @@ typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args, const voi
 /* TEMPORAL, and no params make it read only the frame itself (a recursion over frames, a time
  * shift): a host that cannot give other frames must not offer it, rather than show a wrong one. */
 #define NPRFX_NODE_NEEDS_OTHER_FRAMES 0x4u
-/* Renders any rows of a frame from its inputs' rows within its footprint (desc->footprint, which
- * must then be >= 0) of the window: it reads no input pixel farther than that and computes
+/* Renders any rows of a frame from its inputs' rows within its footprint (desc->footprint; params
+ * whose footprint is -1 cannot, and render whole frames) of the window: it reads no input pixel farther than that and computes
  * nothing from a whole input (no statistics of the frame), so a runner may render a frame a strip
  * of rows at a time from inputs that hold only those rows, bit for bit as the whole frame
  * (docs/design.md §1 "Memory"). */

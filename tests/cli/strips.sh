@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Strip renders (issue 16, docs/design.md §1 "Memory"): a write whose chain renders by rows
-# (reads of EXRs; blend, threshold-map, morphology) goes a strip of rows at a time.
+# (reads of EXRs; blend, threshold-map, morphology, warp with a reach) goes a strip of rows at a
+# time.
 #   - the pixels are the whole frame's, bit for bit, at any strip height (1 row, 7 rows against
 #     filters reaching 6 rows, 64, taller than the frame), chained filters included, and a plate
 #     written through strips keeps its channels' file types; no temporary file is left;
@@ -62,6 +63,30 @@ sed 's/"radius": 2}/"radius": 0}/' chain.json > chain0.json
 "$NPRFX" run chain0.json --threads 2 -q --output-dir r0 --strip-rows 7 2>/dev/null
 same whole/out/morph.0001.exr r0/out/morph.0001.exr && fail "the diff cannot tell a dilation from none" || pass
 same whole/out/look.0001.exr r0/out/look.0001.exr && fail "the look does not show the filters" || pass
+
+# A warp with a reach renders by rows too: the image rows within reach (plus the filter's taps)
+# of the strip; bicubic reads two rows beyond the floor. Without a reach its footprint is the
+# whole frame, and the same graph renders whole frames.
+cat > warp.json <<'EOF'
+{"frames": "1-2", "nodes": {
+ "plate": {"node": "read", "path": "plates/o.####.exr"},
+ "wp": {"node": "warp", "inputs": {"image": "plate:R,G,B", "offset": "plate:motion_prev.X,motion_prev.Y"},
+        "params": {"amount": 3, "reach": 4.5, "filter": "bicubic"}},
+ "w": {"node": "write", "inputs": {"image": "wp"}, "path": "out/warp.####.exr"}
+}}
+EOF
+"$NPRFX" run warp.json --threads 2 -q --output-dir ww --strip-rows -1 2> ww.err || fail "warp, whole frames: $(cat ww.err)"
+for rows in 1 5 64; do
+  "$NPRFX" run warp.json --threads 2 -q --output-dir ws$rows --strip-rows $rows --stats > ws$rows.txt 2> ws$rows.err ||
+    { fail "warp, --strip-rows $rows: $(cat ws$rows.err)"; continue; }
+  grep -q "^rendered by strips of $rows rows" ws$rows.txt && pass || fail "warp with a reach, --strip-rows $rows: no strips: $(tail -2 ws$rows.txt)"
+  same ww/out/warp.0002.exr ws$rows/out/warp.0002.exr && pass || fail "warp, --strip-rows $rows: differs from the whole frame"
+done
+sed 's/"amount": 3, "reach": 4.5, /"amount": 3, /' warp.json > warp0.json
+"$NPRFX" run warp0.json --threads 2 -q --output-dir w0 --strip-rows 5 --stats > w0.txt 2> w0.err || fail "warp without reach: $(cat w0.err)"
+grep -q "rendered by strips" w0.txt && fail "a warp without a reach rendered by strips" || pass
+# The reach binds: the orbit moves up to ~6 px a frame at this size, so an unbounded warp differs.
+same ww/out/warp.0002.exr w0/out/warp.0002.exr && fail "reach 4.5 changed nothing: the test cannot see it" || pass
 
 # ---- 4K ---------------------------------------------------------------------------------------
 # A plate of 4 half channels (one frame of them as floats: 127 MiB), made by the paper node.

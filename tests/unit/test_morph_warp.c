@@ -180,7 +180,7 @@ static void test_warp(nprfx_context *ctx)
             o[0] = 0.25f;
             o[1] = -0.5f;
         }
-    nprfx_value pv[4];
+    nprfx_value pv[8];
     defaults(n, pv);
     set(n, pv, "amount", 2.0); /* displacement (0.5, -1) */
     for (int filter = 0; filter < 2; filter++) {
@@ -232,6 +232,26 @@ static void test_warp(nprfx_context *ctx)
     wp.border = 2;
     CHECK(nprfx_warp_render(ctx, &wp, &ins[0], &ins[1], r, &direct) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "warp.border") != NULL);
+    /* reach clamps each component: displacement (0.5, -1) with reach 0.75 reads (0.5, -0.75);
+     * with reach 2 nothing changes; the footprint is the reach plus two rows of taps, and -1
+     * (anywhere) without one */
+    set(n, pv, "filter", 0);
+    set(n, pv, "reach", 0.75);
+    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK_NEAR(nprfx_image_at(&out, 6, 6)[0], 2.0f * 6.5f + 3.0f * 5.25f, 1e-4);
+    int fp = 0;
+    CHECK_OK(nprfx_node_footprint(ctx, n, pv, &fp));
+    CHECK(fp == 3);
+    set(n, pv, "reach", 2.0);
+    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK_NEAR(nprfx_image_at(&out, 6, 6)[0], 2.0f * 6.5f + 3.0f * 5.0f, 1e-4);
+    set(n, pv, "reach", 0.0);
+    CHECK_OK(nprfx_node_footprint(ctx, n, pv, &fp));
+    CHECK(fp == -1);
+    wp.border = NPRFX_BORDER_CLAMP;
+    wp.reach = -1;
+    CHECK(nprfx_warp_render(ctx, &wp, &ins[0], &ins[1], r, &direct) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(strstr(th_error(ctx), "warp.reach") != NULL);
     nprfx_image_free(&direct);
     nprfx_image_free(&ins[0]);
     nprfx_image_free(&ins[1]);
