@@ -202,7 +202,7 @@ static nprfx_result paper_output(const nprfx_value *pv, const int *ich, nprfx_ou
 
 static nprfx_result paper_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_paper_render(a->ctx, params, a->window, a->output);
+    return nprfx_paper_render_cached(a->ctx, params, a->window, a->output, a->state);
 }
 
 const nprfx_node_desc nprfx_node_paper = {
@@ -234,6 +234,9 @@ const nprfx_node_desc nprfx_node_paper = {
     .num_params = P_COUNT,
     .output = paper_output,
     .render = paper_render,
+    /* the texture of the last window, copied for every later frame (it never changes) */
+    .flags = NPRFX_NODE_STATEFUL,
+    .state_free = nprfx_paper_state_free,
     .params_size = sizeof(pp),
     .version_major = 1,
 };

@@ -75,6 +75,13 @@ NPRFX_API int nprfx_paper_output_channels(const nprfx_paper_params *p);
 NPRFX_API nprfx_result nprfx_paper_render(nprfx_context *ctx, const nprfx_paper_params *p,
                                           nprfx_rect window, nprfx_image *out);
 
+/* nprfx_paper_render through a per-instance cache in *state (the node's render args' state slot;
+ * NULL: no cache): the last window rendered is kept, and a window inside it with the same params
+ * is copied from it, the same pixels. Free the state with nprfx_paper_state_free. */
+NPRFX_API nprfx_result nprfx_paper_render_cached(nprfx_context *ctx, const nprfx_paper_params *p,
+                                                 nprfx_rect window, nprfx_image *out, void **state);
+NPRFX_API void nprfx_paper_state_free(void *state);
+
 #ifdef __cplusplus
 }
 #endif

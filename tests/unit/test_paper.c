@@ -1,7 +1,7 @@
 /* The paper node (core/paper.c): exact tileability, no dependence on time, window, tile split or
  * thread count, the height's range and mean, kinds and seeds that differ, the canvas weave's
- * period, the colour formula on a flat paper, the optional format input, and the error paths,
- * through its descriptor. */
+ * period, the colour formula on a flat paper, the optional format input, the error paths and
+ * the per-instance cache (the same pixels), through its descriptor. */
 #include <math.h>
 #include <string.h>
 
@@ -75,6 +75,78 @@ static int same(const nprfx_image *a, const nprfx_image *b)
 }
 
 static const char *const kinds[] = {"paper", "watercolor", "canvas"};
+
+/* The per-instance cache (nprfx_paper_render_cached through the node's state slot): the same
+ * pixels as without it, when it serves a later frame, a window inside the kept one, params
+ * changed, a window reaching outside it, and the other output. */
+static nprfx_result render_state(nprfx_context *ctx, nprfx_image *out, nprfx_rect window,
+                                 double time, void **state)
+{
+    nprfx_image in[1];
+    memset(in, 0, sizeof in);
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = ctx;
+    a.node = N;
+    a.time = time;
+    a.render_scale = 1;
+    a.frame = out->bounds;
+    a.window = window;
+    a.first_frame = 1;
+    a.last_frame = 100;
+    a.inputs = in;
+    a.params = pv;
+    a.output = out;
+    a.state = state;
+    return nprfx_node_render(&a);
+}
+
+static void test_cache(nprfx_context *ctx)
+{
+    reset();
+    set("kind", 1);
+    nprfx_rect f = nprfx_rect_make(0, 0, 96, 64), part = nprfx_rect_make(10, 20, 50, 40);
+    void *state = NULL;
+    nprfx_image ref = make(f), got = make(f);
+    CHECK_OK(render_at(ctx, &ref, f, 1, NULL));
+    for (int t = 1; t <= 3; t++) { /* the first a miss, then hits */
+        memset(got.data, 0, sizeof(float) * 96 * 64 * 4);
+        CHECK_OK(render_state(ctx, &got, f, t, &state));
+        CHECK(same(&ref, &got));
+    }
+    memset(got.data, 0, sizeof(float) * 96 * 64 * 4);
+    CHECK_OK(render_state(ctx, &got, part, 4, &state)); /* inside the kept window */
+    int bad = 0;
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 96; x++)
+            for (int c = 0; c < 4; c++) {
+                float want = nprfx_rect_contains(part, x, y) ? nprfx_image_at(&ref, x, y)[c] : 0;
+                bad += nprfx_image_at(&got, x, y)[c] != want;
+            }
+    CHECK(bad == 0);
+    set("seed", 7); /* other params: made anew */
+    CHECK_OK(render_at(ctx, &ref, f, 1, NULL));
+    CHECK_OK(render_state(ctx, &got, f, 5, &state));
+    CHECK(same(&ref, &got));
+    nprfx_rect wide = nprfx_rect_make(0, 0, 128, 64); /* reaches outside the kept window */
+    nprfx_image ref2 = make(wide), got2 = make(wide);
+    CHECK_OK(render_at(ctx, &ref2, wide, 1, NULL));
+    CHECK_OK(render_state(ctx, &got2, wide, 6, &state));
+    CHECK(same(&ref2, &got2));
+    set("output", NPRFX_PAPER_HEIGHT); /* another channel count */
+    nprfx_image h1 = make(f), h2 = make(f);
+    CHECK_OK(render_at(ctx, &h1, f, 1, NULL));
+    CHECK_OK(render_state(ctx, &h2, f, 7, &state));
+    CHECK(same(&h1, &h2));
+    N->state_free(state);
+    nprfx_image_free(&ref);
+    nprfx_image_free(&got);
+    nprfx_image_free(&ref2);
+    nprfx_image_free(&got2);
+    nprfx_image_free(&h1);
+    nprfx_image_free(&h2);
+}
 
 static void test_lint(nprfx_context *ctx)
 {
@@ -343,6 +415,7 @@ int main(void)
     test_weave_period(ctx);
     test_color(ctx);
     test_errors(ctx);
+    test_cache(ctx);
     nprfx_context_destroy(ctx);
     return check_finish();
 }
