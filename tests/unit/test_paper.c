@@ -35,9 +35,10 @@ static int out_channels(void)
     return (int)pv[th_param(N, "output")].v[0] == NPRFX_PAPER_HEIGHT ? 1 : 4;
 }
 
-/* Render `window` of out at `time`; `format` is the optional image input (NULL: none). */
-static nprfx_result render_at(nprfx_context *ctx, nprfx_image *out, nprfx_rect window, double time,
-                              const nprfx_image *format)
+/* Render `window` of out at `time`; `format` is the optional image input (NULL: none); state:
+ * the node's state slot (NULL: none, so no cache). */
+static nprfx_result render_with(nprfx_context *ctx, nprfx_image *out, nprfx_rect window,
+                                double time, const nprfx_image *format, void **state)
 {
     nprfx_image in[1];
     memset(in, 0, sizeof in);
@@ -56,7 +57,14 @@ static nprfx_result render_at(nprfx_context *ctx, nprfx_image *out, nprfx_rect w
     a.inputs = in;
     a.params = pv;
     a.output = out;
+    a.state = state;
     return nprfx_node_render(&a);
+}
+
+static nprfx_result render_at(nprfx_context *ctx, nprfx_image *out, nprfx_rect window, double time,
+                              const nprfx_image *format)
+{
+    return render_with(ctx, out, window, time, format, NULL);
 }
 
 static nprfx_image make(nprfx_rect r)
@@ -82,24 +90,7 @@ static const char *const kinds[] = {"paper", "watercolor", "canvas"};
 static nprfx_result render_state(nprfx_context *ctx, nprfx_image *out, nprfx_rect window,
                                  double time, void **state)
 {
-    nprfx_image in[1];
-    memset(in, 0, sizeof in);
-    nprfx_render_args a;
-    memset(&a, 0, sizeof a);
-    a.size = sizeof a;
-    a.ctx = ctx;
-    a.node = N;
-    a.time = time;
-    a.render_scale = 1;
-    a.frame = out->bounds;
-    a.window = window;
-    a.first_frame = 1;
-    a.last_frame = 100;
-    a.inputs = in;
-    a.params = pv;
-    a.output = out;
-    a.state = state;
-    return nprfx_node_render(&a);
+    return render_with(ctx, out, window, time, NULL, state);
 }
 
 static void test_cache(nprfx_context *ctx)
