@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "flow_opencv.h"
 #include "nprfx/nprfx.h"
 
 typedef struct command {
@@ -54,6 +55,12 @@ int main(int argc, char **argv)
     }
     if (!strcmp(argv[1], "--version")) {
         printf("nprfx %s\n", NPRFX_VERSION_STRING);
+        /* what the flow node computes with (tests skip footage without it) */
+        const nprfx_flow_provider *fp = nprfx_flow_opencv();
+        if (fp)
+            printf("optical flow: %s\n", fp->name);
+        else
+            printf("optical flow: none (built without OpenCV: the flow node cannot render)\n");
         return 0;
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)

@@ -14,7 +14,12 @@
 # usage: bash flow.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
 NPRFX=$1; W=$3
+. "$2/tests/lib/flow.sh"
 rm -rf "$W"; mkdir -p "$W"; cd "$W" || exit 1
+if flow_missing "$NPRFX"; then
+  echo "flow: this build has no optical flow provider (OpenCV): skipped"
+  exit 77
+fi
 passes=0; fails=0
 pass() { passes=$((passes+1)); }
 fail() { echo "FAIL: $*"; fails=$((fails+1)); }

@@ -24,7 +24,8 @@ fail() { echo "FAIL: $*"; fails=$((fails+1)); }
 ge() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a >= b) }'; }
 lt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a < b) }'; }
 
-if "$NPRFX" help flow 2>/dev/null | grep -q "no optical flow provider"; then
+. "$SRC/tests/lib/flow.sh"
+if flow_missing "$NPRFX"; then
   echo "footage: this build has no optical flow provider (OpenCV): skipped"
   exit 77
 fi

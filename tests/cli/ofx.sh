@@ -100,8 +100,10 @@ frame_limit() {
   echo "--frames $first-$last"
 }
 
+. "$SRC/tests/lib/flow.sh"
 ngraphs=0
 for g in $graphs; do
+  needs_missing_flow "$NPRFX" "$g" && { echo "skip: $g (no optical flow in this build)"; continue; }
   name=$(basename "$(dirname "$g")")_$(basename "$g" .json)
   out="$W/$name"
   limit=$(frame_limit "$g")
