@@ -10,7 +10,12 @@ rm -rf "$W"; mkdir -p "$W"
 passes=0; fails=0
 . "$SRC/tests/lib/flow.sh"
 for g in "$SRC"/tests/graphs/*.json; do
-  needs_missing_flow "$NPRFX" "$g" && { echo "skipped $(basename "$g"): no optical flow in this build"; continue; }
+  if needs_missing_flow "$NPRFX" "$g"; then
+    echo "skipped $(basename "$g"): no optical flow in this build"
+    # its goldens too: the names before the frame number of its write paths
+    skipped="${skipped:-} $(grep -o '"path": *"golden/[^"#]*' "$g" | sed 's|.*golden/||; s|\.$||' | tr '\n' ' ')"
+    continue
+  fi
   name=$(basename "$g" .json)
   if ! "$NPRFX" run "$g" --output-dir "$W" --quiet; then
     echo "FAIL: $name did not render"; fails=$((fails+1)); continue
@@ -19,6 +24,8 @@ done
 # every golden file must be produced, and every produced file must have a golden
 for gold in "$SRC"/tests/golden/*.exr; do
   f="$W/golden/$(basename "$gold")"
+  stem=$(basename "$gold"); stem=${stem%%.[0-9]*}
+  case " ${skipped:-} " in *" $stem "*) continue ;; esac
   if [ ! -f "$f" ]; then echo "FAIL: $(basename "$gold") was not produced"; fails=$((fails+1)); continue; fi
   if "$NPRFX" diff "$gold" "$f" --fail 1e-5 --failpercent 0 --hardfail 1e-4 --warn 1e-5 \
        --out "${f%.exr}.diff.exr" --scale 1000 > "${f%.exr}.diff.txt" 2>&1; then
