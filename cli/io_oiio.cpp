@@ -428,6 +428,18 @@ void copy_field(char *dst, size_t n, const std::string &s)
 
 std::atomic<unsigned> temp_counter{0};
 
+/* The folders above target (path as the caller named it, for the message), made when missing. */
+static nprfx_result make_parent_dirs(nprfx_context *ctx, const std::filesystem::path &target,
+                                     const char *path)
+{
+    std::error_code ec;
+    if (target.has_parent_path()) std::filesystem::create_directories(target.parent_path(), ec);
+    if (ec)
+        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
+                           target.parent_path().string().c_str(), path, ec.message().c_str());
+    return NPRFX_OK;
+}
+
 /* ".name.tmp-<pid>-<n>.ext" beside the target: same file system, so rename() is atomic, and the
  * extension is kept for anyone who inspects a leftover. The counter separates threads. */
 std::string temp_path_for(const std::filesystem::path &target)
@@ -459,12 +471,7 @@ nprfx_result write_atomic(nprfx_context *ctx, const char *path, ImageSpec spec, 
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': not a file name",
                            path);
     std::error_code ec;
-    if (target.has_parent_path()) {
-        fs::create_directories(target.parent_path(), ec);
-        if (ec)
-            return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
-                               target.parent_path().string().c_str(), path, ec.message().c_str());
-    }
+    if (nprfx_result r = make_parent_dirs(ctx, target, path)) return r;
     /* The format follows the target's extension, not the temporary name's. */
     std::unique_ptr<ImageOutput> out = ImageOutput::create(path);
     if (!out) {
@@ -1385,14 +1392,7 @@ extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *pat
         if (target.filename().empty())
             return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                                "cannot write '%s': not a file name", path);
-        std::error_code ec;
-        if (target.has_parent_path()) {
-            fs::create_directories(target.parent_path(), ec);
-            if (ec)
-                return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
-                                   target.parent_path().string().c_str(), path,
-                                   ec.message().c_str());
-        }
+        if (nprfx_result r = make_parent_dirs(ctx, target, path)) return r;
         w->out = ImageOutput::create(path);
         if (!w->out) {
             std::string e = OIIO::geterror();
@@ -1660,13 +1660,7 @@ extern "C" nprfx_result nprfx_io_write_text(nprfx_context *ctx, const char *path
     try {
         fs::path target(path);
         std::error_code ec;
-        if (target.has_parent_path()) {
-            fs::create_directories(target.parent_path(), ec);
-            if (ec)
-                return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s",
-                                   target.parent_path().string().c_str(), path,
-                                   ec.message().c_str());
-        }
+        if (nprfx_result r = make_parent_dirs(ctx, target, path)) return r;
         std::string tmp = temp_path_for(target);
         FILE *f = std::fopen(tmp.c_str(), "wb");
         bool ok = f && std::fwrite(text, 1, len, f) == len;

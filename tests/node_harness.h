@@ -44,10 +44,12 @@ static inline nprfx_image th_synth(nprfx_context *ctx, const char *scene, int fr
     return im;
 }
 
-/* Render `window` of out at frame 1 of a one-frame shot, without fetch or state. */
-static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *node,
-                                     const nprfx_image *inputs, const nprfx_value *params,
-                                     nprfx_image *out, nprfx_rect window)
+/* Render args for `window` of out at frame 1 of a one-frame shot, without fetch or state: a test
+ * that needs another time, shot, fetch or state slot sets those fields and calls
+ * nprfx_node_render itself. */
+static inline nprfx_render_args th_args(nprfx_context *ctx, const nprfx_node_desc *node,
+                                        const nprfx_image *inputs, const nprfx_value *params,
+                                        nprfx_image *out, nprfx_rect window)
 {
     nprfx_render_args a;
     memset(&a, 0, sizeof a);
@@ -62,6 +64,15 @@ static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *
     a.inputs = inputs;
     a.params = params;
     a.output = out;
+    return a;
+}
+
+/* Render `window` of out at frame 1 of a one-frame shot, without fetch or state. */
+static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *node,
+                                     const nprfx_image *inputs, const nprfx_value *params,
+                                     nprfx_image *out, nprfx_rect window)
+{
+    nprfx_render_args a = th_args(ctx, node, inputs, params, out, window);
     return nprfx_node_render(&a);
 }
 

@@ -114,20 +114,10 @@ static nprfx_result render(nprfx_context *ctx, footage *s, const nprfx_value *pv
     memset(ins, 0, sizeof ins);
     for (int i = 0; i < NPRFX_CN_IN_COUNT; i++)
         if (s->connected & (1u << i)) fetch(s, i, frame, &ins[i]);
-    nprfx_render_args a;
-    memset(&a, 0, sizeof a);
-    a.size = sizeof a;
-    a.ctx = ctx;
-    a.node = node;
+    nprfx_render_args a = th_args(ctx, node, ins, pv, out, out->bounds);
     a.time = frame;
-    a.render_scale = 1;
-    a.frame = out->bounds;
-    a.window = out->bounds;
     a.first_frame = FIRST;
     a.last_frame = LAST;
-    a.inputs = ins;
-    a.params = pv;
-    a.output = out;
     a.fetch = fetch;
     a.fetch_user = s;
     a.state = state;

@@ -43,20 +43,9 @@ static nprfx_result render_with(nprfx_context *ctx, nprfx_image *out, nprfx_rect
     nprfx_image in[1];
     memset(in, 0, sizeof in);
     if (format) in[0] = *format;
-    nprfx_render_args a;
-    memset(&a, 0, sizeof a);
-    a.size = sizeof a;
-    a.ctx = ctx;
-    a.node = N;
+    nprfx_render_args a = th_args(ctx, N, in, pv, out, window);
     a.time = time;
-    a.render_scale = 1;
-    a.frame = out->bounds;
-    a.window = window;
-    a.first_frame = 1;
     a.last_frame = 100;
-    a.inputs = in;
-    a.params = pv;
-    a.output = out;
     a.state = state;
     return nprfx_node_render(&a);
 }
