@@ -3,6 +3,7 @@
 
 #include "nprfx/threshold.h"
 #include "nprfx/exec.h"
+#include "internal_threshold.h"
 
 #define NPRFX_INV_SQRT_PI 0.56418958354775628695
 
@@ -84,6 +85,55 @@ double nprfx_threshold_builtin_mu(double tone, double sigma)
 double nprfx_threshold_builtin(double p, double tone, double sigma)
 {
     return nprfx_threshold_erf(p, sigma, nprfx_threshold_builtin_mu(tone, sigma));
+}
+
+/* ---- the step position as a table (internal_threshold.h) ------------------------------------ */
+
+/* mu for tone t <= 0.5 is solve_upper(t), and 1 - solve_upper(1 - t) above: only solve_upper
+ * is tabled, as a function of s = log t. Its slope: mean_upper(sigma, mu) = t, so
+ * d mu / d s = t / (d mean / d mu), where d mean / d mu = (erfc(sigma mu) - erfc(sigma (mu - 1)))
+ * / 2. */
+void internal_mu_table_init(internal_mu_table *tab, double sigma)
+{
+    tab->sigma = sigma;
+    tab->t_max = 6.0 / sigma < 0.5 ? 6.0 / sigma : 0.5;
+    tab->n = 0;
+    if (!(tab->t_max > MU_TABLE_T_MIN)) return;
+    tab->n = MU_TABLE_N;
+    tab->s0 = log(MU_TABLE_T_MIN);
+    double h = (log(tab->t_max) - tab->s0) / MU_TABLE_N;
+    tab->inv_h = 1.0 / h;
+    for (int i = 0; i <= MU_TABLE_N; i++) {
+        double t = i == MU_TABLE_N ? tab->t_max : exp(tab->s0 + i * h);
+        double mu = solve_upper(t, sigma);
+        double dm = 0.5 * (erfc(sigma * mu) - erfc(sigma * (mu - 1.0)));
+        tab->mu[i] = mu;
+        tab->dmu[i] = dm < 0.0 ? t / dm : 0.0;
+    }
+}
+
+static double table_upper(const internal_mu_table *tab, double t)
+{
+    if (tab->n == 0 || t < MU_TABLE_T_MIN || t >= tab->t_max) return solve_upper(t, tab->sigma);
+    double x = (log(t) - tab->s0) * tab->inv_h;
+    int i = (int)x;
+    if (i >= tab->n) i = tab->n - 1;
+    if (i < 0) i = 0;
+    double u = x - i, u2 = u * u, u3 = u2 * u;
+    double h = 1.0 / tab->inv_h;
+    /* cubic Hermite on [s_i, s_i+1] with the exact end values and slopes */
+    return (2 * u3 - 3 * u2 + 1) * tab->mu[i] + (u3 - 2 * u2 + u) * h * tab->dmu[i] +
+           (-2 * u3 + 3 * u2) * tab->mu[i + 1] + (u3 - u2) * h * tab->dmu[i + 1];
+}
+
+double internal_mu_table_eval(const internal_mu_table *tab, double tone)
+{
+    /* the same cases, in the same order, as nprfx_threshold_builtin_mu */
+    double sigma = tab->sigma;
+    if (!(tone > 0.0)) return 1.0 + 40.0 / sigma;
+    if (tone >= 1.0) return -40.0 / sigma;
+    if (tone <= 0.5) return table_upper(tab, tone);
+    return 1.0 - table_upper(tab, 1.0 - tone);
 }
 
 double nprfx_threshold_quantize(double tone, int steps)
@@ -177,6 +227,7 @@ typedef struct tm_job {
     nprfx_rect window;
     const nprfx_image *pattern, *tone_in, *map; /* tone_in, map: NULL when not connected */
     nprfx_image *out;
+    const internal_mu_table *mu_table; /* builtin mode */
 } tm_job;
 
 static void tm_rows(void *user, int begin, int end, int worker)
@@ -187,6 +238,7 @@ static void tm_rows(void *user, int begin, int end, int worker)
     /* The builtin step position is a pure function of the tone: remember the last one, since
      * neighbouring pixels (and every pixel, with no tone input) share it. */
     double last_tone = -1.0, mu = pp->mu;
+    const internal_mu_table *tab = j->mu_table;
     for (int y = j->window.y0 + begin; y < j->window.y0 + end; y++) {
         for (int x = j->window.x0; x < j->window.x1; x++) {
             const float *p = pixel_or_zero(j->pattern, x, y);
@@ -204,7 +256,7 @@ static void tm_rows(void *user, int begin, int end, int worker)
             } else {
                 /* builtin is the erf threshold at the position mu(tone) */
                 if (pp->mode == NPRFX_THRESHOLD_BUILTIN && tone != last_tone) {
-                    mu = nprfx_threshold_builtin_mu(tone, pp->sigma);
+                    mu = internal_mu_table_eval(tab, tone);
                     last_tone = tone;
                 }
                 for (int c = 0; c < nout; c++)
@@ -252,7 +304,9 @@ nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_pa
                            "threshold-map: output has %d channels, expected %d", out->channels,
                            want);
     if (nprfx_rect_empty(window)) return NPRFX_OK;
-    tm_job j = {p, window, pattern, tone, map, out};
+    internal_mu_table mu_table;
+    if (p->mode == NPRFX_THRESHOLD_BUILTIN) internal_mu_table_init(&mu_table, p->sigma);
+    tm_job j = {p, window, pattern, tone, map, out, &mu_table};
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(window), 8, tm_rows, &j);
     return NPRFX_OK;
 }
