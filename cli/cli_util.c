@@ -136,6 +136,11 @@ void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
             "frames held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
             "resident %.0f MiB\n",
             peak, est, need, lim, nprfx_cli_peak_mib());
+    if (plan && plan->state) {
+        char kept[32];
+        nprfx_format_bytes(kept, sizeof kept, plan->state);
+        fprintf(f, "of the estimate, up to %s are caches nodes keep between frames\n", kept);
+    }
     if (plan && plan->strip_rows > 0) {
         char whole[32];
         nprfx_format_bytes(whole, sizeof whole, plan->whole_need);

@@ -102,7 +102,11 @@ int nprfx_cmd_bench(int argc, char **argv)
                         first ? "" : ", ", d->inputs[k].name, sel ? ":" : "", sel ? sel : "");
         first = 0;
     }
-    snprintf(json + len, sizeof json - (size_t)len, "}}}}");
+    /* The write is never run (bench evaluates the node itself): it makes the node the graph's
+     * output, so the plan sizes its frame and the plate's channels against --mem-limit. */
+    snprintf(json + len, sizeof json - (size_t)len,
+             "}}, \"out\": {\"node\": \"write\", \"inputs\": {\"image\": \"bench\"}, "
+             "\"path\": \"bench.####.exr\"}}}");
 
     if (mem_limit && nprfx_cli_set_mem_limit("nprfx", "bench", mem_limit)) return 2;
     nprfx_cli_env env;

@@ -82,6 +82,9 @@ typedef struct nprfx_graph_plan_info {
      * what strips hold at once (whole_need: what whole frames would). */
     int strip_rows;
     uint64_t whole_need;
+    /* Appended: of need, the bytes stateful nodes keep between frames (their caches, as
+     * desc->state_bytes bounds them). */
+    uint64_t state;
 } nprfx_graph_plan_info;
 
 /* Parse a graph file. Read paths are resolved relative to the graph file's directory; write

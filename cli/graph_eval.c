@@ -303,18 +303,33 @@ static nprfx_result eval_synth(nprfx_graph *g, int node, int frame, nprfx_image 
                                gmeta *meta)
 {
     gnode *n = &g->nodes[node];
-    int nc = nprfx_synth_channel_count();
+    const char *const *all = nprfx_synth_channel_names();
+    int nc = nprfx_synth_channel_count(), pick[1024];
+    /* Only the channels the readers take are made (as a read reads only those): the plate is
+     * never whole, and unpicked motion is not computed. */
+    int count = internal_graph_plate_pick(g, node, all, nc, pick);
+    if (count <= 0) {
+        count = nc;
+        for (int c = 0; c < nc; c++)
+            pick[c] = c;
+    }
     char what[300];
     snprintf(what, sizeof what, "node '%s': synth frame", n->name);
-    nprfx_result r = internal_graph_frame_alloc(g, node, what,
-                                                nprfx_rect_make(0, 0, n->width, n->height), nc, im);
+    nprfx_result r = internal_graph_frame_alloc(
+        g, node, what, nprfx_rect_make(0, 0, n->width, n->height), count, im);
     if (r) return r;
-    if ((r = nprfx_synth_render(n->ctx, n->scene, frame, im))) {
+    if ((r = nprfx_synth_render_channels(n->ctx, n->scene, frame, pick, count, im))) {
         internal_graph_frame_release(g, im);
         return r;
     }
-    *names = internal_graph_names_dup(nprfx_synth_channel_names(), nc);
-    if (!*names) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    const char *picked[1024];
+    for (int c = 0; c < count; c++)
+        picked[c] = all[pick[c]];
+    *names = internal_graph_names_dup(picked, count);
+    if (!*names) {
+        internal_graph_frame_release(g, im);
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
     internal_graph_variant_plate(g, im, *names);
     meta->display = im->bounds;
     meta->pixel_aspect = 1.0f;

@@ -7,7 +7,6 @@
 
 #include "internal_graph.h"
 #include "io_limits.h"
-#include "nprfx/synth.h"
 
 nprfx_result internal_graph_check_limits(nprfx_graph *g)
 {
@@ -16,8 +15,10 @@ nprfx_result internal_graph_check_limits(nprfx_graph *g)
         if (n->kind != GK_SYNTH) continue;
         char what[600];
         snprintf(what, sizeof what, "node '%s': synth size", n->name);
-        nprfx_result r = nprfx_image_limit_check(g->ctx, what, n->width, n->height,
-                                                 nprfx_synth_channel_count(), 0);
+        /* One channel: a graph's synth makes only the channels its readers take (eval_synth),
+         * which are known once the graph is planned; the frame is checked again with them
+         * before it is allocated. This refuses the sizes no plate could have. */
+        nprfx_result r = nprfx_image_limit_check(g->ctx, what, n->width, n->height, 1, 0);
         if (r) return r;
     }
     int w = 0, h = 0;

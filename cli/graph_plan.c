@@ -195,41 +195,37 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
     return m;
 }
 
-int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta)
+int internal_graph_plate_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *map)
 {
-    int nc = im->channels;
     unsigned char keep[1024]; /* wider plates stay whole */
     if (nc > (int)sizeof keep) return 0;
-    int kept = internal_graph_plate_channels(g, node, (const char *const *)*names, nc, keep);
+    int kept = internal_graph_plate_channels(g, node, names, nc, keep);
     if (kept <= 0 || kept == nc) return 0;
     /* Each reader must select the same channels from the trimmed plate as from the whole one (a
      * suffix that was ambiguous could otherwise become unique); else the plate stays whole. */
-    int map[1024], n = 0;
-    char **sub = calloc((size_t)kept, sizeof *sub);
-    if (!sub) return 0;
+    const char *sub[1024];
+    int n = 0;
     for (int c = 0; c < nc; c++)
         if (keep[c]) {
             map[n] = c;
-            sub[n++] = (*names)[c];
+            sub[n++] = names[c];
         }
-    for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++) {
-        int whole[256], part[256], cw = 0, cp = 0;
-        const gnode *reader = &g->nodes[g->plan_readers[r][0]];
-        int k = g->plan_readers[r][1];
-        if (internal_graph_input_channels(g, reader, k, (const char *const *)*names, nc, whole,
-                                          &cw) ||
-            internal_graph_input_channels(g, reader, k, (const char *const *)sub, kept, part,
-                                          &cp) ||
-            cw != cp) {
-            free(sub);
+    for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++)
+        if (!same_selection(g, &g->nodes[g->plan_readers[r][0]], g->plan_readers[r][1], names, nc,
+                            sub, kept, map))
             return 0;
-        }
-        for (int c = 0; c < cw; c++)
-            if (map[part[c]] != whole[c]) {
-                free(sub);
-                return 0;
-            }
-    }
+    return kept;
+}
+
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta)
+{
+    int nc = im->channels, map[1024];
+    int kept = internal_graph_plate_pick(g, node, (const char *const *)*names, nc, map);
+    if (kept <= 0) return 0;
+    char **sub = calloc((size_t)kept, sizeof *sub);
+    if (!sub) return 0;
+    for (int c = 0; c < kept; c++)
+        sub[c] = (*names)[map[c]];
     char what[600];
     snprintf(what, sizeof what, "node '%s': the %d channels its readers take", g->nodes[node].name,
              kept);
@@ -245,8 +241,11 @@ int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char **
             for (int c = 0; c < kept; c++)
                 d[c] = s[map[c]];
         }
-    for (int c = 0; c < nc; c++)
-        if (!keep[c]) free((*names)[c]);
+    for (int c = 0, m = 0; c < nc; c++) /* map is increasing */
+        if (m < kept && map[m] == c)
+            m++;
+        else
+            free((*names)[c]);
     free(*names);
     *names = sub;
     /* Whatever is kept per channel follows the same map, so a plate written as read still
@@ -496,7 +495,22 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         sh->h = n->height;
         sh->channels = nc;
         sh->known = 1;
-        trim_shape(g, i, sh, scratch);
+        /* eval_synth renders only the channels its readers take: no whole plate to hold */
+        int map[1024];
+        int kept = internal_graph_plate_pick(g, i, (const char *const *)sh->names, nc, map);
+        if (kept > 0) {
+            unsigned char keep[1024] = {0};
+            for (int c = 0; c < kept; c++)
+                keep[map[c]] = 1;
+            int m = 0;
+            for (int c = 0; c < nc; c++) { /* map is increasing: compacted in place */
+                if (keep[c])
+                    sh->names[m++] = sh->names[c];
+                else
+                    free(sh->names[c]);
+            }
+            sh->channels = kept;
+        }
         return 0;
     }
     if (n->kind == GK_READ) {
@@ -595,6 +609,8 @@ typedef struct sim {
     size_t nidle, capidle;
     uint64_t live, idle_bytes, peak, need; /* peak: with the pool's idle buffers; need: without */
     int peak_node, peak_w, peak_h, peak_channels; /* the frame that made the need's peak */
+    unsigned char *stated;                        /* per node: its state is counted */
+    uint64_t state; /* the bytes stateful nodes keep between frames, all of them */
 } sim;
 
 static void sim_note(sim *s, int node, int w, int h, int channels)
@@ -645,6 +661,25 @@ static int sim_consume(sim *s, int src)
     uint64_t b = s->cur[src];
     s->cur[src] = 0;
     return sim_release(s, b);
+}
+
+/* The bytes node n keeps in its state between frames of shape sh (desc->state_bytes), its
+ * inputs' channel counts from their shapes; 0 when it cannot be told (the render reports why). */
+static uint64_t state_bytes(nprfx_graph *g, const gnode *n, const shape *shapes, const shape *sh)
+{
+    int in_ch[32] = {0};
+    if (n->desc->num_inputs > 32) return 0;
+    for (int k = 0; k < n->desc->num_inputs; k++) {
+        int src = n->inputs[k].src, idx[256];
+        if (src < 0 || !shapes[src].known) continue;
+        if (internal_graph_input_channels(g, n, k, (const char *const *)shapes[src].names,
+                                          shapes[src].channels, idx, &in_ch[k]))
+            return 0;
+    }
+    nprfx_state_query q = {sh->w, sh->h, g->first_frame, g->last_frame, in_ch};
+    double bytes = 0;
+    if (nprfx_node_state_bytes(n->ctx, n->desc, n->params, &q, &bytes)) return 0;
+    return bytes < 1.8e19 ? (uint64_t)bytes : UINT64_MAX / 2;
 }
 
 /* Evaluate node root (and what it needs) on shapes: non-zero when a shape cannot be told. */
@@ -717,6 +752,14 @@ static int sim_eval(sim *s, int root)
                 sim_alloc(s, b);
             sim_note(s, node, sh->w, sh->h, sh->channels);
             if (extra) rc |= sim_release(s, extra);
+        }
+        /* a stateful node's caches, from its first render on, for good */
+        if (n->kind == GK_NODE && (n->desc->flags & NPRFX_NODE_STATEFUL) && !s->stated[node]) {
+            s->stated[node] = 1;
+            uint64_t kept = state_bytes(g, n, s->shapes, sh);
+            s->state += kept;
+            s->live += kept;
+            sim_note(s, node, sh->w, sh->h, sh->channels);
         }
         s->cur[node] = b;
         s->done[node] = 1;
@@ -814,6 +857,7 @@ static nprfx_result plan_strips(nprfx_graph *g, int frame, int over, nprfx_graph
         g->strip_rows = rows;
         return NPRFX_OK;
     }
+    need += out->state; /* the stateful nodes' caches, besides the strips */
     g->strip_rows = rows;
     out->strip_rows = rows;
     out->need = need;
@@ -851,7 +895,8 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
     s.prev = calloc(nodes, sizeof *s.prev);
     s.done = calloc(nodes, sizeof *s.done);
     s.uses = calloc(nodes, sizeof *s.uses);
-    int failed = !s.shapes || !s.scratch || !s.cur || !s.prev || !s.done || !s.uses;
+    s.stated = calloc(nodes, 1);
+    int failed = !s.shapes || !s.scratch || !s.cur || !s.prev || !s.done || !s.uses || !s.stated;
     for (int f = 0; f < 2 && !failed; f++)
         failed = sim_frame(&s);
     if (!failed && s.peak_node >= 0) {
@@ -862,22 +907,28 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
         out->height = sh->h;
         out->peak_node = g->nodes[s.peak_node].name;
         out->whole_need = s.need;
+        out->state = s.state;
         int over = g->mem_limit != UINT64_MAX && s.need > g->mem_limit;
         char why[600] = "";
         r = plan_strips(g, frame, over, out, why, sizeof why);
         if (r || out->strip_rows > 0) {
             over = 0; /* strips decided, or refused with their own message */
         } else if (over) {
-            char need[32], lim[32], one[32];
+            char need[32], lim[32], one[32], kept[96] = "";
             nprfx_format_bytes(need, sizeof need, s.need);
+            if (s.state) {
+                char sb[32];
+                nprfx_format_bytes(sb, sizeof sb, s.state);
+                snprintf(kept, sizeof kept, " (%s of it the caches nodes keep between frames)", sb);
+            }
             nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
             nprfx_format_bytes(one, sizeof one, shape_bytes(sh));
             r = nprfx_error(
                 g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
-                "frame %d needs %s of frames at its peak, at node '%s' (its %dx%d frame "
+                "frame %d needs %s of frames%s at its peak, at node '%s' (its %dx%d frame "
                 "with %d channel%s, %s, joins the frames still held): above the %s "
                 "memory limit (%s); nothing was rendered%s%s%s",
-                frame, need, g->nodes[s.peak_node].name, sh->w, sh->h, sh->channels,
+                frame, need, kept, g->nodes[s.peak_node].name, sh->w, sh->h, sh->channels,
                 sh->channels == 1 ? "" : "s", one, lim, nprfx_mem_limit_origin(),
                 why[0] ? " (nor can it render by strips of rows: " : "", why, why[0] ? ")" : "");
         }
@@ -889,6 +940,7 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
     free(s.cur);
     free(s.prev);
     free(s.done);
+    free(s.stated);
     free(s.uses);
     free(s.idle);
     return r;

@@ -165,6 +165,10 @@ int internal_graph_plate_channels(nprfx_graph *g, int node, const char *const *n
  * indices into names in file order into pick (room for nc); -1 to read them all: nothing to
  * leave out, no plan, or a selection that would come out otherwise on the channels read. */
 int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *pick);
+/* The channels of plate node's result with names (nc) to keep: those its readers take, when
+ * every reader then selects the very same channels from them; their indices in names, in
+ * order, into map (room for nc), and their count; 0 to keep the plate whole. */
+int internal_graph_plate_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *map);
 /* Keep only the channels of plate node's result (im, names, and meta's per-channel types when it
  * has them) that its readers take, when every reader then selects the very same channels
  * (internal_graph_plate_channels); whether it did. */

@@ -319,6 +319,11 @@ static void cache_clear(adv_cache *c)
     c->has_result = 0;
 }
 
+double nprfx_advect_state_bytes(int width, int height, int output_channels)
+{
+    return (double)width * height * sizeof(float) * (2 * 2 + 2 + output_channels);
+}
+
 void nprfx_advect_state_free(void *state)
 {
     adv_cache *c = state;

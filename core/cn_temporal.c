@@ -214,6 +214,24 @@ static nprfx_result cn_slot_ensure(const cn_run *run, nprfx_cn_state *st)
 /* Sizes the pass for a span of n frames within the byte budget: checkpoints every K frames and
  * a ring of K recent states (sqrt decomposition: any frame is at most K steps from a checkpoint
  * and in-order or reverse-order rendering recomputes each block once). */
+static void cn_pass_shape(size_t sb, size_t budget, int64_t n, int *K, int *nring, int *ncap)
+{
+    int64_t m = sb ? (int64_t)(budget / sb) : 0;
+    if (n < 1) n = 1;
+    int64_t k = (int64_t)ceil(sqrt((double)n));
+    if (m >= 2 * k + 1) {
+        *K = (int)k;
+        *nring = (int)k;
+    } else if (m >= 2) {
+        *nring = 1;
+        *K = (int)((n + (m - 1) - 1) / (m - 1));
+    } else {
+        *nring = 1;
+        *K = 0;
+    }
+    *ncap = *K > 0 ? (int)(n / *K + 2) : 0;
+}
+
 static nprfx_result cn_pass_configure(const cn_run *run, cn_pass *ps, int dir, int64_t origin,
                                       int64_t n)
 {
@@ -221,21 +239,8 @@ static nprfx_result cn_pass_configure(const cn_run *run, cn_pass *ps, int dir, i
     cn_pass_free(ps);
     ps->dir = dir;
     ps->origin = origin;
-    size_t sb = nprfx_cn_state_bytes(run->args->frame, run->p.channels);
-    int64_t m = sb ? (int64_t)(run->budget / sb) : 0;
-    if (n < 1) n = 1;
-    int64_t k = (int64_t)ceil(sqrt((double)n));
-    if (m >= 2 * k + 1) {
-        ps->K = (int)k;
-        ps->nring = (int)k;
-    } else if (m >= 2) {
-        ps->nring = 1;
-        ps->K = (int)((n + (m - 1) - 1) / (m - 1));
-    } else {
-        ps->nring = 1;
-        ps->K = 0;
-    }
-    ps->ncap = ps->K > 0 ? (int)(n / ps->K + 2) : 0;
+    cn_pass_shape(nprfx_cn_state_bytes(run->args->frame, run->p.channels), run->budget, n, &ps->K,
+                  &ps->nring, &ps->ncap);
     ps->ckpt = ps->ncap ? calloc((size_t)ps->ncap, sizeof(cn_slot)) : NULL;
     ps->ring = calloc((size_t)ps->nring, sizeof(cn_slot));
     if ((ps->ncap && !ps->ckpt) || !ps->ring) {
@@ -525,6 +530,32 @@ static void cn_span(const nprfx_coherent_noise_params *np, int64_t t, int first,
     }
     *start = s;
     *last = l;
+}
+
+double nprfx_coherent_noise_state_bytes(const nprfx_coherent_noise_params *np, int width,
+                                        int height, int source_channels, int first_frame,
+                                        int last_frame)
+{
+    nprfx_rect frame = nprfx_rect_make(0, 0, width, height);
+    int channels = np->noise == NPRFX_CN_NOISE_INPUT ? (source_channels > 4   ? 4
+                                                        : source_channels > 0 ? source_channels
+                                                                              : 1)
+                                                     : np->channels;
+    int passes = np->mode == NPRFX_CN_MODE_SYMMETRIC ? 2 : 1;
+    double mb = np->cache_mb > 0 ? np->cache_mb : 0;
+    size_t budget = (size_t)(mb * 1048576.0) / (size_t)passes;
+    /* the longest pass: the window's steps, else the shot (unknown: as long as the budget
+     * allows, the bound then) */
+    int64_t n = np->window > 0              ? (int64_t)np->window + 1
+                : last_frame >= first_frame ? (int64_t)last_frame - first_frame + 1
+                                            : INT64_C(1) << 40;
+    size_t sb = nprfx_cn_state_bytes(frame, channels);
+    int K, nring, ncap;
+    cn_pass_shape(sb, budget, n, &K, &nring, &ncap);
+    double px = (double)width * height;
+    /* a pass: its checkpoints and ring, the depth it keeps and the gated depth */
+    double pass = (double)(ncap + nring) * sb + 2.0 * px * sizeof(float);
+    return passes * pass + px * channels * sizeof(float); /* and the last result */
 }
 
 int nprfx_coherent_noise_frames(const nprfx_coherent_noise_params *np, const nprfx_frames_query *q,

@@ -216,6 +216,13 @@ static void pair_clear(flow_pair *p)
     memset(p, 0, sizeof *p);
 }
 
+double nprfx_flow_state_bytes(int width, int height)
+{
+    /* per pixel of a pair: la, lb, fab (2), fba (2), conf (2) floats, and oka, okb */
+    double per_pixel = 8.0 * sizeof(float) + 2.0;
+    return (double)FLOW_CACHE_PAIRS * width * height * per_pixel;
+}
+
 void nprfx_flow_state_free(void *state)
 {
     flow_cache *c = state;

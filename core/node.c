@@ -540,6 +540,26 @@ nprfx_result nprfx_node_footprint(nprfx_context *ctx, const nprfx_node_desc *nod
     return r;
 }
 
+nprfx_result nprfx_node_state_bytes(nprfx_context *ctx, const nprfx_node_desc *node,
+                                    const nprfx_value *params, const nprfx_state_query *q,
+                                    double *bytes)
+{
+    if (!bytes) return NPRFX_ERR_INVALID_ARGUMENT;
+    *bytes = 0;
+    if (!node || !q || (node->num_params > 0 && !params))
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "nprfx_node_state_bytes: no node, query or params");
+    if (node->size < offsetof(nprfx_node_desc, state_bytes) + sizeof(void *) || !node->state_bytes)
+        return NPRFX_OK;
+    typed_buf b;
+    nprfx_result r = typed_bind(ctx, node, params, &b);
+    if (!r) *bytes = node->state_bytes(b.typed, q);
+    typed_release(&b);
+    if (!r && !(*bytes >= 0))
+        return nprfx_error(ctx, NPRFX_ERR_INTERNAL, "%s: state_bytes gave %g", node->id, *bytes);
+    return r;
+}
+
 /* ---- descriptor lint ------------------------------------------------------------------------ */
 
 /* Identifiers are what graphs, --set and OFX use: lower-case letters, digits, '_' ('-' in node

@@ -26,6 +26,12 @@ void nprfx_paper_state_free(void *state)
     internal_state_free(c);
 }
 
+double nprfx_paper_state_bytes(const nprfx_paper_params *p, int width, int height)
+{
+    int channels = p->output == NPRFX_PAPER_HEIGHT ? 1 : 4;
+    return (double)width * height * channels * sizeof(float);
+}
+
 /* The whole params struct, bytes and all: a field added to it later is part of the key without
  * a second list here. The node's binder zeroes the struct, so padding compares equal; a caller's
  * stray padding can only cause a miss (a render), never a wrong hit. */

@@ -330,6 +330,8 @@ typedef struct render_job {
     pose poses[3][MAX_OBJECTS]; /* likewise */
     int width;
     nprfx_image *out;
+    const int *pick;              /* out's channel c is synth channel pick[c] */
+    int motion_prev, motion_next; /* whether they are picked: each costs two projections */
 } render_job;
 
 static int intersect(const object_desc *o, const pose *p, sg_vec3 eye, sg_vec3 dir, double tmax,
@@ -409,8 +411,10 @@ static void shade_pixel(const render_job *job, int x, int y, float *px)
     px[CH_B] = (float)(o->colour[2] * shade);
     px[CH_A] = 1.0f;
     px[CH_Z] = (float)sg_dot(sg_sub(P, c->eye), c->fwd);
-    motion_to(c, p, &job->cam[0], &job->poses[0][best_obj], best.p, &px[CH_MPX], &px[CH_MPY]);
-    motion_to(c, p, &job->cam[2], &job->poses[2][best_obj], best.p, &px[CH_MNX], &px[CH_MNY]);
+    if (job->motion_prev)
+        motion_to(c, p, &job->cam[0], &job->poses[0][best_obj], best.p, &px[CH_MPX], &px[CH_MPY]);
+    if (job->motion_next)
+        motion_to(c, p, &job->cam[2], &job->poses[2][best_obj], best.p, &px[CH_MNX], &px[CH_MNY]);
     px[CH_PX] = (float)P.x;
     px[CH_PY] = (float)P.y;
     px[CH_PZ] = (float)P.z;
@@ -440,8 +444,8 @@ static void render_rows(void *user, int begin, int end, int worker)
         for (int x = 0; x < job->width; x++) {
             shade_pixel(job, x, y, tmp);
             float *dst = nprfx_image_at(job->out, x, y);
-            for (int ch = 0; ch < CH_COUNT; ch++)
-                dst[ch] = tmp[ch];
+            for (int ch = 0; ch < job->out->channels; ch++)
+                dst[ch] = tmp[job->pick[ch]];
         }
 }
 
@@ -453,6 +457,19 @@ static const scene_def *find_scene(const char *name)
 }
 
 nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame, nprfx_image *out)
+{
+    int all[CH_COUNT];
+    for (int c = 0; c < CH_COUNT; c++)
+        all[c] = c;
+    if (out && out->channels != CH_COUNT)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "synth: the output needs %d channels, it has %d", CH_COUNT,
+                           out->channels);
+    return nprfx_synth_render_channels(ctx, name, frame, all, CH_COUNT, out);
+}
+
+nprfx_result nprfx_synth_render_channels(nprfx_context *ctx, const char *name, int frame,
+                                         const int *channels, int count, nprfx_image *out)
 {
     if (!name || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
@@ -467,10 +484,13 @@ nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame,
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "synth: unknown scene '%s' (known: %s)",
                            name, list);
     }
-    if (out->channels != CH_COUNT)
+    if (!channels || count < 1 || out->channels != count)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "synth: the output needs %d channels, it has %d", CH_COUNT,
-                           out->channels);
+                           "synth: the output has %d channels for %d picked", out->channels, count);
+    for (int c = 0; c < count; c++)
+        if (channels[c] < 0 || channels[c] >= CH_COUNT)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "synth: channel index %d is outside [0, %d)", channels[c], CH_COUNT);
     if (out->bounds.x0 != 0 || out->bounds.y0 != 0 || nprfx_rect_empty(out->bounds))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "synth: the output must be a non-empty image with bounds from (0,0), "
@@ -482,6 +502,11 @@ nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame,
     job.scene = sc;
     job.width = out->bounds.x1;
     job.out = out;
+    job.pick = channels;
+    for (int c = 0; c < count; c++) {
+        job.motion_prev |= channels[c] == CH_MPX || channels[c] == CH_MPY;
+        job.motion_next |= channels[c] == CH_MNX || channels[c] == CH_MNY;
+    }
     for (int i = 0; i < 3; i++) {
         double t = (double)frame + (i - 1);
         job.cam[i] = make_camera(sc, t, out->bounds.x1, out->bounds.y1);

@@ -139,6 +139,14 @@ static int advect_footprint(const void *params)
     return -1;
 }
 
+static double advect_state_bytes(const void *params, const nprfx_state_query *q)
+{
+    const ap *p = params;
+    const char *names[NPRFX_ADVECT_CHANNELS];
+    int channels = nprfx_advect_output_channels(p->output, names);
+    return nprfx_advect_state_bytes(q->width, q->height, channels);
+}
+
 const nprfx_node_desc nprfx_node_advect = {
     .size = sizeof(nprfx_node_desc),
     .id = "advect",
@@ -170,6 +178,7 @@ const nprfx_node_desc nprfx_node_advect = {
     .flags = NPRFX_NODE_TEMPORAL | NPRFX_NODE_STATEFUL | NPRFX_NODE_NEEDS_OTHER_FRAMES,
     .render = advect_render,
     .state_free = nprfx_advect_state_free,
+    .state_bytes = advect_state_bytes,
     .params_size = sizeof(ap),
     .version_major = 1,
     .frames_needed = advect_frames_needed,

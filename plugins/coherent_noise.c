@@ -435,6 +435,12 @@ static int cn_frames_needed(const void *params, const nprfx_frames_query *q, int
     return nprfx_coherent_noise_frames(params, q, input, ranges);
 }
 
+static double cn_state_bytes(const void *params, const nprfx_state_query *q)
+{
+    return nprfx_coherent_noise_state_bytes(
+        params, q->width, q->height, q->input_channels[IN_SOURCE], q->first_frame, q->last_frame);
+}
+
 const nprfx_node_desc nprfx_node_coherent_noise = {
     sizeof(nprfx_node_desc),
     "coherent-noise",
@@ -456,4 +462,5 @@ const nprfx_node_desc nprfx_node_coherent_noise = {
      * unbounded (pixels change only past 2W frames from the start) */
     .version_minor = 1,
     .frames_needed = cn_frames_needed,
+    .state_bytes = cn_state_bytes,
 };

@@ -137,6 +137,12 @@ static int flow_frames_needed(const void *params, const nprfx_frames_query *q, i
     return 1;
 }
 
+static double flow_state_bytes(const void *params, const nprfx_state_query *q)
+{
+    (void)params;
+    return nprfx_flow_state_bytes(q->width, q->height);
+}
+
 const nprfx_node_desc nprfx_node_flow = {
     .size = sizeof(nprfx_node_desc),
     .id = "flow",
@@ -164,6 +170,7 @@ const nprfx_node_desc nprfx_node_flow = {
     .flags = NPRFX_NODE_TEMPORAL | NPRFX_NODE_NEEDS_OTHER_FRAMES | NPRFX_NODE_STATEFUL,
     .render = flow_render,
     .state_free = nprfx_flow_state_free,
+    .state_bytes = flow_state_bytes,
     .params_size = sizeof(fp),
     .version_major = 1,
     .frames_needed = flow_frames_needed,

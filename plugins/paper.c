@@ -200,6 +200,11 @@ static nprfx_result paper_output(const nprfx_value *pv, const int *ich, nprfx_ou
     return NPRFX_OK;
 }
 
+static double paper_state_bytes(const void *params, const nprfx_state_query *q)
+{
+    return nprfx_paper_state_bytes(params, q->width, q->height);
+}
+
 static nprfx_result paper_render(const nprfx_render_args *a, const void *params)
 {
     return nprfx_paper_render_cached(a->ctx, params, a->window, a->output, a->state);
@@ -237,6 +242,7 @@ const nprfx_node_desc nprfx_node_paper = {
     /* the texture of the last window, copied for every later frame (it never changes) */
     .flags = NPRFX_NODE_STATEFUL,
     .state_free = nprfx_paper_state_free,
+    .state_bytes = paper_state_bytes,
     .params_size = sizeof(pp),
     .version_major = 1,
 };

@@ -120,6 +120,9 @@ NPRFX_API int nprfx_advect_frames(const nprfx_advect_params *p, const nprfx_fram
 
 /* Frees what nprfx_advect_render keeps in the instance's state. */
 NPRFX_API void nprfx_advect_state_free(void *state);
+/* The most bytes that state holds for frames of width x height with output_channels: both
+ * layers' coordinates, a step's scratch and the last whole output. */
+NPRFX_API double nprfx_advect_state_bytes(int width, int height, int output_channels);
 
 #ifdef __cplusplus
 }

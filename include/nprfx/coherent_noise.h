@@ -183,6 +183,12 @@ typedef struct nprfx_coherent_noise_params {
 NPRFX_API nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
                                                    const nprfx_coherent_noise_params *p);
 NPRFX_API void nprfx_coherent_noise_state_free(void *state);
+/* The most bytes that state holds for frames of width x height over the shot first..last
+ * (last < first: unknown), source_channels: the source input's (input mode): each pass's
+ * checkpoints and ring as cache_mb lets them be, its depths, and the last result. */
+NPRFX_API double nprfx_coherent_noise_state_bytes(const nprfx_coherent_noise_params *p, int width,
+                                                  int height, int source_channels, int first_frame,
+                                                  int last_frame);
 
 /* The automatic window (the node's window = 0): the fewest frames W with alpha^W at most
  * NPRFX_CN_WINDOW_TOLERANCE, the weight the frames cut off would have had (66 frames at alpha

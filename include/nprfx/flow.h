@@ -124,6 +124,9 @@ NPRFX_API nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_pa
                                          int input, void **state, nprfx_rect window,
                                          nprfx_image *out);
 NPRFX_API void nprfx_flow_state_free(void *state);
+/* The most bytes that state holds for frames of width x height: its solved pairs (luminances,
+ * masks, both flows and both confidences of each). */
+NPRFX_API double nprfx_flow_state_bytes(int width, int height);
 
 #ifdef __cplusplus
 }

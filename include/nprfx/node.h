@@ -117,6 +117,13 @@ typedef struct nprfx_frames_query {
     const int *input_channels;   /* per input: its channel count, 0 when not connected */
 } nprfx_frames_query;
 
+/* What a node keeps between calls depends on: the question desc->state_bytes answers. */
+typedef struct nprfx_state_query {
+    int width, height;           /* of the frames rendered (render scale applied) */
+    int first_frame, last_frame; /* the shot; last < first when unknown */
+    const int *input_channels;   /* per input: its channel count, 0 when not connected */
+} nprfx_state_query;
+
 typedef struct nprfx_render_args {
     size_t size; /* sizeof(nprfx_render_args) */
     nprfx_context *ctx;
@@ -160,10 +167,10 @@ typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args, const voi
  * shift): a host that cannot give other frames must not offer it, rather than show a wrong one. */
 #define NPRFX_NODE_NEEDS_OTHER_FRAMES 0x4u
 /* Renders any rows of a frame from its inputs' rows within its footprint (desc->footprint; params
- * whose footprint is -1 cannot, and render whole frames) of the window: it reads no input pixel farther than that and computes
- * nothing from a whole input (no statistics of the frame), so a runner may render a frame a strip
- * of rows at a time from inputs that hold only those rows, bit for bit as the whole frame
- * (docs/design.md §1 "Memory"). */
+ * whose footprint is -1 cannot, and render whole frames) of the window: it reads no input pixel
+ * farther than that and computes nothing from a whole input (no statistics of the frame), so a
+ * runner may render a frame a strip of rows at a time from inputs that hold only those rows, bit
+ * for bit as the whole frame (docs/design.md §1 "Memory"). */
 #define NPRFX_NODE_ROWS 0x8u
 
 struct nprfx_node_desc {
@@ -217,6 +224,12 @@ struct nprfx_node_desc {
      * runner's warning before hours of work). Called through nprfx_node_footprint. Appended:
      * read it only when `size` covers it. */
     int (*footprint)(const void *params);
+    /* Optional, for STATEFUL nodes: the most bytes the node's *state holds between calls while
+     * it renders the frames of q with these params (its caches at their fullest: a frame-state
+     * cache's bound, a solved pair of frames, a texture window). A runner counts them with the
+     * frames it holds, so a memory limit covers them. Without it: 0. Called through
+     * nprfx_node_state_bytes. Appended: read it only when `size` covers it. */
+    double (*state_bytes)(const void *params, const nprfx_state_query *q);
 };
 
 /* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
@@ -253,6 +266,12 @@ NPRFX_API nprfx_result nprfx_node_frames_needed(nprfx_context *ctx, const nprfx_
                                                 const nprfx_value *params,
                                                 const nprfx_frames_query *q, int input,
                                                 nprfx_frame_range *ranges, int *count);
+
+/* The most bytes the node keeps in its state between calls for these params and frames
+ * (desc->state_bytes; 0 without one) into *bytes. Params are checked as for render. */
+NPRFX_API nprfx_result nprfx_node_state_bytes(nprfx_context *ctx, const nprfx_node_desc *node,
+                                              const nprfx_value *params, const nprfx_state_query *q,
+                                              double *bytes);
 
 /* The node's footprint for these params (desc->footprint; 0 without one) into *radius: pixels
  * at render scale 1, -1 for anywhere in the frame. Params are checked as for render. */

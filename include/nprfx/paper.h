@@ -81,6 +81,8 @@ NPRFX_API nprfx_result nprfx_paper_render(nprfx_context *ctx, const nprfx_paper_
 NPRFX_API nprfx_result nprfx_paper_render_cached(nprfx_context *ctx, const nprfx_paper_params *p,
                                                  nprfx_rect window, nprfx_image *out, void **state);
 NPRFX_API void nprfx_paper_state_free(void *state);
+/* The most bytes that state holds for frames of width x height: one window of the output. */
+NPRFX_API double nprfx_paper_state_bytes(const nprfx_paper_params *p, int width, int height);
 
 #ifdef __cplusplus
 }

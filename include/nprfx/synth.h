@@ -39,6 +39,13 @@ NPRFX_API const nprfx_synth_scene_info *nprfx_synth_scene_at(int i);
 NPRFX_API nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame,
                                           nprfx_image *out);
 
+/* The same frame with only some channels: out's channel c is channel channels[c] of the whole
+ * plate (indices in nprfx_synth_channel_names order), bit for bit as nprfx_synth_render makes
+ * it; out must have `count` channels. Motion that is not picked is not computed. */
+NPRFX_API nprfx_result nprfx_synth_render_channels(nprfx_context *ctx, const char *name, int frame,
+                                                   const int *channels, int count,
+                                                   nprfx_image *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -291,6 +291,50 @@ static void test_registry(nprfx_context *ctx)
     }
 }
 
+/* The state the stateful nodes say they keep between calls (desc->state_bytes, which a runner
+ * counts against its memory limit), hand-computed from each cache's layout for a 100x50 frame
+ * (5000 pixels) and the default params. */
+static double state_of(nprfx_context *ctx, const char *id, const char *param, double value,
+                       int first, int last)
+{
+    const nprfx_node_desc *d = nprfx_node_find(id);
+    CHECK(d != NULL);
+    if (!d) return -1;
+    nprfx_value pv[64];
+    nprfx_node_defaults(d, pv);
+    for (int i = 0; param && i < d->num_params; i++)
+        if (!strcmp(d->params[i].name, param)) pv[i].v[0] = value;
+    int in_ch[32] = {0};
+    nprfx_state_query q = {100, 50, first, last, in_ch};
+    double bytes = -1;
+    CHECK_OK(nprfx_node_state_bytes(ctx, d, pv, &q, &bytes));
+    return bytes;
+}
+
+static void test_state_bytes(nprfx_context *ctx)
+{
+    /* paper: one colour window, 4 floats a pixel */
+    CHECK(state_of(ctx, "paper", NULL, 0, 1, 10) == 5000 * 4 * 4.0);
+    /* flow: 2 pairs of (two luminances, two 2-channel flows, two confidences: 8 floats; two
+     * masks: 2 bytes) a pixel */
+    CHECK(state_of(ctx, "flow", NULL, 0, 1, 10) == 2 * 5000 * (8 * 4 + 2.0));
+    /* advect, output all (5 channels): two 2-channel layers, a 2-channel step scratch, the
+     * output */
+    CHECK(state_of(ctx, "advect", NULL, 0, 1, 10) == 5000 * 4 * (4 + 2 + 5.0));
+    /* coherent-noise, 1 channel, shot of 16 frames, the default 1024 MB bound: a state is a float
+     * and a byte a pixel (25000 B); checkpoints every 4 frames (16 / 4 + 2 slots) and a ring of
+     * 4: 10 states; and 2 depth frames, the 1-channel result */
+    CHECK(state_of(ctx, "coherent-noise", NULL, 0, 1, 16) == 10 * 25000 + 2 * 20000 + 20000.0);
+    /* cache_mb 0: the current state only */
+    CHECK(state_of(ctx, "coherent-noise", "cache_mb", 0, 1, 16) == 25000 + 2 * 20000 + 20000.0);
+    /* a bound of 1 MB holds 41 states of 25000 B: two slots for the ring and checkpoints every
+     * ceil(1000 / 40) = 25 frames of a 1000-frame shot (42 slots): 43 states */
+    CHECK(state_of(ctx, "coherent-noise", "cache_mb", 1, 1, 1000) ==
+          43 * 25000 + 2 * 20000 + 20000.0);
+    /* a node without a cache keeps nothing */
+    CHECK(state_of(ctx, "blend", NULL, 0, 1, 10) == 0);
+}
+
 int main(void)
 {
     nprfx_context *ctx = NULL;
@@ -298,6 +342,7 @@ int main(void)
     test_binding(ctx);
     test_lint_catches(ctx);
     test_registry(ctx);
+    test_state_bytes(ctx);
     nprfx_context_destroy(ctx);
     return check_finish();
 }

@@ -371,6 +371,35 @@ static void test_threads(void)
     nprfx_pool_destroy(pool);
 }
 
+/* Picked channels (what a graph's synth makes: only those its readers take) are the whole
+ * plate's, bit for bit, in the order picked, with or without the motion channels; bad picks
+ * are refused. */
+static void test_pick(const char *scene)
+{
+    nprfx_image all = render(scene, 4, 96, 64);
+    const int picks[][5] = {{4, 5, 6, 21, 0}, {7, 8, 14, 15, 16}, {25, 3, 9, 0, 24}};
+    for (int k = 0; k < 3; k++) {
+        nprfx_image sub;
+        CHECK_OK(nprfx_image_alloc(ctx, all.bounds, 5, &sub));
+        CHECK_OK(nprfx_synth_render_channels(ctx, scene, 4, picks[k], 5, &sub));
+        int bad = 0;
+        for (int y = 0; y < 64; y++)
+            for (int x = 0; x < 96; x++)
+                for (int c = 0; c < 5; c++)
+                    bad += memcmp(&px(&sub, x, y)[c], &px(&all, x, y)[picks[k][c]], 4) != 0;
+        CHECK(bad == 0);
+        nprfx_image_free(&sub);
+    }
+    nprfx_image one;
+    CHECK_OK(nprfx_image_alloc(ctx, all.bounds, 1, &one));
+    const int out_of_range[] = {26}, two[] = {0, 1};
+    CHECK(nprfx_synth_render_channels(ctx, scene, 4, out_of_range, 1, &one) ==
+          NPRFX_ERR_INVALID_ARGUMENT);
+    CHECK(nprfx_synth_render_channels(ctx, scene, 4, two, 2, &one) == NPRFX_ERR_INVALID_ARGUMENT);
+    nprfx_image_free(&one);
+    nprfx_image_free(&all);
+}
+
 int main(void)
 {
     nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
@@ -378,6 +407,8 @@ int main(void)
     test_channels_and_scenes();
     test_poly_roots();
     test_shapes();
+    test_pick("orbit");
+    test_pick("dolly");
     test_translate_exact(256, 256);
     test_translate_exact(100, 60);
     test_affine_exact("rotate", 128, 96);
