@@ -42,7 +42,8 @@ typedef struct snode {
 
 typedef struct strips {
     nprfx_graph *g;
-    int write;
+    const int *writes; /* the writes rendered together (their chains share nodes) */
+    int nwrites;
     int n;
     snode *s;
     int *slot; /* per graph node: its index in s, or -1 */
@@ -50,14 +51,12 @@ typedef struct strips {
     int have_frame;
 } strips;
 
-/* The nodes write node `node` depends on, inputs before their readers, found without recursion
- * (a graph's depth is limited only by its node count). */
-static nprfx_result chain_order(nprfx_graph *g, int node, int **order, int *count)
+/* The nodes write nodes writes[0..nw) depend on, each once, inputs before their readers, found
+ * without recursion (a graph's depth is limited only by its node count). */
+static nprfx_result chain_order(nprfx_graph *g, const int *writes, int nw, int **order, int *count)
 {
     *order = NULL;
     *count = 0;
-    int src = g->nodes[node].inputs[0].src;
-    if (src < 0) return NPRFX_OK;
     int *seen = calloc((size_t)g->count, sizeof *seen);
     int *stack = malloc((size_t)g->count * 2 * sizeof *stack);
     int *out = malloc((size_t)g->count * sizeof *out);
@@ -68,26 +67,30 @@ static nprfx_result chain_order(nprfx_graph *g, int node, int **order, int *coun
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
     int top = 0, n = 0;
-    stack[0] = src;
-    stack[1] = 0;
-    seen[src] = 1;
-    top = 1;
-    while (top > 0) {
-        int at = stack[2 * (top - 1)], *k = &stack[2 * (top - 1) + 1];
-        const gnode *nd = &g->nodes[at];
-        int next = -1;
-        while (*k < nd->ninputs && next < 0) {
-            int s = nd->inputs[(*k)++].src;
-            if (s >= 0 && !seen[s]) next = s;
-        }
-        if (next >= 0) {
-            seen[next] = 1;
-            stack[2 * top] = next;
-            stack[2 * top + 1] = 0;
-            top++;
-        } else {
-            out[n++] = at;
-            top--;
+    for (int i = 0; i < nw; i++) {
+        int src = g->nodes[writes[i]].inputs[0].src;
+        if (src < 0 || seen[src]) continue;
+        stack[0] = src;
+        stack[1] = 0;
+        seen[src] = 1;
+        top = 1;
+        while (top > 0) {
+            int at = stack[2 * (top - 1)], *k = &stack[2 * (top - 1) + 1];
+            const gnode *nd = &g->nodes[at];
+            int next = -1;
+            while (*k < nd->ninputs && next < 0) {
+                int s = nd->inputs[(*k)++].src;
+                if (s >= 0 && !seen[s]) next = s;
+            }
+            if (next >= 0) {
+                seen[next] = 1;
+                stack[2 * top] = next;
+                stack[2 * top + 1] = 0;
+                top++;
+            } else {
+                out[n++] = at;
+                top--;
+            }
         }
     }
     free(seen);
@@ -112,7 +115,7 @@ int internal_graph_strips_possible(nprfx_graph *g, int node, char *why, size_t n
         return 0;
     }
     int *order, count, ok = 1;
-    if (chain_order(g, node, &order, &count)) return 0;
+    if (chain_order(g, &node, 1, &order, &count)) return 0;
     for (int i = 0; i < count && ok; i++) {
         const gnode *nd = &g->nodes[order[i]];
         if (nd->kind == GK_READ) continue;
@@ -168,15 +171,17 @@ static void strips_free(strips *st)
     memset(st, 0, sizeof *st);
 }
 
-/* The chain of write node `write` at frame: its nodes in order, each result's channels, the
- * plates opened for rows, the margins. Files are opened (headers only), no pixel is read. */
-static nprfx_result strips_prepare(nprfx_graph *g, int write, int frame, strips *st)
+/* The chains of writes[0..nw) at frame, together: their nodes in order, each once, each
+ * result's channels, the plates opened for rows, the margins. Files are opened (headers only),
+ * no pixel is read. */
+static nprfx_result strips_prepare(nprfx_graph *g, const int *writes, int nw, int frame, strips *st)
 {
     memset(st, 0, sizeof *st);
     st->g = g;
-    st->write = write;
+    st->writes = writes;
+    st->nwrites = nw;
     int *order = NULL;
-    nprfx_result r = chain_order(g, write, &order, &st->n);
+    nprfx_result r = chain_order(g, writes, nw, &order, &st->n);
     if (r) return r;
     st->s = calloc((size_t)(st->n ? st->n : 1), sizeof *st->s);
     st->slot = malloc((size_t)g->count * sizeof *st->slot);
@@ -256,10 +261,11 @@ static nprfx_result strips_prepare(nprfx_graph *g, int write, int frame, strips 
         s->display = st->s[first].display;
         s->pixel_aspect = st->s[first].pixel_aspect;
     }
-    /* Margins, from the write back: a node's rows are its readers' rows grown by their
-     * footprints. Uses: the readers of each result within the chain, the write included. */
+    /* Margins, from the writes back: a node's rows are its readers' rows grown by their
+     * footprints. Uses: the readers of each result within the chains, the writes included. */
     if (!r) {
-        st->s[st->slot[g->nodes[write].inputs[0].src]].uses = 1;
+        for (int i = 0; i < nw; i++)
+            st->s[st->slot[g->nodes[writes[i]].inputs[0].src]].uses++;
         for (int i = st->n - 1; i >= 0; i--) {
             const snode *s = &st->s[i];
             const gnode *nd = &g->nodes[s->node];
@@ -395,35 +401,80 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
     return r;
 }
 
-nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame)
+int internal_graph_strip_group(nprfx_graph *g, int write, int *group)
 {
-    gnode *w = &g->nodes[node];
+    /* Flood over shared chain nodes: mark holds the group's chain nodes so far; a strip write
+     * whose chain meets them joins, and its nodes are marked; until none joins. */
+    unsigned char *mark = calloc((size_t)g->count, 1), *in = calloc((size_t)g->count, 1);
+    int n = 0;
+    if (!mark || !in) goto done;
+    in[write] = 1;
+    for (int grown = 1; grown;) {
+        grown = 0;
+        for (int w = 0; w < g->count; w++) {
+            if (g->nodes[w].kind != GK_WRITE) continue;
+            if (!in[w] && !internal_graph_strips_possible(g, w, NULL, 0)) continue;
+            int *order, count;
+            if (chain_order(g, &w, 1, &order, &count)) goto done;
+            int meets = in[w];
+            for (int k = 0; k < count && !meets; k++)
+                meets = mark[order[k]];
+            if (meets) {
+                for (int k = 0; k < count; k++)
+                    if (!mark[order[k]]) mark[order[k]] = grown = 1;
+                if (!in[w]) in[w] = grown = 1;
+            }
+            free(order);
+        }
+    }
+    for (int w = 0; w < g->count; w++)
+        if (in[w]) group[n++] = w;
+done:
+    if (n == 0) group[n++] = write; /* out of memory: alone, as before */
+    free(mark);
+    free(in);
+    return n;
+}
+
+/* One write of a strip render: its file, open for rows, and the channels it writes. */
+typedef struct swrite {
+    snode *src;
+    nprfx_row_writer *out;
+} swrite;
+
+nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int nw, int frame)
+{
     strips st;
-    nprfx_result r = strips_prepare(g, node, frame, &st);
+    nprfx_result r = strips_prepare(g, writes, nw, frame, &st);
     if (r) return r;
     double t0 = internal_graph_now();
-    snode *src = &st.s[st.slot[w->inputs[0].src]];
-    char path[4096];
-    internal_graph_resolve_path(g, g->out_dir, w->path, frame, path, sizeof path);
-    r = internal_graph_check_not_input(g, w, path, frame);
-    /* The channels written, their names and file types, as write_node takes them. */
-    int idx[256], count = 0;
-    if (!r)
-        r = internal_graph_input_channels(g, w, 0, (const char *const *)src->names, src->channels,
-                                          idx, &count);
-    const char *names[256];
-    unsigned char types[256];
-    for (int c = 0; !r && c < count; c++) {
-        names[c] = src->names[idx[c]];
-        types[c] = src->types ? src->types[idx[c]] : NPRFX_PIXEL_FLOAT;
-    }
-    nprfx_row_writer *out = NULL;
-    if (!r) {
-        nprfx_write_options wo = {sizeof wo, w->compression ? w->compression : "zip", w->half};
-        wo.types = src->types ? types : NULL;
-        wo.pixel_aspect = src->pixel_aspect;
-        const nprfx_rect *display = nprfx_rect_empty(src->display) ? NULL : &src->display;
-        r = nprfx_io_rows_create(w->ctx, path, st.frame, count, names, display, &wo, &out);
+    swrite *sw = calloc((size_t)nw, sizeof *sw);
+    if (!sw) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    for (int i = 0; !r && i < nw; i++) {
+        gnode *w = &g->nodes[writes[i]];
+        snode *src = sw[i].src = &st.s[st.slot[w->inputs[0].src]];
+        char path[4096];
+        internal_graph_resolve_path(g, g->out_dir, w->path, frame, path, sizeof path);
+        r = internal_graph_check_not_input(g, w, path, frame);
+        /* The channels written, their names and file types, as write_node takes them. */
+        int idx[256], count = 0;
+        if (!r)
+            r = internal_graph_input_channels(g, w, 0, (const char *const *)src->names,
+                                              src->channels, idx, &count);
+        const char *names[256];
+        unsigned char types[256];
+        for (int c = 0; !r && c < count; c++) {
+            names[c] = src->names[idx[c]];
+            types[c] = src->types ? src->types[idx[c]] : NPRFX_PIXEL_FLOAT;
+        }
+        if (!r) {
+            nprfx_write_options wo = {sizeof wo, w->compression ? w->compression : "zip", w->half};
+            wo.types = src->types ? types : NULL;
+            wo.pixel_aspect = src->pixel_aspect;
+            const nprfx_rect *display = nprfx_rect_empty(src->display) ? NULL : &src->display;
+            r = nprfx_io_rows_create(w->ctx, path, st.frame, count, names, display, &wo,
+                                     &sw[i].out);
+        }
     }
     double tw = internal_graph_now() - t0;
     const int step = g->strip_rows > 0 ? g->strip_rows : 64;
@@ -434,22 +485,36 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame)
         for (int i = 0; i < st.n && !r; i++)
             r = render_rows(&st, &st.s[i], frame, y0, y1);
         double t1 = internal_graph_now();
-        nprfx_image view, scratch;
-        memset(&scratch, 0, sizeof scratch);
-        if (!r) r = select_rows(&st, w, 0, src, &view, &scratch);
-        if (!r) r = nprfx_io_rows_write(w->ctx, out, &view);
-        internal_graph_frame_release(g, &scratch);
-        release_buf(&st, src);
+        for (int i = 0; i < nw && !r; i++) {
+            const gnode *w = &g->nodes[writes[i]];
+            nprfx_image view, scratch;
+            memset(&scratch, 0, sizeof scratch);
+            r = select_rows(&st, w, 0, sw[i].src, &view, &scratch);
+            /* the strip's own rows: a source that another chain node also reads holds its
+             * margin too */
+            if (!r)
+                view = nprfx_image_crop(&view, nprfx_rect_make(st.frame.x0, y0, st.frame.x1, y1));
+            if (!r) r = nprfx_io_rows_write(w->ctx, sw[i].out, &view);
+            internal_graph_frame_release(g, &scratch);
+            if (--sw[i].src->left == 0) release_buf(&st, sw[i].src);
+        }
         tw += internal_graph_now() - t1;
     }
+    /* Every file is finished (renamed into place, or its temporary removed) whatever failed. */
     double t1 = internal_graph_now();
-    nprfx_result fr = nprfx_io_rows_finish(w->ctx, out, !r);
-    if (!r) r = fr;
+    for (int i = 0; sw && i < nw; i++) {
+        if (!sw[i].out) continue;
+        nprfx_result fr = nprfx_io_rows_finish(g->nodes[writes[i]].ctx, sw[i].out, !r);
+        if (!r) r = fr;
+    }
     tw += internal_graph_now() - t1;
     for (int i = 0; i < st.n; i++)
         g->stats[st.s[i].node].calls++;
-    g->stats[node].seconds += tw;
-    g->stats[node].calls++;
+    for (int i = 0; i < nw; i++) { /* the writes share the time of the files */
+        g->stats[writes[i]].seconds += tw / nw;
+        g->stats[writes[i]].calls++;
+    }
+    free(sw);
     strips_free(&st);
     return r;
 }
@@ -458,13 +523,23 @@ uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int row
                                    nprfx_result *err)
 {
     strips st;
-    if ((*err = strips_prepare(g, write, frame, &st))) return 0;
+    int *group = malloc((size_t)g->count * sizeof *group);
+    if (!group) {
+        *err = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        return 0;
+    }
+    int nw = internal_graph_strip_group(g, write, group);
+    *err = strips_prepare(g, group, nw, frame, &st);
+    if (*err) {
+        free(group);
+        return 0;
+    }
     /* As if every chain node's strip were held at once (most go back before the next renders):
      * its rows, the channel selections its inputs pack, and for a read the plate before its
      * motion channels are appended and one block of 64 rows it decodes. */
     const uint64_t w = (uint64_t)nprfx_rect_width(st.frame),
                    fh = (uint64_t)nprfx_rect_height(st.frame);
-    uint64_t need = 0;
+    uint64_t need = 0, packed = 0;
     for (int i = 0; i < st.n; i++) {
         const snode *s = &st.s[i];
         uint64_t h = (uint64_t)rows + 2u * (uint64_t)s->margin;
@@ -473,8 +548,15 @@ uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int row
         if (s->rr) ch += (uint64_t)s->shape.nchannels * (1u + (64u + h - 1) / h);
         need += w * h * ch * sizeof(float);
     }
-    need += w * (uint64_t)(rows < (int)fh ? rows : (int)fh) * (uint64_t)st.s[st.n - 1].channels *
-            sizeof(float); /* the write's packed rows */
+    for (int i = 0; i < nw; i++) /* a write's packed rows (one at a time) */
+        if (st.s[st.slot[g->nodes[group[i]].inputs[0].src]].channels > 0) {
+            const snode *src = &st.s[st.slot[g->nodes[group[i]].inputs[0].src]];
+            uint64_t b = w * (uint64_t)(rows < (int)fh ? rows : (int)fh) * (uint64_t)src->channels *
+                         sizeof(float);
+            if (b > packed) packed = b;
+        }
+    need += packed;
     strips_free(&st);
+    free(group);
     return need;
 }

@@ -144,15 +144,24 @@ static nprfx_result render_frame(nprfx_graph *g, int frame, int files, int *writ
     *written = 0;
     nprfx_result r = internal_graph_plan_build(g);
     internal_graph_frame_begin(g, frame);
+    int *group = NULL;
     for (int i = 0; !r && i < g->count; i++) {
         if (g->nodes[i].kind != GK_WRITE) continue;
-        /* Strips where the plan chose them (a graph over the memory limit, or --strip-rows). */
-        if (files && g->strip_rows > 0 && internal_graph_strips_possible(g, i, NULL, 0))
-            r = internal_graph_write_strips(g, i, frame);
-        else
+        /* Strips where the plan chose them (a graph over the memory limit, or --strip-rows):
+         * the writes whose chains share nodes go together, from the first of them. */
+        if (files && g->strip_rows > 0 && internal_graph_strips_possible(g, i, NULL, 0)) {
+            if (!group && !(group = malloc((size_t)g->count * sizeof *group))) {
+                r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+                break;
+            }
+            int nw = internal_graph_strip_group(g, i, group);
+            if (group[0] == i) r = internal_graph_write_strips(g, group, nw, frame);
+        } else {
             r = write_node(g, i, frame, files);
+        }
         if (!r) (*written)++;
     }
+    free(group);
     /* What the next frame will not read goes now, not when the byte bound is reached. */
     internal_graph_frame_sweep(g);
     return r;

@@ -251,11 +251,16 @@ nprfx_result internal_graph_check_not_input(nprfx_graph *g, const gnode *w, cons
  * node it depends on is a read of an EXR or a node with NPRFX_NODE_ROWS and a footprint >= 0,
  * none temporal; no preview. When not, why names the node in the way. */
 int internal_graph_strips_possible(nprfx_graph *g, int node, char *why, size_t n);
-/* Render write node `node` at frame by strips of g->strip_rows rows (graph_strips.c). */
-nprfx_result internal_graph_write_strips(nprfx_graph *g, int node, int frame);
-/* The bytes a strip render of write node `write` at frame holds at most with strips of `rows`
- * rows (the plates' headers are read); *err: why it cannot be told (raised on g's context), a
- * plate's block of rows above the memory limit (NPRFX_ERR_OUT_OF_MEMORY) among them. */
+/* Render write nodes writes[0..nw) (a strip group, internal_graph_strip_group) at frame by
+ * strips of g->strip_rows rows, each node of their chains once a strip (graph_strips.c). */
+nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int nw, int frame);
+/* The writes that render by strips together with write node `write` (their chains share nodes,
+ * directly or through others; it included), in node order, into group (room for g->count);
+ * their count. Shared nodes then render each strip once for all of them. */
+int internal_graph_strip_group(nprfx_graph *g, int write, int *group);
+/* The bytes a strip render of write node `write` (with its strip group) at frame holds at most with
+ * strips of `rows` rows (the plates' headers are read); *err: why it cannot be told (raised on g's
+ * context), a plate's block of rows above the memory limit (NPRFX_ERR_OUT_OF_MEMORY) among them. */
 uint64_t internal_graph_strip_need(nprfx_graph *g, int write, int frame, int rows,
                                    nprfx_result *err);
 

@@ -4,7 +4,8 @@
 # time.
 #   - the pixels are the whole frame's, bit for bit, at any strip height (1 row, 7 rows against
 #     filters reaching 6 rows, 64, taller than the frame), chained filters included, and a plate
-#     written through strips keeps its channels' file types; no temporary file is left;
+#     written through strips keeps its channels' file types; no temporary file is left; writes
+#     whose chains share nodes go together, each shared node rendering a strip once;
 #   - a 4K (3840x2160) graph renders under a --mem-limit below one frame of its plate's
 #     channels, by strips the plan chooses itself, identical to the whole-frame render without a
 #     limit, in a fraction of its peak resident memory;
@@ -54,6 +55,12 @@ for rows in 1 7 64 1000; do
   [ $n -eq 6 ] && pass || fail "the whole-frame render wrote $n files, not 6"
   left=$(find s$rows -name '.*tmp*' | head -1)
   [ -z "$left" ] && pass || fail "--strip-rows $rows left a temporary file: $left"
+done
+# The three writes share the plate (all of them) and morph1/morph2 (w_look, w_morph): a strip of
+# each node is made once for all of them, so each renders once a frame, not once per write.
+for n in plate morph1 morph2 thr look; do
+  awk -v n="$n" '$1 == n && $3 == 2 { ok = 1 } END { exit !ok }' s7.txt && pass ||
+    fail "strips: $n did not render once a frame: $(grep "^  $n " s7.txt)"
 done
 # A plate written through strips keeps its channels' file types (half here), as a whole write.
 "$NPRFX" info s7/out/plate.0001.exr | grep -q "R G B A (half)" && pass ||
