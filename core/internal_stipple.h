@@ -88,7 +88,8 @@ typedef struct stlist {
 #define STENCIL_MAX 8
 typedef struct internal_stencils {
     double r;
-    int phases;
+    int phases;   /* a power of two */
+    int shift;    /* log2(phases) */
     int lo, size; /* the stencil's pixels: offsets lo .. lo + size - 1 from the centre's pixel */
     float *cov;   /* size^2 coverages per phase, phases row by row; NULL: not made */
 } internal_stencils;
