@@ -36,6 +36,9 @@ typedef struct pixdata {
     size_t cap;    /* pixels allocated */
     void *fixes;   /* repair_outliers: the repaired values */
     size_t fixcap; /* repairs they have room for */
+    /* Every held row is of a frame without uv and id inputs (fill_raw's plane_row): su depends
+     * on the column only and sv on the row only, one object, so the Jacobian is separable. */
+    int plane;
 } pixdata;
 
 /* OK_SEAM: the two one-sided differences disagree (a UV seam next to the pixel, or a fold).

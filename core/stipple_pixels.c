@@ -464,6 +464,7 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
         for (int m = 0; m < a.n; m++)
             AHEAD(a, line, m, x1 - x0);
     }
+    d->plane = !in->uv && !in->id; /* until a row is not a plane_row */
     for (int y = d->r.y0; y < d->r.y1; y++) {
         rowsrc sid = row_source(in->id, y, x0, x1), suv = row_source(in->uv, y, x0, x1);
         rowsrc sto = row_source(in->tone, y, x0, x1);
@@ -486,6 +487,7 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
                 continue;
             }
         }
+        d->plane = 0;
         for (int x = x0; x < x1; x++, k++) {
             d->ok[k] = 0;
             d->g[k] = 0.0f;
