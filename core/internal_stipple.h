@@ -36,6 +36,9 @@ typedef struct pixdata {
     size_t cap;    /* pixels allocated */
     void *fixes;   /* repair_outliers: the repaired values */
     size_t fixcap; /* repairs they have room for */
+    /* Every held row is of a frame without uv and id inputs (fill_raw's plane_row): su depends
+     * on the column only and sv on the row only, one object, so the Jacobian is separable. */
+    int plane;
 } pixdata;
 
 /* OK_SEAM: the two one-sided differences disagree (a UV seam next to the pixel, or a fold).
@@ -88,7 +91,8 @@ typedef struct stlist {
 #define STENCIL_MAX 8
 typedef struct internal_stencils {
     double r;
-    int phases;
+    int phases;   /* a power of two */
+    int shift;    /* log2(phases) */
     int lo, size; /* the stencil's pixels: offsets lo .. lo + size - 1 from the centre's pixel */
     float *cov;   /* size^2 coverages per phase, phases row by row; NULL: not made */
 } internal_stencils;

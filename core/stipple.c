@@ -14,7 +14,12 @@
  * say whether the pixel is usable, and add without branching where the result is the same
  * float; owners are queried in blocks whose per-sample tests are branch-free; the disc coverage
  * evaluates its P and quadrant-area terms two at a time with SSE2 where there is SSE2, each
- * lane doing the scalar code's operations, so every build gives the same floats. */
+ * lane doing the scalar code's operations, so every build gives the same floats. A frame
+ * without uv and id inputs (the image its own UV space) fills its rows without per-input
+ * tests and its Jacobian from one derivative per column and per row (stipple_pixels.c,
+ * stipple_jacobian.c); a dot whose stencil lies wholly in its tile is drawn as straight-line
+ * rows (stipple_disc.c). Callgrind, one 1080p orbit frame: 1.21G / 1.49G / 1.45G instructions
+ * (uniform / radius / multitone) before these, 0.82G / 1.04G / 1.05G after. */
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>

@@ -180,9 +180,126 @@ static inline void jac_quad(pixdata *d, const jacview *v, size_t k, int x)
 }
 #endif
 
+#if defined(__SSE2__)
+/* Two floats from p into the low lanes (an 8-byte load that may alias anything). */
+static inline __m128 load_2f(const float *p)
+{
+    return _mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)p));
+}
+#endif
+
+/* fill_jacobian where the held pixels are a plane (pixdata.plane): every pixel has a UV and
+ * object 0; su is the same in every row and sv the same along a row. So the x differences of
+ * a column are the same in every row (those of sv exactly 0), and the y differences of a row
+ * the same in every column (those of su exactly 0): derivative() gives the same values, and
+ * jac_pixel the same floats, computed once per column and once per row (the reference code
+ * on row r.y0 and column r.x0), then per pixel only the determinant and the stores. The
+ * per-pixel differences were the largest pass of a render without a uv input. 0 when out of
+ * memory (nothing written: the caller takes the general path). */
+static int plane_jacobian(pixdata *d, nprfx_rect r)
+{
+    const int nx = nprfx_rect_width(r), ny = nprfx_rect_height(r);
+    if (nx <= 0 || ny <= 0) return 1;
+    float *f = malloc(sizeof(float) * 2 * ((size_t)nx + (size_t)ny));
+    unsigned char *e = malloc((size_t)nx + (size_t)ny);
+    if (!f || !e) {
+        free(f);
+        free(e);
+        return 0;
+    }
+    float *fux = f, *fvx = f + nx, *fuy = f + 2 * (size_t)nx, *fvy = fuy + ny;
+    unsigned char *ex = e, *ey = e + nx;
+    const size_t w = (size_t)d->w;
+    for (int x = r.x0; x < r.x1; x++) {
+        double du = 0, dv = 0;
+        const int i = x - r.x0;
+        ex[i] = (unsigned char)derivative(d->su, d->sv, pd_at(d, x, r.y0), 1, x + 1 < d->r.x1,
+                                          x - 1 >= d->r.x0, &du, &dv);
+        fux[i] = (float)du;
+        fvx[i] = (float)dv;
+    }
+    for (int y = r.y0; y < r.y1; y++) {
+        double du = 0, dv = 0;
+        const int i = y - r.y0;
+        ey[i] = (unsigned char)derivative(d->su, d->sv, pd_at(d, r.x0, y), w, y + 1 < d->r.y1,
+                                          y - 1 >= d->r.y0, &du, &dv);
+        fuy[i] = (float)du;
+        fvy[i] = (float)dv;
+    }
+    /* whether every column has a derivative: then a row whose own has one is the usual row */
+    int cols_all = 1;
+    for (int i = 0; i < nx; i++)
+        cols_all &= ex[i] != 0;
+    for (int y = r.y0; y < r.y1; y++) {
+        const size_t k0 = pd_at(d, r.x0, y);
+        const int j = y - r.y0;
+        float *restrict jac = d->jac + 4 * k0, *restrict adet = d->adet + k0;
+        int *restrict jid = d->jid + k0;
+        unsigned char *restrict ok = d->ok + k0;
+        const int *restrict id = d->id + k0;
+        int i = 0;
+#if defined(__SSE2__)
+        if (cols_all && ey[j]) {
+            /* two at a time: the stored floats, det from them as jac_pixel orders it (a
+             * product of floats as doubles is exact, so the order of its factors does not
+             * matter), and jac_lanes' usability test */
+            const __m128d uy = _mm_set1_pd((double)fuy[j]), vy = _mm_set1_pd((double)fvy[j]);
+            const __m128d dmax = _mm_set1_pd(1.79769313486231570815e308);
+            const __m128i none = _mm_set1_epi32(NO_ID);
+            const unsigned char seam_row = ey[j] == 2 ? OK_SEAM : 0;
+            for (; i + 2 <= nx; i += 2) {
+                const __m128 ux2 = load_2f(fux + i), vx2 = load_2f(fvx + i);
+                const __m128 lu = _mm_unpacklo_ps(ux2, _mm_set1_ps(fuy[j]));
+                const __m128 lv = _mm_unpacklo_ps(vx2, _mm_set1_ps(fvy[j]));
+                _mm_storeu_ps(jac + 4 * (size_t)i, _mm_movelh_ps(lu, lv));
+                _mm_storeu_ps(jac + 4 * (size_t)i + 4, _mm_movehl_ps(lv, lu));
+                const __m128d det = _mm_sub_pd(_mm_mul_pd(_mm_cvtps_pd(ux2), vy),
+                                               _mm_mul_pd(uy, _mm_cvtps_pd(vx2)));
+                const __m128d ad = _mm_andnot_pd(_mm_set1_pd(-0.0), det);
+                const __m128 fad = _mm_cvtpd_ps(ad);
+                _mm_storel_pi((__m64 *)(adet + i), fad);
+                const __m128i usable =
+                    _mm_and_si128(_mm_shuffle_epi32(_mm_castpd_si128(_mm_cmple_pd(ad, dmax)),
+                                                    _MM_SHUFFLE(3, 1, 2, 0)),
+                                  _mm_castps_si128(_mm_cmpgt_ps(fad, _mm_setzero_ps())));
+                const __m128i idv = _mm_loadl_epi64((const __m128i *)(id + i));
+                _mm_storel_epi64(
+                    (__m128i *)(jid + i),
+                    _mm_or_si128(_mm_and_si128(usable, idv), _mm_andnot_si128(usable, none)));
+                const int bits = _mm_movemask_ps(_mm_castsi128_ps(usable));
+                ok[i] |=
+                    (unsigned char)((ex[i] == 2 ? OK_SEAM : 0) | seam_row | (bits & 1 ? OK_J : 0));
+                ok[i + 1] |= (unsigned char)((ex[i + 1] == 2 ? OK_SEAM : 0) | seam_row |
+                                             (bits & 2 ? OK_J : 0));
+            }
+        }
+#endif
+        for (; i < nx; i++) {
+            jid[i] = NO_ID;
+            if (!ex[i] || !ey[j]) continue;
+            if (ex[i] == 2 || ey[j] == 2) ok[i] |= OK_SEAM;
+            float *jc = jac + 4 * (size_t)i;
+            jc[0] = fux[i];
+            jc[1] = fuy[j];
+            jc[2] = fvx[i];
+            jc[3] = fvy[j];
+            const double det = (double)jc[0] * jc[3] - (double)jc[1] * jc[2];
+            adet[i] = (float)fabs(det);
+            if (det != 0.0 && isfinite(det) && adet[i] > 0) {
+                ok[i] |= OK_J;
+                jid[i] = id[i];
+            }
+        }
+    }
+    free(f);
+    free(e);
+    return 1;
+}
+
 /* The Jacobian, |det J|, OK_J, OK_SEAM and jid (NO_ID where not usable) over r. */
 void internal_stipple_fill_jacobian(pixdata *d, nprfx_rect r)
 {
+    if (d->plane && plane_jacobian(d, r)) return;
 #if defined(__SSE2__)
     /* the columns whose left and right neighbours are held */
     const int xa = r.x0 - 1 >= d->r.x0 ? r.x0 : d->r.x0 + 1;

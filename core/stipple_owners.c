@@ -276,6 +276,8 @@ static int keyed_cmp(const void *pa, const void *pb)
  * the blocks fall (each block's stipples are sorted by owner, and the rows of blocks dealt out
  * by owner row). */
 #define BLOCK 4
+/* member_hits, block_owners and block_queries take a row of a block as one SSE2 vector */
+_Static_assert(BLOCK == 4, "a block row is four lanes");
 #define BLOCK_PX (BLOCK * BLOCK)
 /* owned samples waiting for emit() */
 #define PENDING 64
@@ -577,8 +579,15 @@ static unsigned block_owners(block_ctx *b, int cols)
             memcpy(b->id + BLOCK * r, id, sizeof(int) * BLOCK);
         else
             memcpy(b->id + BLOCK * r, id, sizeof(int) * (size_t)cols);
+#if defined(__SSE2__)
+        /* the strip is padded with limits of 0; a row's four at once (BLOCK is 4) */
+        const __m128i l = _mm_loadu_si128((const __m128i *)lim);
+        kept |= (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(l, _mm_setzero_si128())))
+                << (BLOCK * r);
+#else
         for (int c = 0; c < BLOCK; c++) /* the strip is padded with limits of 0 */
             kept |= (unsigned)(lim[c] > 0) << (BLOCK * r + c);
+#endif
     }
     return kept;
 }
@@ -649,8 +658,18 @@ static void block_queries(block_ctx *b, unsigned kept)
     while (kept && b->r == NPRFX_OK) {
         const int id0 = id[lowest_bit(kept)];
         unsigned group = 0;
+#if defined(__SSE2__)
+        /* a row's four ids at once (BLOCK is 4); slots outside the block are not in kept */
+        const __m128i i0 = _mm_set1_epi32(id0);
+        for (int r = 0; r < b->rows; r++)
+            group |= (unsigned)_mm_movemask_ps(_mm_castsi128_ps(
+                         _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(id + BLOCK * r)), i0)))
+                     << (BLOCK * r);
+        group &= kept;
+#else
         for (unsigned m = kept; m; m &= m - 1)
             group |= (unsigned)(id[lowest_bit(m)] == id0) << lowest_bit(m);
+#endif
         int lim = 0;
         double bb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY}, sum = 0;
         if (group == all) { /* one object: the usual case */
@@ -733,6 +752,7 @@ nprfx_result internal_stipple_owner_stipples(const sjob *j, scratch *s, nprfx_re
     b.st = &st;
     b.np = 0;
     b.out = kl;
+    memset(b.id, 0, sizeof b.id); /* read four a row (block_queries), outside the block too */
     kl->n = 0;
     /* a row of blocks at a time, CHUNK columns at a time; each block's stipples sorted by
      * owner */

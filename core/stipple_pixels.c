@@ -271,6 +271,39 @@ static inline void raw_pixel(rawstate *c, rowstate *st, const float *qi, const f
     id[i] = st->pid;
 }
 
+/* The darkness of the owners of a row (the columns [gx0, gx1); owner_build and the limits
+ * read it nowhere else, so only those read the tone), k0 the row's first held pixel: four at a
+ * time where there is SSE2 (two a vector), 0 where the pixel has no UV. */
+static void raw_darkness(const rawstate *c, pixdata *d, size_t k0, const rowsrc *sto, int gx0,
+                         int gx1)
+{
+    if (gx1 <= gx0) return;
+    const int m = gx1 - gx0, luma = c->luma;
+    const ptrdiff_t ts = sto->ps;
+    const float *q = sto->p + (ptrdiff_t)(gx0 - d->r.x0) * ts;
+    const size_t kg = k0 + (size_t)(gx0 - d->r.x0);
+    const float *curve = c->p->tone_curve;
+    float *restrict g = d->g + kg;
+    const unsigned char *restrict okg = d->ok + kg;
+    int i = 0;
+#if defined(__SSE2__)
+    for (; i + 4 <= m; i += 4, q += 4 * ts) {
+        const __m128 d01 = darkness2(c, curve != NULL, tone2(q, q + ts, luma));
+        const __m128 d23 = darkness2(c, curve != NULL, tone2(q + 2 * ts, q + 3 * ts, luma));
+        /* 0 where the pixel has no UV */
+        __m128i none = _mm_cvtsi32_si128((int)load_u32(okg + i));
+        none =
+            _mm_unpacklo_epi16(_mm_unpacklo_epi8(none, _mm_setzero_si128()), _mm_setzero_si128());
+        none = _mm_cmpeq_epi32(none, _mm_setzero_si128());
+        _mm_storeu_ps(g + i, _mm_andnot_ps(_mm_castsi128_ps(none), _mm_movelh_ps(d01, d23)));
+    }
+#endif
+    for (; i < m; i++, q += ts) {
+        double tone = luma ? 0.2126 * q[0] + 0.7152 * q[1] + 0.0722 * q[2] : q[0];
+        g[i] = okg[i] ? darkness(curve, tone) : 0.0f;
+    }
+}
+
 /* A row that every input covers (the usual case): the generic loop's arithmetic without its
  * bounds tests. Where there is SSE2, four pixels at a time in the usual case (one object, the
  * last one seen, finite UVs), their (u, v) from two loads, and the darkness four at a time
@@ -331,32 +364,44 @@ static void raw_row(rawstate *c, pixdata *d, int y, const rowsrc *sid, const row
         raw_pixel(c, &st, qi + i * is, qu + i * us, id, su, sv, ok, i);
     }
     c->last_id = st.last_id, c->off_u = st.off_u, c->off_v = st.off_v;
-    if (gx1 <= gx0) return;
-    /* the darkness on the owners */
-    const int m = gx1 - gx0, luma = c->luma;
-    const ptrdiff_t ts = sto->ps;
-    const float *q = sto->p + (ptrdiff_t)(gx0 - d->r.x0) * ts;
-    const size_t kg = k0 + (size_t)(gx0 - d->r.x0);
-    const float *curve = c->p->tone_curve;
-    float *restrict g = d->g + kg;
-    const unsigned char *restrict okg = d->ok + kg;
-    i = 0;
+    raw_darkness(c, d, k0, sto, gx0, gx1);
+}
+
+/* A row of a frame without uv and id inputs (the image is its own UV space, one object 0)
+ * that the tone covers: the generic loop's arithmetic, u = (x - frame.x0) / plane_scale a
+ * lane each, two at a time with SSE2 (the same division); v, and so sv, is the row's. The
+ * caller has checked that u and v are finite over the row (|u| is largest at its ends). */
+static void plane_row(rawstate *c, pixdata *d, int y, int fx0, double v, const rowsrc *sto, int gx0,
+                      int gx1)
+{
+    const int n = d->w, x0 = d->r.x0;
+    const size_t k0 = pd_at(d, x0, y);
+    int *restrict id = d->id + k0;
+    double *restrict su = d->su + k0, *restrict sv = d->sv + k0;
+    unsigned char *restrict ok = d->ok + k0;
+    if (c->last_id != 0) object_offsets(c, 0);
+    const double ps = c->p->plane_scale, itu = c->inv_tile_u, ou = c->off_u;
+    const double svr = v * c->inv_tile_v + c->off_v;
+    int i = 0;
 #if defined(__SSE2__)
-    for (; i + 4 <= m; i += 4, q += 4 * ts) {
-        const __m128 d01 = darkness2(c, curve != NULL, tone2(q, q + ts, luma));
-        const __m128 d23 = darkness2(c, curve != NULL, tone2(q + 2 * ts, q + 3 * ts, luma));
-        /* 0 where the pixel has no UV */
-        __m128i none = _mm_cvtsi32_si128((int)load_u32(okg + i));
-        none =
-            _mm_unpacklo_epi16(_mm_unpacklo_epi8(none, _mm_setzero_si128()), _mm_setzero_si128());
-        none = _mm_cmpeq_epi32(none, _mm_setzero_si128());
-        _mm_storeu_ps(g + i, _mm_andnot_ps(_mm_castsi128_ps(none), _mm_movelh_ps(d01, d23)));
+    const __m128d vps = _mm_set1_pd(ps), vitu = _mm_set1_pd(itu), vou = _mm_set1_pd(ou);
+    const __m128d vsv = _mm_set1_pd(svr);
+    for (; i + 2 <= n; i += 2) {
+        const __m128i xi = _mm_setr_epi32(x0 + i - fx0, x0 + i + 1 - fx0, 0, 0);
+        const __m128d u = _mm_div_pd(_mm_cvtepi32_pd(xi), vps);
+        _mm_storeu_pd(su + i, _mm_add_pd(_mm_mul_pd(u, vitu), vou));
+        _mm_storeu_pd(sv + i, vsv);
     }
 #endif
-    for (; i < m; i++, q += ts) {
-        double tone = luma ? 0.2126 * q[0] + 0.7152 * q[1] + 0.0722 * q[2] : q[0];
-        g[i] = okg[i] ? darkness(curve, tone) : 0.0f;
+    for (; i < n; i++) {
+        const double u = (x0 + i - fx0) / ps;
+        su[i] = u * itu + ou;
+        sv[i] = svr;
     }
+    for (i = 0; i < n; i++)
+        id[i] = 0;
+    memset(ok, OK_UV, (size_t)n);
+    raw_darkness(c, d, k0, sto, gx0, gx1);
 }
 
 /* The byte ranges of the inputs of row y over columns [x0, x1): the UV and the id, and the
@@ -419,6 +464,7 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
         for (int m = 0; m < a.n; m++)
             AHEAD(a, line, m, x1 - x0);
     }
+    d->plane = !in->uv && !in->id; /* until a row is not a plane_row */
     for (int y = d->r.y0; y < d->r.y1; y++) {
         rowsrc sid = row_source(in->id, y, x0, x1), suv = row_source(in->uv, y, x0, x1);
         rowsrc sto = row_source(in->tone, y, x0, x1);
@@ -431,6 +477,17 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
             raw_row(&c, d, y, &sid, &suv, &sto, owners ? gx0 : 0, owners ? gx1 : 0, &a);
             continue;
         }
+        if (!in->uv && !in->id && sto.lo == x0 && sto.hi == x1) {
+            /* the generic loop's u and v, finite over the row where they are at its ends */
+            const double v = (y - in->frame.y0) / p->plane_scale;
+            if (isfinite(v) && isfinite((x0 - in->frame.x0) / p->plane_scale) &&
+                isfinite((x1 - 1 - in->frame.x0) / p->plane_scale)) {
+                const int owners = y >= E.y0 && y < E.y1;
+                plane_row(&c, d, y, in->frame.x0, v, &sto, owners ? gx0 : 0, owners ? gx1 : 0);
+                continue;
+            }
+        }
+        d->plane = 0;
         for (int x = x0; x < x1; x++, k++) {
             d->ok[k] = 0;
             d->g[k] = 0.0f;
