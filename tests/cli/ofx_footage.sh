@@ -14,9 +14,11 @@
 #     is confidence.prev): rendered in order, equal to the runner within half an 8-bit level
 #     (0.002): the output's rounding. The footage is 8-bit, so the host's 8-bit Source loses
 #     nothing and the flow is the runner's.
-#  3. mlt, out of order (frames 1-5, then 12-14): a jump is a cut: frames 12-14 equal (0.002)
-#     the runner's render of a shot that starts at 12 (zero motion and confidence there, nodes restart), and
-#     differ from the in-order result; never the flow against the wrong previous frame.
+#  3. mlt, out of order (frames 1-5, then 7-9): a jump is a cut: frames 7-9 equal (0.002) the
+#     runner's render of a shot that starts at 7 (zero motion and confidence there, nodes
+#     restart), and differ from the in-order result; never the flow against the wrong previous
+#     frame. One frame skipped: frames 5 and 7 are alike enough that a flow between them would
+#     pass the flow's own cut detection, so a plug-in that took 5 as 7's previous frame fails.
 # Skipped (77) in a build without an optical flow provider (no OpenCV): the adapter then derives
 # nothing (and coherent-noise and advect keep their clips).
 #
@@ -93,18 +95,18 @@ done
 # --- 3. mlt, out of order: a jump restarts --------------------------------------------------------
 for g in cn_mlt advect; do
   out=$([ $g = advect ] && echo uv || echo cn)
-  if ! ofx "$W/$g.json" --profile mlt --output-dir "$W/$g/jump" --frames 1-5,12-14 \
+  if ! ofx "$W/$g.json" --profile mlt --output-dir "$W/$g/jump" --frames 1-5,7-9 \
        2> "$W/$g.jump.log"; then
-    fail "$g under mlt, frames 1-5,12-14: $(tail -n 2 "$W/$g.jump.log" | tr '\n' ' ')"; continue
+    fail "$g under mlt, frames 1-5,7-9: $(tail -n 2 "$W/$g.jump.log" | tr '\n' ' ')"; continue
   fi
-  "$NPRFX" run "$W/$g.json" --output-dir "$W/$g/cut" --shot 12-24 --frames 12-14 --quiet
-  for f in 0012 0013 0014; do
+  "$NPRFX" run "$W/$g.json" --output-dir "$W/$g/cut" --shot 7-24 --frames 7-9 --quiet
+  for f in 0007 0008 0009; do
     if within "$W/$g/cut/$out.$f.exr" "$W/$g/jump/$out.$f.exr" 0.002; then pass
-    else fail "$g under mlt: frame $f after a jump is not the restart (a shot from 12):"; tail -n 3 "$W/diff.log"; fi
+    else fail "$g under mlt: frame $f after a jump is not the restart (a shot from 7):"; tail -n 3 "$W/diff.log"; fi
   done
-  # and the restart is visible: frame 12 of the shot from 1 is another picture
-  if within "$W/$g/direct/$out.0012.exr" "$W/$g/jump/$out.0012.exr" 0.002; then
-    fail "$g under mlt: frame 12 after a jump equals the in-order render (the test cannot see a restart)"
+  # and the restart is visible: frame 7 of the shot from 1 is another picture
+  if within "$W/$g/direct/$out.0007.exr" "$W/$g/jump/$out.0007.exr" 0.002; then
+    fail "$g under mlt: frame 7 after a jump equals the in-order render (the test cannot see a restart)"
   else pass; fi
   for f in 0001 0005; do
     if within "$W/$g/direct/$out.$f.exr" "$W/$g/jump/$out.$f.exr" 0.002; then pass
