@@ -24,6 +24,17 @@ typedef struct nprfx_render_hook {
     int exports;
 } nprfx_render_hook;
 
+/* For a render hook, during its render: the node connected to input `input` of the node being
+ * rendered (fetch_user is the render's args->fetch_user), with its params; NULL when the input is
+ * not connected or comes from a read or synth. The OpenFX test host's --footage mode serves a
+ * plug-in the picture a flow node reads instead of the flow (tests/ofxhost/render.c). */
+const nprfx_node_desc *nprfx_graph_hook_upstream(void *fetch_user, int input,
+                                                 const nprfx_value **params);
+/* Input `up_input` of that node at `frame`, with the channels that node reads: a view valid as
+ * args->fetch's are (NPRFX_FETCH_KEEP further fetches). */
+nprfx_result nprfx_graph_hook_fetch_upstream(void *fetch_user, int input, int up_input, int frame,
+                                             nprfx_image *out);
+
 /* How the graph's plates and seeds are altered, for measuring a look against its baselines
  * (nprfx measure). */
 typedef enum nprfx_graph_variant {

@@ -526,6 +526,42 @@ static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *ou
     return fetch_input(user, input, frame, 0, out);
 }
 
+const nprfx_node_desc *nprfx_graph_hook_upstream(void *fetch_user, int input,
+                                                 const nprfx_value **params)
+{
+    render_frame *rf = fetch_user;
+    const gnode *n = &rf->g->nodes[rf->node];
+    if (input < 0 || input >= n->ninputs || n->inputs[input].src < 0) return NULL;
+    const gnode *up = &rf->g->nodes[n->inputs[input].src];
+    if (up->kind != GK_NODE) return NULL;
+    if (params) *params = up->params;
+    return up->desc;
+}
+
+nprfx_result nprfx_graph_hook_fetch_upstream(void *fetch_user, int input, int up_input, int frame,
+                                             nprfx_image *out)
+{
+    render_frame *rf = fetch_user;
+    nprfx_graph *g = rf->g;
+    const gnode *n = &g->nodes[rf->node];
+    if (!nprfx_graph_hook_upstream(fetch_user, input, NULL))
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "node '%s': input %d is not connected to a processing node", n->name,
+                           input);
+    const gnode *up = &g->nodes[n->inputs[input].src];
+    if (up_input < 0 || up_input >= up->ninputs || up->inputs[up_input].src < 0)
+        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "node '%s': input %d is not connected",
+                           up->name, up_input);
+    pin_slot *slot = &rf->ring[rf->nfetch++ % RING];
+    slot_release(g, slot);
+    centry *e;
+    nprfx_result r = internal_graph_eval(g, up->inputs[up_input].src, frame, &e);
+    if (r) return r;
+    e->pins++;
+    slot->e = e;
+    return internal_graph_select_input(g, up, up_input, e, out, &slot->scratch);
+}
+
 /* The span of frames node n reads to render `frame` (all inputs): rf's warm-up range. */
 static void warmup_range(nprfx_graph *g, const gnode *n, const nprfx_value *params, int frame,
                          const int *in_ch, render_frame *rf)

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flow_opencv.h"
 #include "ofx_internal.h"
 #include "support/data_files.h"
 
@@ -205,21 +206,37 @@ static OfxStatus load(void)
                                      &temporal) != kOfxStatOK)
         temporal = 1;
     nprfx_ofx_g.temporal = temporal != 0;
+    nprfx_ofx_g.flow = nprfx_flow_opencv(); /* NULL without OpenCV: nothing is derived */
     find_data_dir();
     return kOfxStatOK;
 }
 
 /* ---- describe -------------------------------------------------------------------------------- */
 
+/* Whether the Filter context derives inputs from Source in this host (ofx_derive.c). */
+static int filter_derives(const nprfx_node_desc *d)
+{
+    ofx_derive_plan plan;
+    return nprfx_ofx_derive_plan(d, nprfx_ofx_g.temporal, &plan);
+}
+
 /* The Filter context has exactly one input, Source: offered when the node has a main input and
- * can run without every other one. */
+ * can run without every other one, or when it derives the others from Source (footage). */
 static int filter_capable(const nprfx_node_desc *d)
 {
     int main = nprfx_ofx_main_input(d);
     if (main < 0) return 0;
+    if (filter_derives(d)) return 1;
     for (int k = 0; k < d->num_inputs; k++)
         if (k != main && !(d->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) return 0;
     return 1;
+}
+
+/* A node that only works with other frames, in a host without temporal clip access: offered
+ * only in the Filter context on footage, where the plug-in keeps the previous Source frame. */
+static int filter_only(const nprfx_node_desc *d)
+{
+    return (d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) && !nprfx_ofx_g.temporal;
 }
 
 static int has_temporal_input(const nprfx_node_desc *d)
@@ -234,7 +251,7 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
 {
     /* A node that only works with other frames is not offered where they cannot be had: a
      * missing plug-in with a logged reason beats one that silently shows the current frame. */
-    if ((d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) && !nprfx_ofx_g.temporal) {
+    if (filter_only(d) && !filter_derives(d)) {
         char why[512];
         snprintf(why, sizeof why,
                  "nprfx: %s is not available in this host: it reads its inputs at other frames, "
@@ -249,7 +266,22 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     set_str(p, kOfxPropLabel, 0, d->label);
     set_str(p, kOfxPropShortLabel, 0, d->label);
     set_str(p, kOfxPropLongLabel, 0, d->label);
-    set_str(p, kOfxPropPluginDescription, 0, d->help ? d->help : "");
+    /* The host's help: the node's, and on footage what the Filter context does with Source. */
+    static const char footage[] =
+        "\n\nIn the Filter context the Source clip is footage: the plug-in computes the motion "
+        "inputs from it with the flow node (default params), as a graph with a flow node "
+        "connected to them would. A host without temporal clip access (MLT: Shotcut, Kdenlive) "
+        "cannot give the neighbouring frames, so the plug-in keeps the previous frame: results "
+        "there depend on rendering in order, and a seek, an out-of-order frame or a change of "
+        "params restarts the effect as at a cut.";
+    const char *help = d->help ? d->help : "";
+    char *text = NULL;
+    if (filter_derives(d) && (text = malloc(strlen(help) + sizeof footage))) {
+        memcpy(text, help, strlen(help));
+        memcpy(text + strlen(help), footage, sizeof footage);
+    }
+    set_str(p, kOfxPropPluginDescription, 0, text ? text : help);
+    free(text);
     /* Everything under "NPR" in the host's menus; a node's own group below it ("NPR/Filter"). */
     char grouping[NPRFX_OFX_NAME_MAX];
     if (!d->group || !d->group[0] || !strcmp(d->group, "NPR"))
@@ -265,7 +297,8 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
              NPRFX_VERSION_STRING);
     set_str(p, kOfxPropVersionLabel, 0, vlabel);
     int nctx = 0;
-    set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextGeneral);
+    if (!filter_only(d))
+        set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextGeneral);
     if (filter_capable(d))
         set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextFilter);
     /* Pixels are scene-linear float32 throughout nprfx, and the clip preferences ask for float;
@@ -465,8 +498,13 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
         !context)
         return kOfxStatErrValue;
     int general = !strcmp(context, kOfxImageEffectContextGeneral);
+    if (general && filter_only(d)) return kOfxStatErrUnsupported;
     if (!general && !(filter_capable(d) && !strcmp(context, kOfxImageEffectContextFilter)))
         return kOfxStatErrUnsupported;
+    /* Footage: Source is the picture the flow is computed on; it feeds the main input too unless
+     * that is itself derived (advect's motion_prev). */
+    ofx_derive_plan plan;
+    int derives = !general && nprfx_ofx_derive_plan(d, nprfx_ofx_g.temporal, &plan);
     int main = nprfx_ofx_main_input(d);
     int temporal = (d->flags & NPRFX_NODE_TEMPORAL) && nprfx_ofx_g.temporal;
     int maskable = general && nprfx_ofx_maskable(d);
@@ -486,12 +524,17 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
         const nprfx_input_desc *in = &d->inputs[k];
         nprfx_ofx_clip_name(d, k, clip, sizeof clip);
         if (!(cp = define_clip(fx, clip))) return kOfxStatFailed;
-        set_str(cp, kOfxPropLabel, 0, in->label ? in->label : clip);
+        set_str(cp, kOfxPropLabel, 0,
+                derives && plan.count[k] ? NPRFX_OFX_SOURCE_CLIP
+                : in->label              ? in->label
+                                         : clip);
         set_str(cp, kOfxImageEffectPropSupportedComponents, 0, kOfxImageComponentRGBA);
         set_str(cp, kOfxImageEffectPropSupportedComponents, 1, kOfxImageComponentAlpha);
+        /* As the input is (Source of a footage node that is not connected: the render says
+         * that the footage is missing) */
         set_int(cp, kOfxImageClipPropOptional, 0, (in->flags & NPRFX_INPUT_OPTIONAL) != 0);
         set_int(cp, kOfxImageEffectPropTemporalClipAccess, 0,
-                temporal && (in->flags & NPRFX_INPUT_TEMPORAL));
+                temporal && ((in->flags & NPRFX_INPUT_TEMPORAL) || derives));
         /* Nodes read neighbourhoods and whole unaligned maps: ask for untiled inputs. */
         set_int(cp, kOfxImageEffectPropSupportsTiles, 0, 0);
     }
@@ -519,6 +562,8 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
     char name[NPRFX_OFX_NAME_MAX + 16];
     for (int k = 0; k < d->num_inputs; k++) {
         if (!general && k != main) continue;
+        /* Source read whole by the flow: a main input that is derived has no channels to pick */
+        if (derives && plan.count[k]) continue;
         nprfx_ofx_clip_name(d, k, clip, sizeof clip);
         if ((st = define_selector(ps, d, k, clip, name, sizeof name)) != kOfxStatOK) return st;
         if (name[0]) add_page_child(page, &nchildren, name);
@@ -568,6 +613,7 @@ static void instance_free(ofx_instance *inst)
 {
     if (!inst) return;
     if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
+    nprfx_ofx_derive_forget(inst);
     pthread_mutex_destroy(&inst->lock);
     nprfx_ofx_free(inst->clips);
     nprfx_ofx_free(inst->params);
@@ -605,6 +651,13 @@ static OfxStatus create_instance(const nprfx_node_desc *d, OfxImageEffectHandle 
     }
     if (fxs->clipGetHandle(fx, NPRFX_OFX_MASK_CLIP, &inst->mask, NULL) != kOfxStatOK)
         inst->mask = NULL;
+    OfxPropertySetHandle ep;
+    char *context = NULL;
+    if (fxs->getPropertySet(fx, &ep) == kOfxStatOK &&
+        nprfx_ofx_g.prop->propGetString(ep, kOfxImageEffectPropContext, 0, &context) ==
+            kOfxStatOK &&
+        context && !strcmp(context, kOfxImageEffectContextFilter))
+        inst->derive = nprfx_ofx_derive_plan(d, nprfx_ofx_g.temporal, &inst->plan);
     OfxParamSetHandle ps;
     if (fxs->getParamSet(fx, &ps) != kOfxStatOK) {
         instance_free(inst);
@@ -657,6 +710,9 @@ static void drop_state(ofx_instance *inst)
     if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
     inst->state = NULL;
     inst->export_done = 0;
+    /* Without temporal access the node cannot recompute its history: the next frame restarts
+     * the effect, as after a cut (the kept Source frame goes with it). */
+    nprfx_ofx_derive_forget(inst);
     pthread_mutex_unlock(&inst->lock);
 }
 
@@ -796,7 +852,25 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
     if (nprfx_ofx_eval_params(inst, ctx, t, 0, values, strings) != NPRFX_OK)
         nprfx_node_defaults(d, values);
     char clip[NPRFX_OFX_NAME_MAX];
-    for (int k = 0; k < d->num_inputs; k++) {
+    int main = nprfx_ofx_main_input(d);
+    if (inst->derive && main >= 0 && nprfx_ofx_clip_connected(inst->clips[main])) {
+        /* Footage: Source at the frames the flow reads for each derived input's frames, and at
+         * the main input's own when Source feeds it; one frame where the host cannot give
+         * others (the plug-in keeps the previous one). */
+        nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
+        int n = 1;
+        r[0].first = r[0].last = time;
+        if (nprfx_ofx_g.temporal)
+            n = nprfx_ofx_derive_frames(d, &inst->plan, values, &q, !inst->plan.count[main], r);
+        double v[2 * NPRFX_MAX_FRAME_RANGES];
+        for (int i = 0; i < n; i++) {
+            v[2 * i] = r[i].first;
+            v[2 * i + 1] = r[i].last;
+        }
+        nprfx_ofx_clip_name(d, main, clip, sizeof clip);
+        if (n > 0) set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, v, 2 * n);
+    }
+    for (int k = 0; k < d->num_inputs && !inst->derive; k++) {
         if (!inst->clips[k] || !channels[k]) continue;
         nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
         int n = 0;

@@ -7,7 +7,9 @@
 #include <pthread.h>
 
 #include "nprfx/nprfx.h"
+#include "nprfx/flow.h"
 #include "ofx_api.h"
+#include "ofx_derive.h"
 #include "ofx_names.h"
 
 /* The suites fetched from the host on load. Property, image effect and parameter suites are
@@ -25,11 +27,39 @@ typedef struct ofx_suites {
     /* The host's kOfxImageEffectPropTemporalClipAccess: 0 means images at other times cannot be
      * had (MLT gives the current frame instead), so nodes get no fetch and say so. */
     int temporal;
+    /* The flow node's solver (OpenCV's DIS), NULL in a build without one: without it no input is
+     * derived from Source (ofx_derive.c) and the footage nodes keep their clips. */
+    const nprfx_flow_provider *flow;
     /* The bundle's Contents/Resources (data files such as the stipple dot sequence), found from
      * the module's own path on load; empty when unknown. */
     char data_dir[4096];
 } ofx_suites;
 extern ofx_suites nprfx_ofx_g;
+
+/* How a node's inputs are derived from the Source clip with the flow node (ofx_derive.c): the
+ * flow's param values (its defaults, with the output choice that covers what the inputs take and
+ * that the host can serve), how many channels it then outputs, and per input the flow channels
+ * it takes (count 0: not derived). */
+typedef struct ofx_derive_plan {
+    const nprfx_node_desc *flow;
+    nprfx_value values[NPRFX_OFX_DERIVE_MAX_PARAMS];
+    int channels;
+    int count[NPRFX_OFX_DERIVE_MAX_INPUTS];
+    int idx[NPRFX_OFX_DERIVE_MAX_INPUTS][4];
+    int any; /* some input is derived and every required one is (or is the main input) */
+} ofx_derive_plan;
+
+/* The plan for node d in a host with (1) or without (0) temporal clip access; returns plan->any.
+ * Without a flow provider, or for a node without derivable inputs, nothing is derived. */
+int nprfx_ofx_derive_plan(const nprfx_node_desc *d, int temporal, ofx_derive_plan *plan);
+
+/* The frames of the Source clip a derived render of q->time reads: the frames the node reads its
+ * derived inputs at, each widened by the frames the flow node reads to compute it, and the
+ * frames it reads the main input at when Source feeds that too (main_fed). Up to
+ * NPRFX_MAX_FRAME_RANGES merged ranges into r; returns how many. */
+int nprfx_ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
+                            const nprfx_value *values, const nprfx_frames_query *q, int main_fed,
+                            nprfx_frame_range *r);
 
 /* One plug-in instance: the handles looked up once at creation, and the node's state slot. */
 typedef struct ofx_instance {
@@ -47,7 +77,20 @@ typedef struct ofx_instance {
      * forgotten at each sequence render and on every change. Guarded by lock. */
     unsigned long long export_key;
     int export_done;
+    /* Filter context on footage (ofx_derive.c): the inputs derived from Source, the flow node's
+     * cache slot, and, where the host has no temporal clip access (MLT renders in order), the
+     * previous Source frame and its flow kept between renders; seg_start is the frame the effect
+     * restarted at (the shot's first, or the last jump, treated as a cut). Guarded by lock. */
+    ofx_derive_plan plan;
+    int derive; /* plan.any, in the Filter context */
+    void *flow_state;
+    nprfx_image kept_src, kept_flow;
+    int kept, kept_frame, seg_start;
 } ofx_instance;
+
+/* Forget the kept frames and the flow's cache (with lock held or before the instance is
+ * shared). */
+void nprfx_ofx_derive_forget(ofx_instance *inst);
 
 void *nprfx_ofx_alloc(size_t bytes);
 void nprfx_ofx_free(void *p);

@@ -77,9 +77,14 @@ void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, in
 
 void nprfx_ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
 {
+    /* Derived inputs have their flow channels once there is footage to derive them from. */
+    int main = nprfx_ofx_main_input(inst->desc);
+    int footage = inst->derive && main >= 0 && nprfx_ofx_clip_connected(inst->clips[main]);
     for (int k = 0; k < inst->desc->num_inputs; k++) {
         int first = 0, count = 0;
-        if (nprfx_ofx_clip_connected(inst->clips[k]))
+        if (inst->derive && inst->plan.count[k])
+            count = footage ? inst->plan.count[k] : 0;
+        else if (nprfx_ofx_clip_connected(inst->clips[k]))
             nprfx_ofx_input_selection(inst, k, time, current, &first, &count);
         channels[k] = count;
     }

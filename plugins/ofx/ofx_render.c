@@ -274,6 +274,13 @@ typedef struct fetched {
     float *scratch;
 } fetched;
 
+#define FLOWS 4 /* flows kept during one render: a frame and its neighbours */
+
+typedef struct flow_slot {
+    int frame, used;
+    nprfx_image im;
+} flow_slot;
+
 typedef struct render_call {
     ofx_instance *inst;
     nprfx_context *ctx;
@@ -285,6 +292,23 @@ typedef struct render_call {
     pthread_mutex_t lock; /* guards the ring: a node may fetch from several threads */
     fetched ring[RING];
     long nfetch;
+    /* Footage (inst->derive, ofx_derive.c): Source whole at the render time, the flow node's
+     * params (render scale applied), the frame, the shot the flow and the node see (from the
+     * effect's restart without temporal access), the flows computed in this call and the derived
+     * views handed out (copies, so a flow can be dropped while a view lives). dlock guards
+     * those; a flow's own fetches take lock. */
+    nprfx_image src;
+    float *src_scratch;
+    nprfx_value fvalues[NPRFX_OFX_DERIVE_MAX_PARAMS];
+    double scale;
+    nprfx_rect frame;
+    int first_frame, last_frame;
+    pthread_mutex_t dlock;
+    flow_slot flows[FLOWS];
+    long nflows;
+    nprfx_image dcur[NPRFX_OFX_DERIVE_MAX_INPUTS];
+    nprfx_image dring[RING];
+    long ndring;
 } render_call;
 
 static void fetched_release(fetched *s)
@@ -331,6 +355,220 @@ static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *ou
         r = nprfx_error(rc->ctx, r, "%s: out of memory", d->id);
     pthread_mutex_unlock(&rc->lock);
     return r;
+}
+
+/* ---- inputs derived from Source (footage in the Filter context, ofx_derive.c) ---------------- */
+
+static int round_frame(double t)
+{
+    return (int)floor(t + 0.5);
+}
+
+/* Source whole (all the components the host image has) at frame t, for the flow: the render
+ * time's image, another frame from the host, or, without temporal clip access, the previous
+ * frame the instance kept. */
+static nprfx_result source_at(render_call *rc, int t, nprfx_image *out)
+{
+    ofx_instance *inst = rc->inst;
+    const nprfx_node_desc *d = inst->desc;
+    if (t == round_frame(rc->time)) {
+        *out = rc->src;
+        return NPRFX_OK;
+    }
+    if (!G.temporal) {
+        if (inst->kept && inst->kept_frame == t) {
+            *out = inst->kept_src;
+            return NPRFX_OK;
+        }
+        return nprfx_error(rc->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "%s: the Source clip at frame %d, while rendering frame %d: this host "
+                           "gives no other frame (no temporal clip access), and the plug-in keeps "
+                           "only the previous one (render in order)",
+                           d->id, t, round_frame(rc->time));
+    }
+    int main = nprfx_ofx_main_input(d);
+    pthread_mutex_lock(&rc->lock);
+    fetched *s = &rc->ring[rc->nfetch++ % RING];
+    fetched_release(s);
+    OfxStatus st = img_fetch(inst->clips[main], t, 1, &s->img);
+    nprfx_result r = NPRFX_OK;
+    if (st != kOfxStatOK)
+        r = nprfx_error(rc->ctx,
+                        st == kOfxStatErrMemory ? NPRFX_ERR_OUT_OF_MEMORY : NPRFX_ERR_MISSING_INPUT,
+                        "%s: the host gave no image of the Source clip at frame %d (OFX status %d)",
+                        d->id, t, st);
+    else if ((r = img_view(&s->img, input_flip(rc, main, &s->img), 0, s->img.ncomp, out,
+                           &s->scratch)))
+        r = nprfx_error(rc->ctx, r, "%s: out of memory", d->id);
+    pthread_mutex_unlock(&rc->lock);
+    return r;
+}
+
+/* The flow node's fetch: Source at its neighbouring frames. */
+static nprfx_result flow_fetch(void *user, int input, double time, nprfx_image *out)
+{
+    (void)input;
+    return source_at(user, round_frame(time), out);
+}
+
+/* The flow at frame t, computed by the flow node on Source as a graph would (held: dlock). */
+static nprfx_result flow_at(render_call *rc, int t, const nprfx_image **out)
+{
+    ofx_instance *inst = rc->inst;
+    for (int i = 0; i < FLOWS; i++)
+        if (rc->flows[i].used && rc->flows[i].frame == t) {
+            *out = &rc->flows[i].im;
+            return NPRFX_OK;
+        }
+    if (!G.temporal && inst->kept && inst->kept_frame == t) {
+        *out = &inst->kept_flow;
+        return NPRFX_OK;
+    }
+    flow_slot *slot = &rc->flows[rc->nflows++ % FLOWS];
+    nprfx_image_free(&slot->im);
+    slot->used = 0;
+    nprfx_image src;
+    nprfx_result r = source_at(rc, t, &src);
+    if (!r) r = nprfx_image_alloc(rc->ctx, rc->frame, inst->plan.channels, &slot->im);
+    if (r) return r;
+    nprfx_render_args a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.ctx = rc->ctx;
+    a.node = inst->plan.flow;
+    a.time = t;
+    a.render_scale = rc->scale;
+    a.frame = rc->frame;
+    a.window = rc->frame;
+    a.first_frame = rc->first_frame;
+    a.last_frame = rc->last_frame;
+    a.inputs = &src;
+    a.params = rc->fvalues;
+    a.output = &slot->im;
+    a.fetch = flow_fetch;
+    a.fetch_user = rc;
+    a.state = &inst->flow_state;
+    if ((r = nprfx_node_render(&a))) {
+        nprfx_image_free(&slot->im);
+        return r;
+    }
+    slot->frame = t;
+    slot->used = 1;
+    *out = &slot->im;
+    return NPRFX_OK;
+}
+
+/* Input k's channels of a flow, copied into dst. */
+static nprfx_result derived_copy(render_call *rc, const nprfx_image *flow, int k, nprfx_image *dst)
+{
+    const ofx_derive_plan *p = &rc->inst->plan;
+    nprfx_result r = nprfx_image_alloc(rc->ctx, flow->bounds, p->count[k], dst);
+    if (r) return r;
+    for (int y = flow->bounds.y0; y < flow->bounds.y1; y++)
+        for (int x = flow->bounds.x0; x < flow->bounds.x1; x++) {
+            const float *s = nprfx_image_at(flow, x, y);
+            float *o = nprfx_image_at(dst, x, y);
+            for (int c = 0; c < p->count[k]; c++)
+                o[c] = s[p->idx[k][c]];
+        }
+    return NPRFX_OK;
+}
+
+/* The node's fetch when inputs are derived: a derived input from the flow at that frame, the
+ * main input fed by Source from the host (or, without temporal access, the kept frame). */
+static nprfx_result derive_fetch(void *user, int input, double time, nprfx_image *out)
+{
+    render_call *rc = user;
+    ofx_instance *inst = rc->inst;
+    const nprfx_node_desc *d = inst->desc;
+    if (input < 0 || input >= d->num_inputs)
+        return nprfx_error(rc->ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s: no input %d", d->id, input);
+    int t = round_frame(time);
+    if (t == round_frame(rc->time) || !rc->inputs[input].data) return fetch_cb(user, input, t, out);
+    if (!inst->plan.count[input]) {
+        if (G.temporal) return fetch_cb(user, input, time, out);
+        const nprfx_image *k = &inst->kept_src;
+        if (inst->kept && inst->kept_frame == t &&
+            (k->channels == rc->count[input] ||
+             (k->channels == 4 && rc->first[input] + rc->count[input] <= 4))) {
+            *out =
+                nprfx_image_channels(k, k->channels == 4 ? rc->first[input] : 0, rc->count[input]);
+            return NPRFX_OK;
+        }
+        return nprfx_error(rc->ctx, NPRFX_ERR_MISSING_INPUT,
+                           "%s: input '%s' (the Source clip) at frame %d, while rendering frame "
+                           "%d: this host gives no other frame (no temporal clip access)",
+                           d->id, d->inputs[input].name, t, round_frame(rc->time));
+    }
+    pthread_mutex_lock(&rc->dlock);
+    const nprfx_image *flow = NULL;
+    nprfx_result r = flow_at(rc, t, &flow);
+    if (!r) {
+        nprfx_image *slot = &rc->dring[rc->ndring++ % RING];
+        nprfx_image_free(slot);
+        if (!(r = derived_copy(rc, flow, input, slot))) *out = *slot;
+    }
+    pthread_mutex_unlock(&rc->dlock);
+    return r;
+}
+
+/* Without temporal clip access, whether frame t continues what the instance kept (the frame
+ * after it, or the same again); anything else (the first render, a jump, a change of size or
+ * params) restarts the effect at t as at a cut: the node's cache and the kept frames go, and
+ * the node and the flow see a shot that starts at t, so its first frame has zero motion and
+ * zero confidence and nothing from before the jump shows. Held: inst->lock. */
+static void derive_continue(render_call *rc, int t)
+{
+    ofx_instance *inst = rc->inst;
+    int follows = inst->kept && (inst->kept_frame == t || inst->kept_frame == t - 1) &&
+                  nprfx_rect_equal(inst->kept_src.bounds, rc->src.bounds) &&
+                  inst->kept_src.channels == rc->src.channels;
+    if (!follows) {
+        if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
+        inst->state = NULL;
+        nprfx_ofx_derive_forget(inst);
+        inst->seg_start = t;
+    }
+    if (inst->seg_start > rc->first_frame) rc->first_frame = inst->seg_start;
+}
+
+/* After a render without temporal access: keep Source and the flow at t for the next frame. */
+static nprfx_result derive_keep(render_call *rc, int t)
+{
+    ofx_instance *inst = rc->inst;
+    if (inst->kept && inst->kept_frame == t) return NPRFX_OK;
+    const nprfx_image *flow = NULL;
+    nprfx_image src, fl;
+    memset(&src, 0, sizeof src);
+    memset(&fl, 0, sizeof fl);
+    nprfx_result r = flow_at(rc, t, &flow);
+    if (!r) r = nprfx_image_alloc(rc->ctx, rc->src.bounds, rc->src.channels, &src);
+    if (!r) r = nprfx_image_copy(rc->ctx, &rc->src, &src);
+    if (!r) r = nprfx_image_alloc(rc->ctx, flow->bounds, flow->channels, &fl);
+    if (!r) r = nprfx_image_copy(rc->ctx, flow, &fl);
+    if (r) {
+        nprfx_image_free(&src);
+        nprfx_image_free(&fl);
+        return r;
+    }
+    nprfx_image_free(&inst->kept_src);
+    nprfx_image_free(&inst->kept_flow);
+    inst->kept_src = src;
+    inst->kept_flow = fl;
+    inst->kept_frame = t;
+    inst->kept = 1;
+    return NPRFX_OK;
+}
+
+static void derive_release(render_call *rc)
+{
+    for (int i = 0; i < FLOWS; i++)
+        nprfx_image_free(&rc->flows[i].im);
+    for (int i = 0; i < RING; i++)
+        nprfx_image_free(&rc->dring[i]);
+    for (int k = 0; k < NPRFX_OFX_DERIVE_MAX_INPUTS; k++)
+        nprfx_image_free(&rc->dcur[k]);
+    nprfx_ofx_free(rc->src_scratch);
 }
 
 /* ---- output ---------------------------------------------------------------------------------- */
@@ -416,11 +654,6 @@ static OfxRectI to_pixels(OfxRectD r, double sx, double sy, double par)
     return p;
 }
 
-static int round_frame(double t)
-{
-    return (int)floor(t + 0.5);
-}
-
 OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 {
     const nprfx_node_desc *d = inst->desc;
@@ -445,6 +678,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     rc.time = time;
     if (nprfx_context_create(&ci, &rc.ctx) != NPRFX_OK) return kOfxStatErrMemory;
     pthread_mutex_init(&rc.lock, NULL);
+    pthread_mutex_init(&rc.dlock, NULL);
     size_t ni = (size_t)d->num_inputs + 1, np = (size_t)d->num_params + 1;
     nprfx_value *values = calloc(np, sizeof *values);
     char **strings = calloc(np, sizeof *strings);
@@ -493,6 +727,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 
     for (int k = 0; k < d->num_inputs; k++) {
         if (!nprfx_ofx_clip_connected(inst->clips[k])) continue;
+        if (inst->derive && inst->plan.count[k]) continue; /* below */
         nprfx_ofx_input_selection(inst, k, time, 0, &rc.first[k], &rc.count[k]);
         OfxStatus st = img_fetch(inst->clips[k], time, 1, &rc.cur[k].img);
         if (st == kOfxStatFailed) continue; /* no image at this time: as if not connected */
@@ -509,6 +744,58 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
             goto done;
         }
         in_ch[k] = rc.count[k];
+    }
+
+    double first = 0, last = 0;
+    nprfx_ofx_shot_range(inst, &first, &last);
+    rc.first_frame = round_frame(first);
+    rc.last_frame = round_frame(last);
+    /* A stateful node's cache, and the flow's and the kept frames of footage, are shared by the
+     * renders of the instance. */
+    if ((d->flags & NPRFX_NODE_STATEFUL) || inst->derive) {
+        pthread_mutex_lock(&inst->lock);
+        locked = 1;
+    }
+    if (inst->derive) {
+        /* Footage: the derived inputs from the flow node run on Source (ofx_derive.c). */
+        int main = nprfx_ofx_main_input(d);
+        if (!nprfx_ofx_clip_connected(inst->clips[main])) {
+            r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
+                            "%s: the Source clip is not connected: it is the footage this effect "
+                            "computes its motion from",
+                            d->id);
+            goto done;
+        }
+        OfxStatus st = kOfxStatOK;
+        if (!rc.cur[main].img.h) st = img_fetch(inst->clips[main], time, 1, &rc.cur[main].img);
+        if (st != kOfxStatOK) {
+            r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
+                            "%s: the host gave no image of the Source clip at frame %g (OFX "
+                            "status %d)",
+                            d->id, time, st);
+            status = st == kOfxStatErrMemory ? st : kOfxStatFailed;
+            goto done;
+        }
+        const ofx_img *si = &rc.cur[main].img;
+        if ((r = img_view(si, input_flip(&rc, main, si), 0, si->ncomp, &rc.src, &rc.src_scratch))) {
+            status = kOfxStatErrMemory;
+            goto done;
+        }
+        memcpy(rc.fvalues, inst->plan.values, sizeof rc.fvalues);
+        nprfx_node_apply_render_scale(inst->plan.flow, rc.fvalues, scale[0]);
+        rc.scale = scale[0];
+        rc.frame = frame;
+        if (!G.temporal) derive_continue(&rc, round_frame(time));
+        const nprfx_image *flow = NULL;
+        pthread_mutex_lock(&rc.dlock);
+        r = flow_at(&rc, round_frame(time), &flow);
+        for (int k = 0; !r && k < d->num_inputs; k++)
+            if (inst->plan.count[k] && !(r = derived_copy(&rc, flow, k, &rc.dcur[k]))) {
+                rc.inputs[k] = rc.dcur[k];
+                in_ch[k] = rc.count[k] = inst->plan.count[k];
+            }
+        pthread_mutex_unlock(&rc.dlock);
+        if (r) goto done;
     }
 
     nprfx_output_info oi;
@@ -559,8 +846,6 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     }
 
     if (!nprfx_rect_empty(window)) {
-        double first = 0, last = 0;
-        nprfx_ofx_shot_range(inst, &first, &last);
         nprfx_render_args a;
         memset(&a, 0, sizeof a);
         a.size = sizeof a;
@@ -570,21 +855,18 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         a.render_scale = scale[0];
         a.frame = frame;
         a.window = window;
-        a.first_frame = round_frame(first);
-        a.last_frame = round_frame(last);
+        a.first_frame = rc.first_frame;
+        a.last_frame = rc.last_frame;
         a.inputs = rc.inputs;
         a.params = values;
         a.output = &res;
         /* Without temporal access the host would answer with the current frame: no fetch, and
          * a node that needs another frame says so. */
-        a.fetch = G.temporal ? fetch_cb : NULL;
+        a.fetch = inst->derive ? derive_fetch : G.temporal ? fetch_cb : NULL;
         a.fetch_user = &rc;
         a.state = &inst->state;
-        if (d->flags & NPRFX_NODE_STATEFUL) {
-            pthread_mutex_lock(&inst->lock);
-            locked = 1;
-        }
         r = nprfx_node_render(&a);
+        if (!r && inst->derive && !G.temporal) r = derive_keep(&rc, round_frame(time));
         if (locked) pthread_mutex_unlock(&inst->lock);
         locked = 0;
         if (r) goto done;
@@ -607,12 +889,14 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_ofx_clear_error(inst);
 
 done:
+    if (locked) pthread_mutex_unlock(&inst->lock);
     if (r && status == kOfxStatOK) status = kOfxStatFailed;
     if (r) {
         char msg[1024];
         nprfx_context_last_error(rc.ctx, msg, sizeof msg);
         nprfx_ofx_post_error(inst, msg);
     }
+    derive_release(&rc);
     for (int i = 0; i < RING; i++)
         fetched_release(&rc.ring[i]);
     for (int k = 0; rc.cur && k < d->num_inputs; k++)
@@ -632,6 +916,7 @@ done:
     free(rc.first);
     free(rc.count);
     pthread_mutex_destroy(&rc.lock);
+    pthread_mutex_destroy(&rc.dlock);
     nprfx_context_destroy(rc.ctx);
     return status;
 }

@@ -10,8 +10,10 @@
 #     access) a tone measuring another frame fails with words that say which frame.
 #  3. mlt and mlt16 (Filter context only, 8- or 16-bit images, no temporal clip access): every
 #     plug-in either renders a one-node graph on its Source clip or is reported unavailable with
-#     a reason; time-offset and coherent-noise are refused for the missing temporal access; tone
-#     with range manual matches the direct render within the quantisation.
+#     a reason; time-offset is refused for the missing temporal access, and so are coherent-noise
+#     and advect in a build without optical flow (with it they take footage as Source and derive
+#     their motion: tests/cli/ofx_footage.sh); tone with range manual matches the direct render
+#     within the quantisation.
 #  4. strict and natron: stipple with 'coverage' (5 channels) renders R, G, B as the runner does
 #     and the coverage in A (the test host reads A back as the coverage channel), and its
 #     'export' files (CSV and SVG, absolute paths) are written by the plug-in byte-identical to
@@ -124,8 +126,15 @@ one_node() { # NODE INPUT... > graph
   printf ' "w": {"node": "write", "inputs": {"image": "n"}, "path": "n.####.exr"}}}\n'
 }
 nodes=$("$NPRFX" list | awk '$2 != "I/O" {print $1}')
+# The footage nodes: with optical flow their Filter context's Source is footage (ofx_footage.sh)
+footage_nodes="coherent-noise advect"
+flow_missing "$NPRFX" && footage_nodes=""
+mkdir -p "$W/mlt"
 for profile in mlt mlt16; do
   for node in $nodes; do
+    case " $footage_nodes " in *" $node "*)
+      echo "$profile $node: footage, tests/cli/ofx_footage.sh" >> "$W/mlt/$profile.txt"; continue ;;
+    esac
     d="$W/mlt/$profile/$node"; mkdir -p "$d"
     required=$(inputs_of "$node" | awk '$2 == "required" {print $1}' | tr '\n' ' ')
     # with required inputs, those (Filter has one clip: a plug-in with two is unavailable);
@@ -151,7 +160,7 @@ for profile in mlt mlt16; do
       *) fail "$profile: $node neither renders through the Filter context nor is unavailable with a reason (${verdict:-no input is its Source clip})" ;;
     esac
     case "$node" in
-      time-offset|coherent-noise)
+      time-offset|coherent-noise|advect)
         if echo "$verdict" | grep -qi "temporal"; then pass
         else fail "$profile: $node is not refused for the missing temporal clip access ($verdict)"; fi ;;
     esac

@@ -355,6 +355,11 @@ int nprfx_ofx_host_plugin_count(const nprfx_ofx_host *h)
     return h ? h->nplugins : 0;
 }
 
+void nprfx_ofx_host_set_footage(nprfx_ofx_host *h, int on)
+{
+    if (h) h->footage = on;
+}
+
 const char *nprfx_ofx_host_profile(const nprfx_ofx_host *h)
 {
     return h ? h->profile->name : "";

@@ -12,12 +12,17 @@
 typedef struct ofx_run {
     const char *bundle;  /* --ofx */
     const char *profile; /* --profile */
+    int footage;         /* --footage */
     nprfx_ofx_host *host;
 } ofx_run;
 
 static int ofx_option(void *user, const char *arg, const char *next)
 {
     ofx_run *o = user;
+    if (!strcmp(arg, "--footage")) {
+        o->footage = 1;
+        return 1;
+    }
     if (!next) return 0;
     if (!strcmp(arg, "--ofx"))
         o->bundle = next;
@@ -37,6 +42,7 @@ static nprfx_result ofx_open(void *user, nprfx_context *ctx, int quiet,
                            "--ofx BUNDLE is required (e.g. build/plugins/ofx/nprfx.ofx.bundle)");
     nprfx_result r = nprfx_ofx_host_open(ctx, o->bundle, o->profile, &o->host);
     if (r) return r;
+    nprfx_ofx_host_set_footage(o->host, o->footage);
     *hook = nprfx_ofx_host_hook(o->host);
     if (quiet) return NPRFX_OK;
     int n = nprfx_ofx_host_plugin_count(o->host);
@@ -77,13 +83,16 @@ int main(int argc, char **argv)
         fprintf(stderr, "nprfx-ofxtest: unknown command '%s' (the only one is run)\n", argv[1]);
         return 2;
     }
-    ofx_run o = {NULL, NULL, NULL};
+    ofx_run o = {NULL, NULL, 0, NULL};
     const nprfx_run_extension ext = {
         "nprfx-ofxtest",
         "  --ofx BUNDLE        render every node through the OpenFX plug-ins of BUNDLE\n"
         "                      (nprfx.ofx.bundle) in a minimal test host; same pixels (required)\n"
         "  --profile NAME      behave as this host does (tests/ofxhost/profile.c): strict (the\n"
-        "                      default), natron (Natron 2.5), mlt (MLT 7, 8-bit), mlt16 (16-bit)\n",
+        "                      default), natron (Natron 2.5), mlt (MLT 7, 8-bit), mlt16 (16-bit)\n"
+        "  --footage           a node whose motion/confidence inputs come from a flow node\n"
+        "                      renders in the Filter context on the picture that flow node\n"
+        "                      reads (the plug-in derives them: footage in a Filter host)\n",
         ofx_option,
         ofx_open,
         ofx_close,

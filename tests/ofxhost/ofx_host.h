@@ -24,6 +24,13 @@ typedef struct nprfx_ofx_host nprfx_ofx_host;
 nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, const char *profile,
                                  nprfx_ofx_host **out);
 
+/* --footage: render every node whose flow-derivable inputs (ofx_derive.h) are connected to a
+ * flow node in the Filter context, with Source the picture that flow node reads instead of
+ * those inputs: the plug-in derives them itself, and the graph is the equivalent General one
+ * (tests/cli/ofx_footage.sh). Flow nodes then render as the runner renders them (only their
+ * size matters). */
+void nprfx_ofx_host_set_footage(nprfx_ofx_host *h, int on);
+
 /* Number of plug-ins the bundle exports. */
 int nprfx_ofx_host_plugin_count(const nprfx_ofx_host *h);
 /* The profile's name. */

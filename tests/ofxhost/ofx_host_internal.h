@@ -26,6 +26,7 @@
 #include <stdint.h>
 
 #include "ofx/ofx_api.h"
+#include "ofx/ofx_derive.h"
 #include "ofx/ofx_names.h"
 #include "ofx_host.h"
 
@@ -200,6 +201,9 @@ struct nprfx_ofx_host {
     char message[HMSG];   /* the last message posted with no instance handle (NULL handle) */
     unsigned message_seq; /* counts those, so a render knows whether one came during it */
     int instances;
+    /* --footage: a node whose flow-derivable inputs come from a flow node is rendered in the
+     * Filter context on the flow node's picture (render.c). */
+    int footage;
 };
 
 /* Suite functions get no user pointer: they reach the host through this, and one host per
@@ -236,6 +240,7 @@ typedef struct node_inst {
     const nprfx_render_args *args; /* set while the runner renders this node */
     int frame_flip;                /* y_up = frame_flip - y_down for frame-aligned images */
     int filter;                    /* instantiated in the Filter context */
+    int footage;                   /* --footage: Source is the picture a flow node reads */
     hframes *frames;               /* per input: frames declared and fetched (frames.c) */
     int began;                     /* beginSequenceRender sent */
     int *in_comps;                 /* per input clip: 4 RGBA, 1 Alpha */

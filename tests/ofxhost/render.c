@@ -37,16 +37,20 @@ static hplugin *find_plugin(nprfx_ofx_host *h, const nprfx_node_desc *d)
 
 /* The context of a new instance. Strict: Filter when the plug-in offers it and only the main
  * input is connected (as a host would for a plain filter), so both contexts get exercised;
- * General otherwise. Natron: General always. MLT: Filter always, so a node with another input
- * connected cannot be built there. Returns 1 for Filter, 0 for General, -1 (error raised). */
-static int choose_context(nprfx_ofx_host *h, hplugin *pl, const nprfx_render_args *a)
+ * General otherwise, and for a node with flow-derivable inputs unless on footage (its Filter
+ * context takes footage, not the graph's input). Natron: General always. MLT: Filter always, so
+ * a node with another input connected cannot be built there. Returns 1 for Filter, 0 for
+ * General, -1 (error raised). */
+static int choose_context(nprfx_ofx_host *h, hplugin *pl, const nprfx_render_args *a, int footage)
 {
     const nprfx_node_desc *d = a->node;
-    int main = nprfx_ofx_main_input(d), only_main = 1;
-    for (int k = 0; k < d->num_inputs; k++)
+    int main = nprfx_ofx_main_input(d), only_main = 1, derivable = 0;
+    for (int k = 0; k < d->num_inputs; k++) {
         only_main &= k == main || !a->inputs[k].data;
+        derivable |= nprfx_ofx_derivable(d, k);
+    }
     if (!h->profile->filter) return 0;
-    if (h->profile->general) return pl->filter && only_main;
+    if (h->profile->general) return pl->filter && only_main && (footage || !derivable);
     for (int k = 0; k < d->num_inputs; k++)
         if (k != main && a->inputs[k].data) {
             nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
@@ -61,7 +65,8 @@ static int choose_context(nprfx_ofx_host *h, hplugin *pl, const nprfx_render_arg
 
 /* The instance of a graph node, created at its first render in the context the profile picks:
  * clips connected as the graph connects the node's inputs, params at their defaults. */
-static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, node_inst **out)
+static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, int footage,
+                                node_inst **out)
 {
     const nprfx_node_desc *d = a->node;
     hplugin *pl = find_plugin(h, d);
@@ -71,7 +76,7 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, n
     if (pl->unavailable)
         return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED, "%s is not available in this host: %s",
                            pl->p->pluginIdentifier, pl->reason);
-    int filter = choose_context(h, pl, a);
+    int filter = choose_context(h, pl, a, footage);
     if (filter < 0) return NPRFX_ERR_UNSUPPORTED;
     node_inst *ni = calloc(1, sizeof *ni);
     size_t ni_n = (size_t)d->num_inputs + 1;
@@ -267,6 +272,8 @@ static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int f
     char name[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
         if (!a->inputs[k].data) continue;
+        /* on footage a derived main input is Source read whole: no selector */
+        if (ni->footage && nprfx_ofx_derivable(d, k)) continue;
         int n = a->inputs[k].channels;
         int opt = nprfx_ofx_selector_find(&d->inputs[k], 0, n);
         if (n > 4 || opt < 0) {
@@ -456,14 +463,144 @@ static nprfx_result check_frames(node_inst *ni, const nprfx_render_args *a)
     return NPRFX_OK;
 }
 
+/* ---- --footage: the Filter context on the picture a flow node reads -------------------------- */
+
+/* A footage render: the runner's args, what replaces them, and where Source comes from. */
+typedef struct footage_call {
+    const nprfx_render_args *orig;
+    nprfx_render_args args;
+    nprfx_image inputs[NPRFX_OFX_DERIVE_MAX_INPUTS];
+    nprfx_image src; /* the picture at the render time, copied (a fetch's view does not last) */
+    int main, via;   /* the main input; the input whose flow node's picture is Source, or -1 */
+} footage_call;
+
+static nprfx_result footage_fetch(void *user, int input, double time, nprfx_image *out)
+{
+    footage_call *fc = user;
+    const nprfx_render_args *a = fc->orig;
+    if (input == fc->main && fc->via >= 0) {
+        if (time == a->time) {
+            *out = fc->src;
+            return NPRFX_OK;
+        }
+        return nprfx_graph_hook_fetch_upstream(a->fetch_user, fc->via, 0,
+                                               (int)(time < 0 ? time - 0.5 : time + 0.5), out);
+    }
+    return a->fetch(a->fetch_user, input, time, out);
+}
+
+/* Whether flow param value v is one the plug-in may choose itself: a choice that changes the
+ * channels the flow outputs (the plug-in takes the fewest that cover its inputs). */
+static int flow_output_choice(const nprfx_node_desc *f, int i, const nprfx_value *v)
+{
+    nprfx_value vals[NPRFX_OFX_DERIVE_MAX_PARAMS];
+    nprfx_output_info a, b;
+    int ich[1] = {4};
+    if (f->params[i].type != NPRFX_PARAM_CHOICE) return 0;
+    nprfx_node_defaults(f, vals);
+    if (nprfx_node_output_info(NULL, f, vals, ich, &a)) return 0;
+    vals[i] = *v;
+    if (nprfx_node_output_info(NULL, f, vals, ich, &b)) return 0;
+    return a.channels != b.channels;
+}
+
+/* When node a->node is to be rendered on footage: fc set up, *use = 1. The graph must be the
+ * General one the plug-in stands for: its flow-derivable inputs connected to one flow node with
+ * the flow's default params (the plug-in derives with those), no other input but the main one. */
+static nprfx_result footage_args(nprfx_ofx_host *h, const nprfx_render_args *a, footage_call *fc,
+                                 int *use)
+{
+    const nprfx_node_desc *d = a->node, *f = nprfx_ofx_flow_node();
+    *use = 0;
+    if (!h->footage || !f || d == f || d->num_inputs > NPRFX_OFX_DERIVE_MAX_INPUTS) return NPRFX_OK;
+    const nprfx_value *fp = NULL;
+    int main = nprfx_ofx_main_input(d), via = -1;
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (!a->inputs[k].data || !nprfx_ofx_derivable(d, k)) continue;
+        const nprfx_value *p = NULL;
+        const nprfx_node_desc *up = nprfx_graph_hook_upstream(a->fetch_user, k, &p);
+        if (up != f || (fp && p != fp))
+            return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
+                               "--footage: input '%s' of %s is not connected to the flow node "
+                               "its other derived inputs come from",
+                               d->inputs[k].name, d->id);
+        fp = p;
+        via = k;
+    }
+    if (via < 0) return NPRFX_OK;
+    for (int i = 0; i < f->num_params; i++) {
+        nprfx_value def[NPRFX_OFX_DERIVE_MAX_PARAMS];
+        nprfx_node_defaults(f, def);
+        if (f->params[i].type != NPRFX_PARAM_STRING && !memcmp(def[i].v, fp[i].v, sizeof def[i].v))
+            continue;
+        if (!flow_output_choice(f, i, &fp[i]))
+            return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
+                               "--footage: %s's flow node has '%s' other than its default: the "
+                               "plug-in derives its inputs with the flow node's defaults",
+                               d->id, f->params[i].name);
+    }
+    if (!h->profile->filter)
+        return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
+                           "--footage: this host (%s) has no Filter context", h->profile->like);
+    memset(fc, 0, sizeof *fc);
+    fc->orig = a;
+    fc->args = *a;
+    fc->main = main;
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (!a->inputs[k].data || nprfx_ofx_derivable(d, k)) continue;
+        if (k != main)
+            return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
+                               "--footage: input '%s' of %s has no clip in the Filter context",
+                               d->inputs[k].name, d->id);
+        fc->inputs[k] = a->inputs[k]; /* Source is the main input itself */
+    }
+    fc->via = fc->inputs[main].data ? -1 : via;
+    if (fc->via >= 0) {
+        nprfx_image v;
+        nprfx_result r =
+            nprfx_graph_hook_fetch_upstream(a->fetch_user, via, 0, (int)(a->time + 0.5), &v);
+        if (!r) r = nprfx_image_alloc(a->ctx, v.bounds, v.channels, &fc->src);
+        if (!r) r = nprfx_image_copy(a->ctx, &v, &fc->src);
+        if (r) {
+            nprfx_image_free(&fc->src);
+            return r;
+        }
+        fc->inputs[main] = fc->src;
+    }
+    fc->args.inputs = fc->inputs;
+    fc->args.fetch = footage_fetch;
+    fc->args.fetch_user = fc;
+    *use = 1;
+    return NPRFX_OK;
+}
+
+static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, void **slot,
+                                int footage);
+
 nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void **slot)
 {
     nprfx_ofx_host *h = user;
+    /* A flow node of the General graph: the runner's, whose result only sizes the frame of the
+     * node it feeds (that node's plug-in computes its own from Source). */
+    if (h->footage && a->node == nprfx_ofx_flow_node()) return nprfx_node_render(a);
+    footage_call fc;
+    int use = 0;
+    nprfx_result r = footage_args(h, a, &fc, &use);
+    if (r || !use) return r ? r : hook_render(h, a, slot, 0);
+    r = hook_render(h, &fc.args, slot, 1);
+    nprfx_image_free(&fc.src);
+    return r;
+}
+
+static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, void **slot,
+                                int footage)
+{
     node_inst *ni = *slot;
     nprfx_result r;
     int first = 0;
     if (!ni) {
-        if ((r = inst_create(h, a, &ni))) return r;
+        if ((r = inst_create(h, a, footage, &ni))) return r;
+        ni->footage = footage;
         *slot = ni;
         first = 1;
     }

@@ -1,0 +1,76 @@
+/* nprfx — which inputs of a node the OpenFX adapter can derive from the Source clip with the flow
+ * node, so that coherent-noise and advect work on plain footage in the Filter context (one clip,
+ * no hand-wired flow; docs/design.md "OpenFX", "Footage in a Filter context"). An input is
+ * derivable when an alternative of its AOV hint names channels that the flow node outputs: the
+ * same rule the runner applies when a graph connects the input to a flow node, so nothing here
+ * lists a node's inputs or the flow's channels a second time. The adapter (plugins/ofx/) and the
+ * test host (tests/ofxhost/) include this one header, as they do ofx_names.h. */
+#ifndef NPRFX_OFX_DERIVE_H
+#define NPRFX_OFX_DERIVE_H
+
+#include <string.h>
+
+#include "nprfx/node.h"
+
+/* The node whose output derived inputs come from. */
+#define NPRFX_OFX_FLOW_NODE "flow"
+/* Bounds of the fixed arrays that hold the flow node's param values and a node's inputs. */
+#define NPRFX_OFX_DERIVE_MAX_PARAMS 32
+#define NPRFX_OFX_DERIVE_MAX_INPUTS 16
+
+/* The flow node's descriptor; NULL where the registry has none of a shape these arrays hold. */
+static inline const nprfx_node_desc *nprfx_ofx_flow_node(void)
+{
+    const nprfx_node_desc *f = nprfx_node_find(NPRFX_OFX_FLOW_NODE);
+    return f && f->num_inputs == 1 && f->num_params <= NPRFX_OFX_DERIVE_MAX_PARAMS ? f : NULL;
+}
+
+/* Alternative `alt` (0-based, '|'-separated) of the input's AOV hint as channels of an output
+ * whose channel names `src` gives: their indices into idx (at most 4), and how many. 0 when the
+ * alternative names a channel src lacks, is a layer form (no channel of that exact name), or has
+ * another count than the input takes; -1 when the hint has no alternative `alt`. */
+static inline int nprfx_ofx_aov_match(const nprfx_input_desc *in, int alt,
+                                      const nprfx_output_info *src, int *idx)
+{
+    const char *s = in->aov;
+    for (int i = 0; s && i < alt; i++)
+        if ((s = strchr(s, '|'))) s++;
+    if (!s) return -1;
+    const char *end = strchr(s, '|');
+    if (!end) end = s + strlen(s);
+    int n = 0;
+    while (s < end) {
+        const char *comma = memchr(s, ',', (size_t)(end - s));
+        const char *e = comma ? comma : end;
+        size_t len = (size_t)(e - s);
+        int found = -1;
+        for (int j = 0; j < src->channels && found < 0; j++)
+            if (src->names[j] && strlen(src->names[j]) == len && !strncmp(src->names[j], s, len))
+                found = j;
+        if (found < 0 || n >= 4) return 0;
+        idx[n++] = found;
+        s = comma ? comma + 1 : end;
+    }
+    if (!n || (in->channels > 0 && n != in->channels)) return 0;
+    return n;
+}
+
+/* Whether input k of d names channels of the flow node's whole output (its default params).
+ * Whether the adapter derives it in a given host also depends on that host (ofx_derive.c: the
+ * flow provider, temporal clip access). */
+static inline int nprfx_ofx_derivable(const nprfx_node_desc *d, int k)
+{
+    const nprfx_node_desc *f = nprfx_ofx_flow_node();
+    if (!f || d == f || k < 0 || k >= d->num_inputs || !d->inputs[k].aov) return 0;
+    nprfx_value v[NPRFX_OFX_DERIVE_MAX_PARAMS];
+    int ich[1] = {4}, idx[4];
+    nprfx_output_info oi;
+    nprfx_node_defaults(f, v);
+    if (nprfx_node_output_info(NULL, f, v, ich, &oi) != NPRFX_OK) return 0;
+    for (int alt = 0;; alt++) {
+        int n = nprfx_ofx_aov_match(&d->inputs[k], alt, &oi, idx);
+        if (n) return n > 0;
+    }
+}
+
+#endif
