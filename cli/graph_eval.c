@@ -501,6 +501,22 @@ static void render_frame_release(render_frame *rf)
     internal_graph_cache_evict(rf->g);
 }
 
+/* Input k of `reader` at frame, evaluated and pinned in a slot of rf (base: the render's own
+ * inputs, else the ring of fetched frames), as the reader selects it. */
+static nprfx_result pin_input(render_frame *rf, const gnode *reader, int k, int frame, int base,
+                              nprfx_image *out)
+{
+    nprfx_graph *g = rf->g;
+    pin_slot *slot = base ? &rf->base[rf->nbase++] : &rf->ring[rf->nfetch++ % RING];
+    slot_release(g, slot);
+    centry *e;
+    nprfx_result r = internal_graph_eval(g, reader->inputs[k].src, frame, &e);
+    if (r) return r;
+    e->pins++;
+    slot->e = e;
+    return internal_graph_select_input(g, reader, k, e, out, &slot->scratch);
+}
+
 static nprfx_result fetch_input(render_frame *rf, int k, int frame, int base, nprfx_image *out)
 {
     nprfx_graph *g = rf->g;
@@ -509,14 +525,7 @@ static nprfx_result fetch_input(render_frame *rf, int k, int frame, int base, np
         return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                            "node '%s': input '%s' is not connected", n->name,
                            k >= 0 && k < n->ninputs ? n->desc->inputs[k].name : "?");
-    pin_slot *slot = base ? &rf->base[rf->nbase++] : &rf->ring[rf->nfetch++ % RING];
-    slot_release(g, slot);
-    centry *e;
-    nprfx_result r = internal_graph_eval(g, n->inputs[k].src, frame, &e);
-    if (r) return r;
-    e->pins++;
-    slot->e = e;
-    return internal_graph_select_input(g, n, k, e, out, &slot->scratch);
+    return pin_input(rf, n, k, frame, base, out);
 }
 
 static nprfx_result fetch_cb(void *user, int input, double time, nprfx_image *out)
@@ -552,14 +561,7 @@ nprfx_result nprfx_graph_hook_fetch_upstream(void *fetch_user, int input, int up
     if (up_input < 0 || up_input >= up->ninputs || up->inputs[up_input].src < 0)
         return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "node '%s': input %d is not connected",
                            up->name, up_input);
-    pin_slot *slot = &rf->ring[rf->nfetch++ % RING];
-    slot_release(g, slot);
-    centry *e;
-    nprfx_result r = internal_graph_eval(g, up->inputs[up_input].src, frame, &e);
-    if (r) return r;
-    e->pins++;
-    slot->e = e;
-    return internal_graph_select_input(g, up, up_input, e, out, &slot->scratch);
+    return pin_input(rf, up, up_input, frame, 0, out);
 }
 
 /* The span of frames node n reads to render `frame` (all inputs): rf's warm-up range. */

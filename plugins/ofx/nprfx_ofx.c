@@ -800,6 +800,20 @@ static void set_clip_rect(OfxPropertySetHandle out_args, const char *prefix, con
     (void)nprfx_ofx_g.prop->propSetDoubleN(out_args, name, n, v);
 }
 
+/* The frames input k's clip is read at, as n ranges (none: the host's default, the frame). */
+static void set_frame_ranges(OfxPropertySetHandle out_args, const nprfx_node_desc *d, int k,
+                             const nprfx_frame_range *r, int n)
+{
+    char clip[NPRFX_OFX_NAME_MAX];
+    double v[2 * NPRFX_MAX_FRAME_RANGES];
+    for (int i = 0; i < n; i++) {
+        v[2 * i] = r[i].first;
+        v[2 * i + 1] = r[i].last;
+    }
+    nprfx_ofx_clip_name(d, k, clip, sizeof clip);
+    if (n > 0) set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, v, 2 * n);
+}
+
 /* Inputs are needed whole (nodes filter neighbourhoods, maps are looked up anywhere); the mask
  * only where the output is asked for. */
 static OfxStatus regions_of_interest(ofx_instance *inst, OfxPropertySetHandle in_args,
@@ -851,7 +865,6 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
      * stand in, so the frame itself is still declared. */
     if (nprfx_ofx_eval_params(inst, ctx, t, 0, values, strings) != NPRFX_OK)
         nprfx_node_defaults(d, values);
-    char clip[NPRFX_OFX_NAME_MAX];
     int main = nprfx_ofx_main_input(d);
     if (inst->derive && main >= 0 && nprfx_ofx_clip_connected(inst->clips[main])) {
         /* Footage: Source at the frames the flow reads for each derived input's frames, and at
@@ -862,13 +875,7 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
         r[0].first = r[0].last = time;
         if (nprfx_ofx_g.temporal)
             n = nprfx_ofx_derive_frames(d, &inst->plan, values, &q, !inst->plan.count[main], r);
-        double v[2 * NPRFX_MAX_FRAME_RANGES];
-        for (int i = 0; i < n; i++) {
-            v[2 * i] = r[i].first;
-            v[2 * i + 1] = r[i].last;
-        }
-        nprfx_ofx_clip_name(d, main, clip, sizeof clip);
-        if (n > 0) set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, v, 2 * n);
+        set_frame_ranges(out_args, d, main, r, n);
     }
     for (int k = 0; k < d->num_inputs && !inst->derive; k++) {
         if (!inst->clips[k] || !channels[k]) continue;
@@ -880,13 +887,7 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
         } else if (nprfx_node_frames_needed(ctx, d, values, &q, k, r, &n) != NPRFX_OK) {
             continue; /* the host's default: the frame itself */
         }
-        double v[2 * NPRFX_MAX_FRAME_RANGES];
-        for (int i = 0; i < n; i++) {
-            v[2 * i] = r[i].first;
-            v[2 * i + 1] = r[i].last;
-        }
-        nprfx_ofx_clip_name(d, k, clip, sizeof clip);
-        if (n > 0) set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, v, 2 * n);
+        set_frame_ranges(out_args, d, k, r, n);
     }
     if (inst->mask && nprfx_ofx_clip_connected(inst->mask)) {
         double r[2] = {t, t};
