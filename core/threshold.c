@@ -1,8 +1,11 @@
 /* Threshold functions and X-toon map lookup (style cookbook §3). See nprfx/threshold.h. */
 #include <math.h>
+#include <pthread.h>
+#include <string.h>
 
 #include "nprfx/threshold.h"
 #include "nprfx/exec.h"
+#include "internal_state.h"
 #include "internal_threshold.h"
 
 #define NPRFX_INV_SQRT_PI 0.56418958354775628695
@@ -269,9 +272,55 @@ static void tm_rows(void *user, int begin, int end, int worker)
     }
 }
 
+/* The per-instance cache: the builtin mode's table for the last sigma. Building it costs 1-3 ms
+ * of one thread, which a strip render or a host's tiles would pay at every call. */
+typedef struct tm_cache {
+    pthread_mutex_t lock; /* first: internal_state.h */
+    int valid;
+    internal_mu_table table;
+} tm_cache;
+
+void nprfx_threshold_state_free(void *state)
+{
+    internal_state_free(state);
+}
+
+double nprfx_threshold_state_bytes(void)
+{
+    return (double)sizeof(tm_cache);
+}
+
+/* The table for sigma into tab: copied from the cache when it holds this sigma, else built
+ * (and kept). The copy keeps the render off the lock, whatever another call stores meanwhile. */
+static void mu_table_for(void **state, double sigma, internal_mu_table *tab)
+{
+    tm_cache *c = state ? internal_state_get(state, sizeof *c) : NULL;
+    if (c) {
+        pthread_mutex_lock(&c->lock);
+        int hit = c->valid && c->table.sigma == sigma;
+        if (hit) memcpy(tab, &c->table, sizeof *tab);
+        pthread_mutex_unlock(&c->lock);
+        if (hit) return;
+    }
+    internal_mu_table_init(tab, sigma);
+    if (!c) return;
+    pthread_mutex_lock(&c->lock);
+    memcpy(&c->table, tab, sizeof *tab);
+    c->valid = 1;
+    pthread_mutex_unlock(&c->lock);
+}
+
 nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_params *p,
                                     const nprfx_image *pattern, const nprfx_image *tone,
                                     const nprfx_image *map, nprfx_rect window, nprfx_image *out)
+{
+    return nprfx_threshold_render_cached(ctx, p, pattern, tone, map, window, out, NULL);
+}
+
+nprfx_result nprfx_threshold_render_cached(nprfx_context *ctx, const nprfx_threshold_params *p,
+                                           const nprfx_image *pattern, const nprfx_image *tone,
+                                           const nprfx_image *map, nprfx_rect window,
+                                           nprfx_image *out, void **state)
 {
     if (!p || !pattern || !pattern->data || !out)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "threshold-map: no pattern or output");
@@ -305,7 +354,7 @@ nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_threshold_pa
                            want);
     if (nprfx_rect_empty(window)) return NPRFX_OK;
     internal_mu_table mu_table;
-    if (p->mode == NPRFX_THRESHOLD_BUILTIN) internal_mu_table_init(&mu_table, p->sigma);
+    if (p->mode == NPRFX_THRESHOLD_BUILTIN) mu_table_for(state, p->sigma, &mu_table);
     tm_job j = {p, window, pattern, tone, map, out, &mu_table};
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(window), 8, tm_rows, &j);
     return NPRFX_OK;

@@ -140,9 +140,15 @@ static nprfx_result tm_output(const nprfx_value *pv, const int *ich, nprfx_outpu
 
 static nprfx_result tm_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_threshold_render(a->ctx, params, &a->inputs[IN_PATTERN],
-                                  nprfx_render_input(a, IN_TONE), nprfx_render_input(a, IN_MAP),
-                                  a->window, a->output);
+    return nprfx_threshold_render_cached(
+        a->ctx, params, &a->inputs[IN_PATTERN], nprfx_render_input(a, IN_TONE),
+        nprfx_render_input(a, IN_MAP), a->window, a->output, a->state);
+}
+
+static double tm_state_bytes(const void *params, const nprfx_state_query *q)
+{
+    (void)params, (void)q;
+    return nprfx_threshold_state_bytes();
 }
 
 const nprfx_node_desc nprfx_node_threshold_map = {
@@ -190,8 +196,11 @@ const nprfx_node_desc nprfx_node_threshold_map = {
     .params = params,
     .num_params = P_COUNT,
     .output = tm_output,
-    .flags = NPRFX_NODE_ROWS, /* per pixel, or within its footprint */
+    /* per pixel, or within its footprint; the builtin table is kept between calls */
+    .flags = NPRFX_NODE_ROWS | NPRFX_NODE_STATEFUL,
     .render = tm_render,
+    .state_free = nprfx_threshold_state_free,
+    .state_bytes = tm_state_bytes,
     .params_size = sizeof(tp),
     .version_major = 1,
     .version_minor = 1, /* 1.1: NaN and infinities as docs/design.md §2.2 says */

@@ -86,6 +86,18 @@ NPRFX_API nprfx_result nprfx_threshold_render(nprfx_context *ctx, const nprfx_th
                                               const nprfx_image *pattern, const nprfx_image *tone,
                                               const nprfx_image *map, nprfx_rect window,
                                               nprfx_image *out);
+/* nprfx_threshold_render with a per-instance cache in *state (NULL at first; free it with
+ * nprfx_threshold_state_free): the builtin mode's step table is built once per sigma instead of
+ * at every call. The same pixels either way. */
+NPRFX_API nprfx_result nprfx_threshold_render_cached(nprfx_context *ctx,
+                                                     const nprfx_threshold_params *p,
+                                                     const nprfx_image *pattern,
+                                                     const nprfx_image *tone,
+                                                     const nprfx_image *map, nprfx_rect window,
+                                                     nprfx_image *out, void **state);
+NPRFX_API void nprfx_threshold_state_free(void *state);
+/* The bytes that state holds (one table). */
+NPRFX_API double nprfx_threshold_state_bytes(void);
 
 #ifdef __cplusplus
 }

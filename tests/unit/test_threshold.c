@@ -376,6 +376,40 @@ static void test_mu_table(void)
     }
 }
 
+/* The per-instance cache of the builtin table: a render through a state that holds another
+ * sigma's table, the same sigma's again, and windows of it give the pixels of a render without
+ * a state (which builds its own table). */
+static void test_table_cache(nprfx_context *ctx)
+{
+    const int w = 64, h = 32;
+    nprfx_image pat = th_image(w, h, 1, NULL), tone = th_image(w, h, 1, NULL);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            nprfx_image_at(&pat, x, y)[0] = (float)nprfx_rand_u01(3, 0, x, y, 0, 0);
+            nprfx_image_at(&tone, x, y)[0] = (float)(x + 0.5) / w; /* 0 .. 1 */
+        }
+    nprfx_threshold_params p = {.mode = NPRFX_THRESHOLD_BUILTIN, .tone_gain = 1};
+    void *state = NULL;
+    const double sig[] = {10, 25, 25, 3};
+    for (int k = 0; k < 4; k++) {
+        p.sigma = sig[k];
+        nprfx_image ref = th_image(w, h, 1, NULL), got = th_image(w, h, 1, NULL);
+        CHECK_OK(nprfx_threshold_render(ctx, &p, &pat, &tone, NULL, ref.bounds, &ref));
+        /* two windows through the state, the second hitting the table the first built */
+        CHECK_OK(nprfx_threshold_render_cached(ctx, &p, &pat, &tone, NULL,
+                                               nprfx_rect_make(0, 0, w, h / 2), &got, &state));
+        CHECK_OK(nprfx_threshold_render_cached(ctx, &p, &pat, &tone, NULL,
+                                               nprfx_rect_make(0, h / 2, w, h), &got, &state));
+        CHECK(memcmp(ref.data, got.data, sizeof(float) * w * h) == 0);
+        nprfx_image_free(&ref);
+        nprfx_image_free(&got);
+    }
+    CHECK(state != NULL);
+    nprfx_threshold_state_free(state);
+    nprfx_image_free(&pat);
+    nprfx_image_free(&tone);
+}
+
 static void test_node_builtin(nprfx_context *ctx)
 {
     nprfx_result r;
@@ -485,6 +519,7 @@ int main(void)
     test_node_erf(ctx);
     test_node_map(ctx);
     test_node_builtin(ctx);
+    test_table_cache(ctx);
     test_determinism(ctx);
     reset();
     nprfx_context_destroy(ctx);
