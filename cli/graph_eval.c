@@ -19,6 +19,7 @@
 #include "nprfx/nprfx.h"
 #include "seq.h"
 #include "internal_graph.h"
+#include "nprfx/exec.h"
 
 /* ---------------------------------------------------------------- evaluation ---- */
 
@@ -407,6 +408,37 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
 
 /* Pick the channels of entry e that input k of node n uses; the view shares e's pixels when
  * they are adjacent, else is *scratch (a frame of the graph's, the caller releases it). */
+/* Packing channels out of a plate, rows [begin, end): a frame's worth of strided reads per
+ * input, on every thread (it ran on the evaluating thread alone, pixel by pixel). */
+typedef struct pack_job {
+    const nprfx_image *src;
+    const nprfx_image *dst;
+    const int *idx;
+    int count;
+} pack_job;
+
+static void pack_rows(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const pack_job *pj = user;
+    const nprfx_image *d = pj->dst;
+    int w = nprfx_rect_width(d->bounds), nc = pj->count;
+    ptrdiff_t ps = pj->src->pixel_stride;
+    for (int y = d->bounds.y0 + begin; y < d->bounds.y0 + end; y++) {
+        const float *s = nprfx_image_at(pj->src, d->bounds.x0, y);
+        float *o = nprfx_image_at(d, d->bounds.x0, y);
+        if (nc == 1) {
+            const float *s0 = s + pj->idx[0];
+            for (int x = 0; x < w; x++)
+                o[x] = s0[x * ps];
+            continue;
+        }
+        for (int x = 0; x < w; x++, s += ps, o += nc)
+            for (int c = 0; c < nc; c++)
+                o[c] = s[pj->idx[c]];
+    }
+}
+
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
                                          nprfx_image *view, nprfx_image *scratch)
 {
@@ -429,13 +461,9 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
              n->kind == GK_NODE ? n->desc->inputs[k].name : "image", g->nodes[e->node].name);
     r = internal_graph_frame_alloc(g, (int)(n - g->nodes), what, e->im.bounds, count, &tmp);
     if (r) return r;
-    for (int y = tmp.bounds.y0; y < tmp.bounds.y1; y++)
-        for (int x = tmp.bounds.x0; x < tmp.bounds.x1; x++) {
-            const float *s = nprfx_image_at(&e->im, x, y);
-            float *d = nprfx_image_at(&tmp, x, y);
-            for (int c = 0; c < count; c++)
-                d[c] = s[idx[c]];
-        }
+    pack_job pj = {&e->im, &tmp, idx, count};
+    nprfx_parallel_for(nprfx_context_executor(g->ctx), nprfx_rect_height(tmp.bounds), 16,
+                       pack_rows, &pj);
     *scratch = tmp;
     *view = tmp;
     return NPRFX_OK;

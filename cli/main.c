@@ -1,6 +1,9 @@
 /* nprfx — the command-line node runner: dispatches to one function per sub-command. */
 #include <stdio.h>
 #include <string.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "commands.h"
 #include "flow_opencv.h"
@@ -47,8 +50,25 @@ static void usage(FILE *f)
                "Example: nprfx run samples/graphs/threshold.json --frames 1-4\n");
 }
 
+/* Every frame of a shot makes the same allocations again: a node's scratch (Gabor's point
+ * lists, its depth window, a strip's planes) is freed at the end of the frame and asked for
+ * again at the next. glibc gives memory at the top of a heap back to the kernel once 128 KiB of
+ * it are free, and serves blocks above its (adaptive) mmap threshold from fresh mappings, so
+ * each frame paid its page faults again: a quarter of the six-node bench graph's compute time
+ * (issue 16). The runner keeps what it freed for the next frame instead: resident memory stays
+ * at the shot's high-water mark, which is the peak it reports anyway. Frames themselves are
+ * pooled (frame_pool.c); blocks above 64 MiB (8K planes) still get their own mappings. */
+static void keep_freed_memory(void)
+{
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_THRESHOLD, 64 << 20);
+    mallopt(M_TRIM_THRESHOLD, 1 << 30);
+#endif
+}
+
 int main(int argc, char **argv)
 {
+    keep_freed_memory();
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
