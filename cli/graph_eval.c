@@ -462,8 +462,8 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
     r = internal_graph_frame_alloc(g, (int)(n - g->nodes), what, e->im.bounds, count, &tmp);
     if (r) return r;
     pack_job pj = {&e->im, &tmp, idx, count};
-    nprfx_parallel_for(nprfx_context_executor(g->ctx), nprfx_rect_height(tmp.bounds), 16,
-                       pack_rows, &pj);
+    nprfx_parallel_for(nprfx_context_executor(g->ctx), nprfx_rect_height(tmp.bounds), 16, pack_rows,
+                       &pj);
     *scratch = tmp;
     *view = tmp;
     return NPRFX_OK;
