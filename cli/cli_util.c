@@ -132,10 +132,11 @@ void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
         snprintf(lim, sizeof lim, "none");
     else
         nprfx_format_bytes(lim, sizeof lim, plan->limit);
-    fprintf(f,
-            "frames held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
-            "resident %.0f MiB\n",
-            peak, est, need, lim, nprfx_cli_peak_mib());
+    fprintf(
+        f,
+        "frames and caches held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
+        "resident %.0f MiB\n",
+        peak, est, need, lim, nprfx_cli_peak_mib());
     if (plan && plan->state) {
         char kept[32];
         nprfx_format_bytes(kept, sizeof kept, plan->state);

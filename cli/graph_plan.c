@@ -275,22 +275,36 @@ static size_t image_bytes(const nprfx_image *im)
 
 static void note_peak(nprfx_graph *g)
 {
-    size_t now = g->held_bytes + nprfx_frame_pool_idle_bytes(g->pool);
+    size_t now = g->held_bytes + g->state_bytes + nprfx_frame_pool_idle_bytes(g->pool);
     if (now > g->mem_peak) g->mem_peak = now;
 }
 
-/* Make room for `bytes` more under the limit: the pool's idle buffers first, then unpinned
- * results, least recently used first. Whether it fits now. */
+void internal_graph_count_state(nprfx_graph *g, gnode *n, int w, int h, const int *in_ch,
+                                const nprfx_value *params)
+{
+    if (n->state_counted || n->kind != GK_NODE || !(n->desc->flags & NPRFX_NODE_STATEFUL)) return;
+    n->state_counted = 1;
+    nprfx_state_query q = {w, h, g->first_frame, g->last_frame, in_ch};
+    double bytes = 0;
+    if (nprfx_node_state_bytes(n->ctx, n->desc, params, &q, &bytes) || !(bytes > 0)) return;
+    g->state_bytes += bytes < 1e18 ? (size_t)bytes : (size_t)1e18;
+    note_peak(g);
+}
+
+/* Make room for `bytes` more under the limit, beside the caches nodes keep: the pool's idle
+ * buffers first, then unpinned results, least recently used first. Whether it fits now. */
 static int make_room(nprfx_graph *g, size_t bytes)
 {
     if (g->mem_limit == UINT64_MAX) return 1;
-    if (g->held_bytes + nprfx_frame_pool_idle_bytes(g->pool) + bytes <= g->mem_limit) return 1;
+    size_t kept = g->state_bytes;
+    if (g->held_bytes + kept + nprfx_frame_pool_idle_bytes(g->pool) + bytes <= g->mem_limit)
+        return 1;
     nprfx_frame_pool_trim(g->pool, 0);
-    for (centry *e = g->tail, *prev; e && g->held_bytes + bytes > g->mem_limit; e = prev) {
+    for (centry *e = g->tail, *prev; e && g->held_bytes + kept + bytes > g->mem_limit; e = prev) {
         prev = e->prev;
         if (!e->pins) internal_graph_cache_drop(g, e);
     }
-    return g->held_bytes + bytes <= g->mem_limit;
+    return g->held_bytes + kept + bytes <= g->mem_limit;
 }
 
 nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
@@ -301,14 +315,18 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
     if (r) return r;
     size_t bytes = (size_t)w * (size_t)h * (size_t)(channels > 0 ? channels : 0) * sizeof(float);
     if (!make_room(g, bytes)) {
-        char need[32], held[32], lim[32];
+        char need[32], held[32], lim[32], kept[32], caches[64] = "";
         nprfx_format_bytes(need, sizeof need, bytes);
         nprfx_format_bytes(held, sizeof held, g->held_bytes);
         nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
+        if (g->state_bytes) {
+            nprfx_format_bytes(kept, sizeof kept, g->state_bytes);
+            snprintf(caches, sizeof caches, " and %s of caches nodes keep", kept);
+        }
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                            "%s %dx%d with %d channel%s needs %s while the graph holds %s of frames "
-                           "it still reads: above the %s memory limit (%s)",
-                           what, w, h, channels, channels == 1 ? "" : "s", need, held, lim,
+                           "it still reads%s: above the %s memory limit (%s)",
+                           what, w, h, channels, channels == 1 ? "" : "s", need, held, caches, lim,
                            nprfx_mem_limit_origin());
     }
     int reused = 0;

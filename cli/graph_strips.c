@@ -387,6 +387,13 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
             double tr = internal_graph_now();
             r = nprfx_node_render(&a);
             g->render_seconds += internal_graph_now() - tr;
+            if (!r) {
+                int in_ch[32] = {0};
+                for (int k = 0; k < d->num_inputs; k++)
+                    in_ch[k] = inputs[k].data ? inputs[k].channels : 0;
+                internal_graph_count_state(g, nd, nprfx_rect_width(st->frame),
+                                           nprfx_rect_height(st->frame), in_ch, a.params);
+            }
         }
         for (int k = 0; k < d->num_inputs; k++)
             internal_graph_frame_release(g, &scratch[k]);

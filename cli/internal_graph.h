@@ -28,6 +28,7 @@ typedef struct gnode {
     nprfx_value *params;
     char **param_text; /* owned copies of STRING values */
     void *state;
+    int state_counted;  /* its caches are in the graph's state_bytes (from its first render) */
     void *instance;     /* the render hook's per-node slot */
     nprfx_context *ctx; /* raises through the graph's with "node 'NAME'" before the message */
     /* read / write / synth */
@@ -120,7 +121,9 @@ struct nprfx_graph {
     uint64_t mem_limit;            /* bytes the graph's frames may take (UINT64_MAX: none) */
     size_t held_bytes;             /* frames handed out: cached results, outputs being rendered,
                                       channel scratch; the pool's idle buffers come on top */
-    size_t mem_peak;               /* the most held_bytes + idle ever was */
+    size_t state_bytes;            /* the caches stateful nodes keep between frames, counted at
+                                      each one's first render (desc->state_bytes) */
+    size_t mem_peak;               /* the most held_bytes + state_bytes + idle ever was */
     double child_seconds;          /* evaluations nested in the one being timed (stats) */
     nprfx_graph_node_stats *stats; /* per node */
     nprfx_render_hook hook;
@@ -174,6 +177,11 @@ int internal_graph_plate_pick(nprfx_graph *g, int node, const char *const *names
  * (internal_graph_plate_channels); whether it did. */
 int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names,
                               gmeta *meta);
+/* After node's first render (frame size w x h, its inputs' channel counts in_ch, the params it
+ * rendered with): count the caches it keeps between frames from then on (desc->state_bytes) in
+ * g->state_bytes, so that later frames are checked against the memory limit with them. */
+void internal_graph_count_state(nprfx_graph *g, gnode *n, int w, int h, const int *in_ch,
+                                const nprfx_value *params);
 /* Count a frame made elsewhere (a plate from the reader) as held. */
 void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im);
 /* Give a frame from internal_graph_frame_alloc (or adopted) back to the pool. */
