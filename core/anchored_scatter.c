@@ -164,13 +164,15 @@ nprfx_result internal_scatter_emit(nprfx_context *ctx, gjob *J, const char *who)
     J->nworkers = nprfx_executor_workers(ex);
     if (J->nworkers < 1) J->nworkers = 1;
     J->scratch = calloc((size_t)J->nworkers, sizeof(void *));
-    int ok = J->scratch != NULL;
+    J->chunks = calloc((size_t)J->nworkers, sizeof(gchunk *));
+    int ok = J->scratch != NULL && J->chunks != NULL;
     /* a row of blocks reads at most CW input rows, and columns from its first window to its
      * last */
     size_t strip_w = (size_t)J->nbx * BLOCK + 2 * (1 + HALO);
     for (int i = 0; i < J->nworkers && ok; i++) {
         emit_scratch *e = calloc(1, sizeof(emit_scratch)); /* padding rows: zero */
         J->scratch[i] = e;
+        if (e) e->chunks = &J->chunks[i];
         ok = e != NULL && (e->T.data = malloc(sizeof(float) * ST_PLANES * CW * strip_w)) != NULL;
     }
     if (ok) nprfx_parallel_for(ex, J->nby, 1, emit_rows, J);
@@ -193,9 +195,13 @@ void internal_scatter_job_free(gjob *J)
     free(J->zwin);
     free(J->idwin);
     free(J->scratch);
-    if (J->blocks)
-        for (int i = 0; i < J->nbx * J->nby; i++)
-            free(J->blocks[i].p);
+    for (int i = 0; J->chunks && i < J->nworkers; i++)
+        for (gchunk *c = J->chunks[i], *next; c; c = next) {
+            next = c->next;
+            free(c);
+        }
+    free(J->chunks);
+    J->chunks = NULL;
     free(J->blocks);
     free(J->row_ok);
     J->zwin = J->idwin = NULL;

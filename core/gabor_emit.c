@@ -21,17 +21,39 @@
 #define SLAB_IN (0.5 - SLAB_SOFT / 3.0)
 #define SLAB_OUT (SLAB_IN + SLAB_SOFT)
 
-static int block_push(gblock *b, const gpoint *pt)
+/* A block's points go after those of the worker's blocks before it, in its current chunk; one
+ * that outgrows the chunk's room moves to a new chunk (at least twice its points). */
+static void block_begin(gblock *b, emit_scratch *scr)
+{
+    gchunk *c = *scr->chunks;
+    b->n = 0;
+    b->p = c ? c->p + c->n : NULL;
+    b->cap = c ? c->cap - c->n : 0;
+}
+
+static int block_push(gblock *b, emit_scratch *scr, const gpoint *pt)
 {
     if (b->n == b->cap) {
-        int cap = b->cap ? 2 * b->cap : 32;
-        gpoint *np = realloc(b->p, sizeof(gpoint) * (size_t)cap);
-        if (!np) return 0;
-        b->p = np;
+        int cap = 2 * b->n > CHUNK_POINTS ? 2 * b->n : CHUNK_POINTS;
+        gchunk *c = malloc(sizeof(gchunk) + sizeof(gpoint) * (size_t)cap);
+        if (!c) return 0;
+        c->n = 0;
+        c->cap = cap;
+        c->next = *scr->chunks;
+        *scr->chunks = c;
+        if (b->n) memcpy(c->p, b->p, sizeof(gpoint) * (size_t)b->n);
+        b->p = c->p;
         b->cap = cap;
     }
     b->p[b->n++] = *pt;
     return 1;
+}
+
+static void block_end(gblock *b, emit_scratch *scr)
+{
+    if (b->n) (*scr->chunks)->n += b->n;
+    b->cap = b->n;
+    if (!b->n) b->p = NULL;
 }
 
 static int in_block(int q)
@@ -414,6 +436,7 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
 #endif
         ncomp = internal_gabor_block_prepare_scalar(G, &scr->T, bx, by, X, &scr->C);
     int x0 = bx * BLOCK - 1, y0 = by * BLOCK - 1; /* pixel (x0, y0): index 0 of the grid */
+    block_begin(b, scr);
     for (int comp = 0; comp < ncomp; comp++) {
         /* the patch's footprint: anchor +- pixel extent, and the largest normal component (the
          * slab's reach per level is added below) */
@@ -526,10 +549,11 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
                         if (!internal_gabor_make_point(G, X, q, ox, oy, ox + ux, oy + uy, w2, h, id,
                                                        &pt))
                             continue;
-                        if (!block_push(b, &pt)) return 0;
+                        if (!block_push(b, scr, &pt)) return 0;
                     }
         }
     }
+    block_end(b, scr);
     return 1;
 }
 

@@ -425,8 +425,18 @@ typedef struct gpoint {
     gaxis ax, ay;
 } gpoint;
 
+/* Points are stored in chunks, a list per emission worker, each block's points contiguous in
+ * one chunk: a block's list used to grow by doubling realloc, four or five allocations and
+ * copies per block and frame (a tenth of the render). */
+typedef struct gchunk {
+    struct gchunk *next;
+    int n, cap; /* points used by finished blocks, room */
+    gpoint p[];
+} gchunk;
+#define CHUNK_POINTS 8192
+
 typedef struct gblock {
-    gpoint *p;
+    gpoint *p; /* in a chunk of its worker's list */
     int n, cap;
 } gblock;
 
@@ -465,6 +475,7 @@ typedef struct emit_scratch {
     gcache C;
     gpixels X;
     gstrip T;
+    gchunk **chunks; /* the worker's list of point chunks (the job's, which outlives this) */
 } emit_scratch;
 
 /* ---- the render ------------------------------------------------------------------------------ */
@@ -502,6 +513,7 @@ typedef struct gjob {
      * allocated once per render, not per block row or tile */
     int nworkers;
     void **scratch;
+    gchunk **chunks; /* per worker: its points' chunks, the current one first */
     /* the window's depth and id as the visibility tests read them (0 and NaN where there is no
      * surface), written by emission from its strips: splatting then does not read the plates
      * again */
