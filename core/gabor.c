@@ -52,7 +52,8 @@
  *  - the inputs are read from the plates once per row of blocks into a worker's strip (planes),
  *    each block's window is copied from it, and emission also writes the window's depth and id
  *    planes the splat tiles read; scratch is allocated once per render and worker, never per
- *    block or tile (no frame-sized copies, few fresh pages);
+ *    block or tile (no frame-sized copies, few fresh pages), and points go into per-worker
+ *    chunks of 8192, each block's contiguous in one (not a list per block grown by realloc);
  *  - a block's pixels live in planes (structure of arrays); interior flags, Jacobians and the
  *    per-pixel attributes are computed 8 pixels at a time, with scalar code only for pixels at
  *    edges or outside the inputs; patch links are vector masks, and a block whose pixels all
