@@ -151,6 +151,58 @@ static inline void blend_pixel(const blend_job *j, const float *b, const float *
     if (j->nch > j->ncol) o[3] = (float)alpha_blend(j->bg[3], b[3], cov);
 }
 
+#if defined(__GNUC__)
+#define BLEND_INLINE static inline __attribute__((always_inline))
+#else
+#define BLEND_INLINE static inline
+#endif
+
+/* The fast path's pixels when neither alpha nor coverage is connected (the usual case): one copy
+ * per mode, so that the mode's switch, the opacity clamp and the coverage test leave the loop.
+ * The same operations in the same order as blend_pixel with a = opacity and cov = 1. */
+BLEND_INLINE void plain_span(const blend_job *j, nprfx_blend_mode mode, const float *bp,
+                             const float *lp, const float *kp, float *o, int n)
+{
+    const ptrdiff_t bs = j->base->pixel_stride, ls = j->layer->pixel_stride;
+    const ptrdiff_t ks = j->back ? j->back->pixel_stride : bs, os = j->out->pixel_stride;
+    const double a = clamp01(j->opacity), f = j->factor, gb = j->gain_base, gl = j->gain_layer;
+    const int ncol = j->ncol, lstep = j->layer_step, kstep = j->back_step;
+    for (int x = 0; x < n; x++, bp += bs, lp += ls, kp += ks, o += os) {
+        for (int c = 0; c < ncol; c++) {
+            const double r = apply_mode(mode, kp[c * kstep], gb * bp[c], gl * lp[c * lstep], f, a);
+            o[c] = (float)alpha_blend(j->bg[c], r, 1.0);
+        }
+        if (j->nch > ncol) o[3] = (float)alpha_blend(j->bg[3], bp[3], 1.0);
+    }
+}
+
+static void plain_row(const blend_job *j, const float *bp, const float *lp, const float *kp,
+                      float *o, int n)
+{
+    switch (j->mode) {
+    case NPRFX_BLEND_ALPHABLEND:
+        plain_span(j, NPRFX_BLEND_ALPHABLEND, bp, lp, kp, o, n);
+        break;
+    case NPRFX_BLEND_OVERLAYALPHA:
+        plain_span(j, NPRFX_BLEND_OVERLAYALPHA, bp, lp, kp, o, n);
+        break;
+    case NPRFX_BLEND_OVERLAY:
+        plain_span(j, NPRFX_BLEND_OVERLAY, bp, lp, kp, o, n);
+        break;
+    case NPRFX_BLEND_MULTIPLY:
+        plain_span(j, NPRFX_BLEND_MULTIPLY, bp, lp, kp, o, n);
+        break;
+    case NPRFX_BLEND_SCREEN:
+        plain_span(j, NPRFX_BLEND_SCREEN, bp, lp, kp, o, n);
+        break;
+    case NPRFX_BLEND_DIFFERENCE:
+        plain_span(j, NPRFX_BLEND_DIFFERENCE, bp, lp, kp, o, n);
+        break;
+    default: /* pigment (a log per sample: the loop overhead is small beside it) */
+        plain_span(j, j->mode, bp, lp, kp, o, n);
+    }
+}
+
 static void blend_rows(void *user, int begin, int end, int worker)
 {
     (void)worker;
@@ -164,6 +216,10 @@ static void blend_rows(void *user, int begin, int end, int worker)
         const float *ap = j->alpha ? row_span(j->alpha, x0, x1, y) : NULL;
         const float *cp = j->coverage ? row_span(j->coverage, x0, x1, y) : NULL;
         float *o = nprfx_image_at(j->out, x0, y);
+        if (bp && lp && kp && !j->alpha && !j->coverage) {
+            plain_row(j, bp, lp, kp, o, x1 - x0);
+            continue;
+        }
         if (bp && lp && kp && (!j->alpha || ap) && (!j->coverage || cp)) {
             const ptrdiff_t bs = j->base->pixel_stride, ls = j->layer->pixel_stride;
             const ptrdiff_t ks = j->back ? j->back->pixel_stride : bs;
