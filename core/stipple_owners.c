@@ -513,6 +513,24 @@ typedef struct block_ctx {
     klist *out;
 } block_ctx;
 
+#if defined(__SSE2__)
+/* member_hits for the strip row at a: four boxes and limits. */
+static inline unsigned member_row(const strip *st, size_t a, __m128d U, __m128d V, __m128i I)
+{
+    __m128d in0 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a)),
+                                        _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a))),
+                             _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a)),
+                                        _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a))));
+    __m128d in1 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a + 2)),
+                                        _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a + 2))),
+                             _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a + 2)),
+                                        _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a + 2))));
+    __m128i l = _mm_cmplt_epi32(I, _mm_loadu_si128((const __m128i *)(st->lim + a)));
+    unsigned box = (unsigned)(_mm_movemask_pd(in0) | _mm_movemask_pd(in1) << 2);
+    return box & (unsigned)_mm_movemask_ps(_mm_castsi128_ps(l));
+}
+#endif
+
 /* The slots of the current query whose boxes and limits admit sample i at (u, v). The values
  * are finite, so these comparisons are the negations of the rejecting ones, and the SSE2 ones
  * (two boxes, four limits at a time) are the same comparisons. */
@@ -523,20 +541,14 @@ static inline unsigned member_hits(const block_ctx *b, int i, double u, double v
 #if defined(__SSE2__)
     const __m128d U = _mm_set1_pd(u), V = _mm_set1_pd(v);
     const __m128i I = _mm_set1_epi32(i);
-    for (int r = 0; r < b->rows; r++) {
-        const size_t a = b->at + (size_t)r * st->stride;
-        __m128d in0 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a)),
-                                            _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a))),
-                                 _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a)),
-                                            _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a))));
-        __m128d in1 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a + 2)),
-                                            _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a + 2))),
-                                 _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a + 2)),
-                                            _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a + 2))));
-        __m128i l = _mm_cmplt_epi32(I, _mm_loadu_si128((const __m128i *)(st->lim + a)));
-        unsigned box = (unsigned)(_mm_movemask_pd(in0) | _mm_movemask_pd(in1) << 2);
-        hits |= (box & (unsigned)_mm_movemask_ps(_mm_castsi128_ps(l))) << (BLOCK * r);
-    }
+    const size_t a = b->at, w = (size_t)st->stride;
+    if (b->rows == BLOCK) /* a whole block (all but the last row of blocks): no loop */
+        hits = member_row(st, a, U, V, I) | member_row(st, a + w, U, V, I) << BLOCK |
+               member_row(st, a + 2 * w, U, V, I) << (2 * BLOCK) |
+               member_row(st, a + 3 * w, U, V, I) << (3 * BLOCK);
+    else
+        for (int r = 0; r < b->rows; r++)
+            hits |= member_row(st, a + (size_t)r * w, U, V, I) << (BLOCK * r);
 #else
     for (int r = 0; r < b->rows; r++)
         for (int c = 0; c < BLOCK; c++) {
