@@ -157,9 +157,11 @@ static inline int jac_lanes(const jacview *v, size_t k, __m128i id)
     _mm_storel_epi64(
         (__m128i *)(v->jid + k),
         _mm_or_si128(_mm_and_si128(usable, id), _mm_andnot_si128(usable, _mm_set1_epi32(NO_ID))));
-    const int bits = _mm_movemask_ps(_mm_castsi128_ps(usable));
-    v->ok[k] = (unsigned char)(OK_UV | (bits & 1 ? OK_J : 0));
-    v->ok[k + 1] = (unsigned char)(OK_UV | (bits & 2 ? OK_J : 0));
+    /* the two ok bytes in one store (x86 is little-endian): OK_UV, and OK_J where usable */
+    const unsigned bits = (unsigned)_mm_movemask_ps(_mm_castsi128_ps(usable));
+    const uint16_t okw =
+        (uint16_t)((OK_UV | OK_UV << 8) | (bits & 1u) * OK_J | (bits & 2u) * (OK_J << 7));
+    memcpy(v->ok + k, &okw, sizeof okw);
     return 1;
 }
 

@@ -309,6 +309,52 @@ static void quad_box(const double *cu, const double *cv, double *u0, double *v0,
     *u0 = a0, *v0 = b0, *u1 = a1, *v1 = b1;
 }
 
+static inline int lowest_bit(unsigned m)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_ctz(m);
+#else
+    int i = 0;
+    while (!(m & 1u))
+        m >>= 1, i++;
+    return i;
+#endif
+}
+
+/* The box of strip owner i (of the strip row at r0, pixel row y, columns from x0; k0 the
+ * row's first owner in the per-pixel data) from the corners owner_build finds, for an owner
+ * that keeps something but lacks a corner in the grid. */
+static void box_off_grid(const sjob *j, const pixdata *d, const cgrid *g, strip *st, size_t r0,
+                         size_t k0, int x0, int y, int i)
+{
+    const size_t a = r0 + (size_t)i;
+    owner o;
+    owner_build(j, d, g, st->imax[a], st->g[a], d->id[k0 + (size_t)i], &o, x0 + i, y);
+    quad_box(o.cu, o.cv, &st->bu0[a], &st->bv0[a], &st->bu1[a], &st->bv1[a]);
+}
+
+#if defined(__SSE2__)
+/* A bit for each of 16 owners (limits lim[0..16), top corners gt[0..17), bottom corners
+ * gb[0..17)) that keeps something (limit > 0) but lacks one of its four corners in the grid:
+ * the test of the scalar loop in strip_fill, 16 owners without a branch each (at object edges
+ * those branches were missed about once an edge owner). */
+static inline unsigned off_grid16(const int32_t *lim, const unsigned char *gt,
+                                  const unsigned char *gb)
+{
+    const __m128i z = _mm_setzero_si128();
+    __m128i miss = _mm_cmpeq_epi8(_mm_loadu_si128((const __m128i *)gt), z);
+    miss = _mm_or_si128(miss, _mm_cmpeq_epi8(_mm_loadu_si128((const __m128i *)(gt + 1)), z));
+    miss = _mm_or_si128(miss, _mm_cmpeq_epi8(_mm_loadu_si128((const __m128i *)gb), z));
+    miss = _mm_or_si128(miss, _mm_cmpeq_epi8(_mm_loadu_si128((const __m128i *)(gb + 1)), z));
+    __m128i k[4];
+    for (int q = 0; q < 4; q++)
+        k[q] = _mm_cmpgt_epi32(_mm_loadu_si128((const __m128i *)(lim + 4 * q)), z);
+    /* -1 and 0 pack to -1 and 0, in lane order */
+    const __m128i keep = _mm_packs_epi16(_mm_packs_epi32(k[0], k[1]), _mm_packs_epi32(k[2], k[3]));
+    return (unsigned)_mm_movemask_epi8(_mm_and_si128(keep, miss));
+}
+#endif
+
 /* The owners of rows [y0, y1) and columns [x0, x1) of E into the strip (from its column 0):
  * the limit of every owner, and where it keeps something, i_max, the darkness and the
  * footprint's box (where it keeps nothing, an empty box). */
@@ -429,12 +475,17 @@ static void strip_fill(const sjob *j, const scratch *s, nprfx_rect E, int y0, in
             bu0[i] = bv0[i] = INFINITY;
             bu1[i] = bv1[i] = -INFINITY;
         }
-        for (i = 0; i < ew; i++) {
-            if (lim[i] <= 0 || (gt[i] && gt[i + 1] && gb[i] && gb[i + 1])) continue;
-            owner o;
-            owner_build(j, d, g, imax[i], gk[i], d->id[k0 + i], &o, x0 + i, y);
-            quad_box(o.cu, o.cv, &bu0[i], &bv0[i], &bu1[i], &bv1[i]);
-        }
+        /* the owners that keep something but lack a corner in the grid (at object edges and
+         * seams): their box from their own corners */
+        i = 0;
+#if defined(__SSE2__)
+        for (; i + 16 <= ew; i += 16)
+            for (unsigned m = off_grid16(lim + i, gt + i, gb + i); m; m &= m - 1)
+                box_off_grid(j, d, g, st, r0, k0, x0, y, i + lowest_bit(m));
+#endif
+        for (; i < ew; i++)
+            if (lim[i] > 0 && !(gt[i] && gt[i + 1] && gb[i] && gb[i + 1]))
+                box_off_grid(j, d, g, st, r0, k0, x0, y, i);
     }
 }
 
@@ -462,17 +513,23 @@ typedef struct block_ctx {
     klist *out;
 } block_ctx;
 
-static inline int lowest_bit(unsigned m)
+#if defined(__SSE2__)
+/* member_hits for the strip row at a: four boxes and limits. */
+static inline unsigned member_row(const strip *st, size_t a, __m128d U, __m128d V, __m128i I)
 {
-#if defined(__GNUC__) || defined(__clang__)
-    return __builtin_ctz(m);
-#else
-    int i = 0;
-    while (!(m & 1u))
-        m >>= 1, i++;
-    return i;
-#endif
+    __m128d in0 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a)),
+                                        _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a))),
+                             _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a)),
+                                        _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a))));
+    __m128d in1 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a + 2)),
+                                        _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a + 2))),
+                             _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a + 2)),
+                                        _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a + 2))));
+    __m128i l = _mm_cmplt_epi32(I, _mm_loadu_si128((const __m128i *)(st->lim + a)));
+    unsigned box = (unsigned)(_mm_movemask_pd(in0) | _mm_movemask_pd(in1) << 2);
+    return box & (unsigned)_mm_movemask_ps(_mm_castsi128_ps(l));
 }
+#endif
 
 /* The slots of the current query whose boxes and limits admit sample i at (u, v). The values
  * are finite, so these comparisons are the negations of the rejecting ones, and the SSE2 ones
@@ -484,20 +541,14 @@ static inline unsigned member_hits(const block_ctx *b, int i, double u, double v
 #if defined(__SSE2__)
     const __m128d U = _mm_set1_pd(u), V = _mm_set1_pd(v);
     const __m128i I = _mm_set1_epi32(i);
-    for (int r = 0; r < b->rows; r++) {
-        const size_t a = b->at + (size_t)r * st->stride;
-        __m128d in0 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a)),
-                                            _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a))),
-                                 _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a)),
-                                            _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a))));
-        __m128d in1 = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(U, _mm_loadu_pd(st->bu0 + a + 2)),
-                                            _mm_cmpge_pd(V, _mm_loadu_pd(st->bv0 + a + 2))),
-                                 _mm_and_pd(_mm_cmple_pd(U, _mm_loadu_pd(st->bu1 + a + 2)),
-                                            _mm_cmple_pd(V, _mm_loadu_pd(st->bv1 + a + 2))));
-        __m128i l = _mm_cmplt_epi32(I, _mm_loadu_si128((const __m128i *)(st->lim + a)));
-        unsigned box = (unsigned)(_mm_movemask_pd(in0) | _mm_movemask_pd(in1) << 2);
-        hits |= (box & (unsigned)_mm_movemask_ps(_mm_castsi128_ps(l))) << (BLOCK * r);
-    }
+    const size_t a = b->at, w = (size_t)st->stride;
+    if (b->rows == BLOCK) /* a whole block (all but the last row of blocks): no loop */
+        hits = member_row(st, a, U, V, I) | member_row(st, a + w, U, V, I) << BLOCK |
+               member_row(st, a + 2 * w, U, V, I) << (2 * BLOCK) |
+               member_row(st, a + 3 * w, U, V, I) << (3 * BLOCK);
+    else
+        for (int r = 0; r < b->rows; r++)
+            hits |= member_row(st, a + (size_t)r * w, U, V, I) << (BLOCK * r);
 #else
     for (int r = 0; r < b->rows; r++)
         for (int c = 0; c < BLOCK; c++) {
