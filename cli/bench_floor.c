@@ -9,28 +9,41 @@
 #include "graph.h"
 #include "internal_graph.h"
 
-typedef struct copy_job {
-    const unsigned char *src;
+typedef struct bytes_job {
+    const unsigned char *src; /* NULL: zero */
     unsigned char *dst;
     size_t bytes;
     int parts;
-} copy_job;
+} bytes_job;
 
-static void copy_parts(void *user, int begin, int end, int worker)
+static void bytes_parts(void *user, int begin, int end, int worker)
 {
     (void)worker;
-    const copy_job *j = user;
+    const bytes_job *j = user;
     for (int p = begin; p < end; p++) {
         size_t a = j->bytes * (size_t)p / (size_t)j->parts;
         size_t b = j->bytes * (size_t)(p + 1) / (size_t)j->parts;
-        memcpy(j->dst + a, j->src + a, b - a);
+        if (j->src)
+            memcpy(j->dst + a, j->src + a, b - a);
+        else
+            memset(j->dst + a, 0, b - a);
     }
+}
+
+void nprfx_cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
+                              int parts)
+{
+    bytes_job j = {src, dst, bytes, parts > 0 ? parts : 1};
+    if (j.parts == 1 || !ex) {
+        bytes_parts(&j, 0, j.parts, 0);
+        return;
+    }
+    nprfx_parallel_for(ex, j.parts, 1, bytes_parts, &j);
 }
 
 double nprfx_cli_copy_bandwidth(const nprfx_executor *ex, size_t bytes)
 {
     if (bytes < ((size_t)64 << 20)) bytes = (size_t)64 << 20; /* well past the caches */
-    copy_job j;
     unsigned char *src = malloc(bytes), *dst = malloc(bytes);
     if (!src || !dst) {
         free(src);
@@ -39,14 +52,10 @@ double nprfx_cli_copy_bandwidth(const nprfx_executor *ex, size_t bytes)
     }
     memset(src, 1, bytes); /* fault both in: the floor is about traffic, not page faults */
     memset(dst, 2, bytes);
-    j.src = src;
-    j.dst = dst;
-    j.bytes = bytes;
-    j.parts = 64;
     double best = 1e30;
     for (int rep = 0; rep < 5; rep++) {
         double t0 = internal_graph_now();
-        nprfx_parallel_for(ex, j.parts, 1, copy_parts, &j);
+        nprfx_cli_parallel_bytes(ex, dst, src, bytes, 64);
         double t = internal_graph_now() - t0;
         if (t < best) best = t;
     }

@@ -46,7 +46,11 @@ typedef struct nprfx_cli_bench_options {
 int nprfx_cli_bench_option(int argc, char **argv, int *i, nprfx_cli_bench_options *o);
 /* Parse o->size into w, h; 2 (with the message) when it is not WxH within 65536. */
 int nprfx_cli_bench_size(const char *cmd, const nprfx_cli_bench_options *o, int *w, int *h);
+/* The copy speed this machine reaches on ex's threads, bytes/s read and written (bench's floor). */
 double nprfx_cli_copy_bandwidth(const nprfx_executor *ex, size_t bytes);
+/* Copy src to dst (src NULL: zero dst), `bytes` cut into `parts` spread over ex's threads. */
+void nprfx_cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
+                              int parts);
 
 /* --mem-limit SIZE of command `cmd`: set the process's memory limit (io_limits.h), or say why
  * SIZE is not a size on stderr and return non-zero. */

@@ -279,15 +279,23 @@ static void note_peak(nprfx_graph *g)
     if (now > g->mem_peak) g->mem_peak = now;
 }
 
+/* The bytes node n keeps between the graph's frames of w x h, its inputs selecting in_ch
+ * channels (desc->state_bytes); 0 when it cannot be told (the render reports why). */
+static uint64_t query_state(nprfx_graph *g, const gnode *n, const nprfx_value *params, int w, int h,
+                            const int *in_ch)
+{
+    nprfx_state_query q = {w, h, g->first_frame, g->last_frame, in_ch};
+    double bytes = 0;
+    if (nprfx_node_state_bytes(n->ctx, n->desc, params, &q, &bytes)) return 0;
+    return bytes < 1.8e19 ? (uint64_t)bytes : UINT64_MAX / 2;
+}
+
 void internal_graph_count_state(nprfx_graph *g, gnode *n, int w, int h, const int *in_ch,
                                 const nprfx_value *params)
 {
     if (n->state_counted || n->kind != GK_NODE || !(n->desc->flags & NPRFX_NODE_STATEFUL)) return;
     n->state_counted = 1;
-    nprfx_state_query q = {w, h, g->first_frame, g->last_frame, in_ch};
-    double bytes = 0;
-    if (nprfx_node_state_bytes(n->ctx, n->desc, params, &q, &bytes) || !(bytes > 0)) return;
-    g->state_bytes += bytes < 1e18 ? (size_t)bytes : (size_t)1e18;
+    g->state_bytes += (size_t)query_state(g, n, params, w, h, in_ch);
     note_peak(g);
 }
 
@@ -694,10 +702,7 @@ static uint64_t state_bytes(nprfx_graph *g, const gnode *n, const shape *shapes,
                                           shapes[src].channels, idx, &in_ch[k]))
             return 0;
     }
-    nprfx_state_query q = {sh->w, sh->h, g->first_frame, g->last_frame, in_ch};
-    double bytes = 0;
-    if (nprfx_node_state_bytes(n->ctx, n->desc, n->params, &q, &bytes)) return 0;
-    return bytes < 1.8e19 ? (uint64_t)bytes : UINT64_MAX / 2;
+    return query_state(g, n, n->params, sh->w, sh->h, in_ch);
 }
 
 /* Evaluate node root (and what it needs) on shapes: non-zero when a shape cannot be told. */

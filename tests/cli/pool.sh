@@ -79,9 +79,11 @@ awk -v k="$kept" 'BEGIN { exit !(k * 1024 >= 622 && k * 1024 <= 623.5) }' && pas
   fail "caches: '$kept' MiB, want 622.8 KiB: $(cat pool.txt)"
 # The estimate counts the frames the plan keeps and those caches; what was held counts the
 # frames and, from each stateful node's first render on, its caches: the estimate, give or take
-# a scratch frame, and at least the caches.
-awk -v h="$hp" -v e="$est" -v k="$kept" 'BEGIN { exit !(h <= 1.25 * e && h >= 0.75 * e && h >= k) }' && pass ||
-  fail "held $hp MiB with the pool, estimate $est MiB of which $kept MiB caches"
+# a scratch frame, and at least 90% of what the plan has in use at once (caches included).
+# Counting the frames alone held 1.8 MiB against 2.3 MiB in use at once.
+nd=$(need pool)
+awk -v h="$hp" -v e="$est" -v n="$nd" 'BEGIN { exit !(h <= 1.25 * e && h >= 0.75 * e && h >= 0.9 * n) }' && pass ||
+  fail "held $hp MiB with the pool, estimate $est MiB of which $kept MiB caches, $nd MiB in use at once"
 # The cache alone keeps every frame's plate: five plates of 160x90x26 floats at least.
 awk -v p="$hp" -v n="$hn" 'BEGIN { exit !(n >= 5 * 1.42 && p < n / 2) }' && pass ||
   fail "held $hp MiB with the pool, $hn MiB without: the plan did not free"
@@ -93,7 +95,6 @@ awk -v p="$plate_new" -v n="$nopool_new" 'BEGIN { exit !(p <= 2.5 * 1.43 && n >=
 
 # A limit just above the frames in use at once fits (the pool gives up its idle buffers), and
 # changes no pixel; the frames held then stay under it.
-nd=$(need pool)
 awk -v n="$nd" -v e="$est" 'BEGIN { exit !(n > 0 && n <= e) }' && pass || fail "in use at once $nd MiB, estimate $est MiB"
 lim=$(awk -v e="$nd" 'BEGIN { printf "%.0fK", e * 1024 * 1.02 + 64 }')
 render tight --mem-limit "$lim"
