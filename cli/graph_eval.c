@@ -439,6 +439,15 @@ static void pack_rows(void *user, int begin, int end, int worker)
     }
 }
 
+int internal_graph_packs(int src_channels, const int *idx, int count, unsigned flags)
+{
+    int contiguous = 1;
+    for (int c = 1; c < count; c++)
+        contiguous &= idx[c] == idx[0] + c;
+    if (!contiguous) return 1;
+    return src_channels > 2 * count && !(flags & NPRFX_INPUT_GATHERED);
+}
+
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,
                                          nprfx_image *view, nprfx_image *scratch)
 {
@@ -446,12 +455,8 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
     nprfx_result r =
         internal_graph_input_channels(g, n, k, (const char *const *)e->names, nc, idx, &count);
     if (r) return r;
-    int contiguous = 1;
-    for (int c = 1; c < count; c++)
-        contiguous &= idx[c] == idx[0] + c;
-    /* A few channels out of a wide plate are packed anyway: nodes then stream through memory
-     * instead of striding over the channels they do not use. */
-    if (contiguous && nc <= 2 * count) {
+    unsigned flags = n->kind == GK_NODE ? n->desc->inputs[k].flags : 0u;
+    if (!internal_graph_packs(nc, idx, count, flags)) {
         *view = nprfx_image_channels(&e->im, idx[0], count);
         return NPRFX_OK;
     }

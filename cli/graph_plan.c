@@ -575,14 +575,11 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
     return -1; /* processing nodes: by the caller, which has the inputs' shapes */
 }
 
-/* The bytes of the channels (idx, count of them) an input packs out of a source of nc channels,
- * as internal_graph_select_input does: 0 when it reads them in place. */
-static uint64_t packed_bytes(const shape *src, const int *idx, int count)
+/* The bytes of the channels (idx, count of them) an input (flags) packs out of its source: 0
+ * when it reads them in place. */
+static uint64_t packed_bytes(const shape *src, const int *idx, int count, unsigned flags)
 {
-    int contiguous = 1;
-    for (int c = 1; c < count; c++)
-        contiguous &= idx[c] == idx[0] + c;
-    if (contiguous && src->channels <= 2 * count) return 0;
+    if (!internal_graph_packs(src->channels, idx, count, flags)) return 0;
     return (uint64_t)src->w * (uint64_t)src->h * (uint64_t)count * sizeof(float);
 }
 
@@ -603,7 +600,7 @@ static int node_shape(nprfx_graph *g, int i, const shape *shapes, shape *sh, uin
                                           &count))
             return 1;
         in_ch[k] = count;
-        *scratch += packed_bytes(s, idx, count);
+        *scratch += packed_bytes(s, idx, count, d->inputs[k].flags);
         if ((d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) || have) continue;
         sh->w = s->w;
         sh->h = s->h;
@@ -810,7 +807,7 @@ static int sim_frame(sim *s)
         if (internal_graph_input_channels(g, w, 0, (const char *const *)sh->names, sh->channels,
                                           idx, &count))
             return 1;
-        uint64_t pack = packed_bytes(sh, idx, count);
+        uint64_t pack = packed_bytes(sh, idx, count, 0u);
         sim_alloc(s, pack);
         sim_note(s, i, sh->w, sh->h, count);
         if (sim_release(s, pack) || sim_consume(s, src)) return 1;

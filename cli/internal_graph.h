@@ -227,6 +227,12 @@ extern const char *const internal_graph_motion_names[4];
 nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const char *file,
                                            const char *const *names, int nc, int *idx,
                                            double *sign);
+/* Whether an input (flags: its NPRFX_INPUT_* flags, 0 for a write node's image) gets the count
+ * channels idx of a source of src_channels packed into a frame of their own rather than read in
+ * place: when they are not adjacent, or are a few out of a wide plate (nodes then stream through
+ * memory instead of striding over the channels they do not use) unless the input gathers them
+ * itself. The evaluation and the memory plan both ask this. */
+int internal_graph_packs(int src_channels, const int *idx, int count, unsigned flags);
 /* The view of the channels of entry e that input k of node n uses: e's pixels when they are
  * adjacent, else *scratch (a frame from internal_graph_frame_alloc, the caller releases it with
  * internal_graph_frame_release; left empty when not needed). */

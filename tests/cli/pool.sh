@@ -8,7 +8,9 @@
 #     held, and the plate's buffers are reused instead of allocated every frame;
 #   - a graph needing more than --mem-limit fails before its first frame, naming the node and
 #     the sizes, writing nothing;
-#   - the forms of `run --stats` and `bench-graph`.
+#   - the forms of `run --stats` and `bench-graph`;
+#   - an input that gathers its own channels (NPRFX_INPUT_GATHERED: gabor-splat's anchor, depth
+#     and id) reads them in place out of a wide plate, with no packed copy.
 #
 # usage: bash pool.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
@@ -143,6 +145,20 @@ echo "$out" | grep -qE '^  plate +synth +2 ' && pass || fail "bench-graph did no
 "$NPRFX" bench-graph reads.json --size big > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "WxH" bad.txt && pass || fail "--size big: $(cat bad.txt)"
 "$NPRFX" bench-graph > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "usage" bad.txt && pass || fail "no graph: $(cat bad.txt)"
 "$NPRFX" bench-graph reads.json --bogus > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "unexpected argument" bad.txt && pass || fail "--bogus: $(cat bad.txt)"
+
+# --- inputs read in place ----------------------------------------------------------------------
+# gabor-splat takes Pref, Z and id out of the synthetic plate: the only frame it allocates is its
+# output (640x360, 1 channel: 0.88 MiB); packed copies of the five channels would add 4.4 MiB.
+cat > gathered.json <<'JSON'
+{"frames": "1", "nodes": {
+  "plate": {"node": "synth", "scene": "orbit", "size": "640x360"},
+  "strokes": {"node": "gabor-splat", "inputs": {"anchor": "plate:Pref", "depth": "plate:Z", "id": "plate:id"}},
+  "out": {"node": "write", "inputs": {"image": "strokes"}, "path": "g/strokes.####.exr"}}}
+JSON
+out=$("$NPRFX" bench-graph gathered.json --size 640x360 --frames 1 --stats 2>&1)
+mib=$(echo "$out" | awk '$1 == "strokes" { print $5 }')
+awk -v m="${mib:-99}" 'BEGIN { exit !(m > 0.8 && m < 1.0) }' && pass ||
+  fail "gabor-splat allocated ${mib:-?} MiB per frame, not its output's 0.88 (inputs packed?): $out"
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]
