@@ -398,24 +398,25 @@ GV_INLINE void block_pixels_body(const gconf *G, const gstrip *T, int bx, int by
     cache_fill(S, T, C, cx0, cy0, cw, ch);
     cache_derive_vec(S, C, cw, ch);
     nprfx_rect reg = S->region;
-    /* every pixel of the block is real: pixel (i, j) is raw pixel (i + HALO, j + HALO) */
-    int inside = x0 >= reg.x0 && x0 + PW <= reg.x1 && y0 >= reg.y0 && y0 + PW <= reg.y1;
-    for (int j = 0; j < PW; j++)
+    /* The lanes whose pixel lies inside the inputs (its own real pixel, raw pixel c + l of the
+     * window) and has a Jacobian go 8 at a time; the rest (edges, and the virtual pixels of a
+     * block on the frame's border) to pixel_scalar. */
+    for (int j = 0; j < PW; j++) {
+        int y = y0 + j, yin = y >= reg.y0 && y < reg.y1;
         for (int i0 = 0; i0 < PWS; i0 += 8) {
-            int k = j * PWS + i0;
+            int k = j * PWS + i0, x = x0 + i0;
+            int c = (y - cy0) * CW + (x - cx0);
             gv8i real = (i0 + lane) < PW;
-            gv8i self = real;
-            if (inside) {
-                int c = (j + HALO) * CW + i0 + HALO;
+            gv8i self = real & 0;
+            if (yin && c >= 0 && c + 8 <= CNP) {
+                self = real & ((x + lane) >= reg.x0) & ((x + lane) < reg.x1);
                 self &= gv_loadi(C->hasj + c);
-                pixels_vec8(G, X, C, k, c, x0 + i0, y0 + j, &self);
-            } else {
-                self &= 0;
+                pixels_vec8(G, X, C, k, c, x, y, &self);
             }
             for (int l = 0; l < 8; l++)
-                if (real[l] && !self[l])
-                    pixel_scalar(G, X, C, k + l, x0 + i0 + l, y0 + j, cx0, cy0);
+                if (real[l] && !self[l]) pixel_scalar(G, X, C, k + l, x + l, y, cx0, cy0);
         }
+    }
 }
 
 #endif /* GABOR_VEC */
