@@ -1,11 +1,13 @@
 /* Threshold functions and X-toon map lookup (style cookbook §3). See nprfx/threshold.h. */
 #include <math.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "nprfx/threshold.h"
 #include "nprfx/exec.h"
 #include "internal_state.h"
+#include "internal_simd.h"
 #include "internal_threshold.h"
 
 #define NPRFX_INV_SQRT_PI 0.56418958354775628695
@@ -264,7 +266,7 @@ static const float *row_span(const nprfx_image *im, int x0, int x1, int y)
  * to spare (2x near y = 1 over 1.1e-16, 5x below): when y - slack and y + slack round to the same
  * float, so does libm's value, and the float is taken; otherwise (a float rounding boundary
  * within the slack: mostly x < -4, where y < 1e-8 and floats are finer than the slack) libm's erf
- * decides. Outside [X0, X1] the float is known without either: see erf_block. */
+ * decides. Outside [X0, X1] the float is known without either: see erf_sample. */
 #define ERFT_X0 (-6.0)
 #define ERFT_X1 4.0
 #define ERFT_STEPS 128
@@ -288,82 +290,189 @@ static void erft_init(void)
     }
 }
 
+/* The Taylor step's bracket b for node t (t2 = t^2) and offset u: y(t + u) = y(t) + y'(t) u b.
+ * The coefficients are y^(k+1)(t) / (k+1)! / y'(t), k = 2..5: Hermite polynomials in t (the
+ * constants by multiplying: their rounding is far below the slack). A macro, so that the scalar
+ * and the vector path spell the same operations in the same order and round alike. */
+/* clang-format off */
+#define ERFT_BRACKET(t, t2, u)                                                                     \
+    (1.0 + (u) * (-(t) + (u) * ((2.0 * (t2) - 1.0) * (1.0 / 3.0) +                                 \
+     (u) * ((-2.0 * (t2) + 3.0) * (t) * (1.0 / 6.0) +                                              \
+     (u) * (((2.0 * (t2) - 6.0) * (t2) + 1.5) * (1.0 / 15.0) +                                     \
+     (u) * (((-4.0 * (t2) + 20.0) * (t2) - 15.0) * (t) * (1.0 / 90.0)))))))
+/* clang-format on */
+
 /* y(x) for x in [X0, X1] from the table (see above). t and u = x - t are exact: t is a multiple
  * of 1/128 and |u| <= 1/256. */
 static inline double erft_eval(double x)
 {
-    const int i = (int)((x - ERFT_X0) * ERFT_STEPS + 0.5);
-    const double t = ERFT_X0 + i * (1.0 / ERFT_STEPS), u = x - t, t2 = t * t;
-    /* y^(k+1)(t) / (k+1)! / y'(t), k = 2..5: Hermite polynomials in t (the constants by
-     * multiplying: their rounding is far below the slack) */
-    const double c2 = (2.0 * t2 - 1.0) * (1.0 / 3.0);
-    const double c3 = (-2.0 * t2 + 3.0) * t * (1.0 / 6.0);
-    const double c4 = ((2.0 * t2 - 6.0) * t2 + 1.5) * (1.0 / 15.0);
-    const double c5 = ((-4.0 * t2 + 20.0) * t2 - 15.0) * t * (1.0 / 90.0);
-    const double b = 1.0 + u * (-t + u * (c2 + u * (c3 + u * (c4 + u * c5))));
-    return erft[i][0] + erft[i][1] * u * b;
+    const int i = (int)((x - ERFT_X0) * (double)ERFT_STEPS + 0.5);
+    const double t = ERFT_X0 + (double)i * (1.0 / ERFT_STEPS), u = x - t, t2 = t * t;
+    return erft[i][0] + erft[i][1] * u * ERFT_BRACKET(t, t2, u);
 }
 
-/* out[k] = (float)threshold_erf(p[k], sigma, mu[k]) for k < n <= ERFT_BLOCK, bit for bit. The
- * first loop has no calls, for the compiler to vectorise; libm's erf redoes the few it could not
- * decide. Past the table's ends the float is decided: for x >= 4 the double (erf(x) + 1) / 2 is
- * within 1e-8 of 1, past the midpoint 1 - 2^-25 to the float below 1, so it rounds to 1 (erf
- * first gets there at x ~ 3.83); for x <= -6, erfc(-x) < 2^-54, so erf(x) rounds to -1 and the
- * threshold is exactly 0 (glibc returns -1 for |x| >= 6, and first does at x ~ -5.92). NaN is
- * redone. */
-static void erf_block(const float *p, const double *mu, int n, double sigma, float *out)
+/* out = (float)threshold_erf(p, sigma, mu) when the table decides it; returns 1 when libm's erf
+ * must decide instead. Past the table's ends the float is decided: for x >= 4 the double
+ * (erf(x) + 1) / 2 is within 1e-8 of 1, past the midpoint 1 - 2^-25 to the float below 1, so it
+ * rounds to 1 (erf first gets there at x ~ 3.83); for x <= -6, erfc(-x) < 2^-54, so erf(x)
+ * rounds to -1 and the threshold is exactly 0 (glibc returns -1 for |x| >= 6, and first does at
+ * x ~ -5.92). NaN is undecided. */
+static inline int erf_sample(float p, double mu, double sigma, float *out)
 {
-    unsigned char redo[ERFT_BLOCK];
-    for (int k = 0; k < n; k++) {
-        const double x = sigma * (p[k] - mu[k]);
-        const int inside = x > ERFT_X0 && x < ERFT_X1;
-        const double y = erft_eval(inside ? x : 0.0);
-        const double slack = ERFT_SLACK(y);
-        const float f = (float)y;
-        const int sure = (float)(y - slack) == (float)(y + slack);
-        out[k] = x >= ERFT_X1 ? 1.0f : x <= ERFT_X0 ? 0.0f : f;
-        redo[k] = !(x >= ERFT_X1 || x <= ERFT_X0 || (inside && sure));
+    const double x = sigma * ((double)p - mu);
+    const int inside = x > ERFT_X0 && x < ERFT_X1;
+    const double y = erft_eval(inside ? x : 0.0);
+    const double slack = ERFT_SLACK(y);
+    const int sure = (float)(y - slack) == (float)(y + slack);
+    *out = x >= ERFT_X1 ? 1.0f : x <= ERFT_X0 ? 0.0f : (float)y;
+    return !(x >= ERFT_X1 || x <= ERFT_X0 || (inside && sure));
+}
+
+/* The float the table could not decide, from libm, inverted as asked. */
+static float erf_exact(float p, double mu, double sigma, int invert)
+{
+    const float v = (float)threshold_erf(p, sigma, mu);
+    return invert ? 1.0f - v : v;
+}
+
+#if INTERNAL_SIMD
+/* 4 doubles: GCC 12 compiles comparisons of wider double vectors lane by lane. */
+#define ERFT_LANES 4
+typedef double erft_vd __attribute__((vector_size(8 * ERFT_LANES)));
+typedef int64_t erft_vl __attribute__((vector_size(8 * ERFT_LANES)));
+typedef float erft_vf __attribute__((vector_size(4 * ERFT_LANES)));
+typedef int32_t erft_vi __attribute__((vector_size(4 * ERFT_LANES)));
+
+/* erf_sample on ERFT_LANES samples at once, lane for lane the same operations, and erf_exact
+ * for the lanes it leaves undecided (from the loaded samples: out may be p). Comparisons give
+ * all-ones masks, which select by bits. The table's nodes are gathered into registers, element
+ * by element (a store and a vector reload would stall). */
+INTERNAL_SIMD_INLINE void erf_lanes(const float *p, const double *mu, double sigma, int invert,
+                                    float *out)
+{
+    erft_vf pf;
+    erft_vd m;
+    memcpy(&pf, p, sizeof pf);
+    memcpy(&m, mu, sizeof m);
+    const erft_vd x = sigma * (__builtin_convertvector(pf, erft_vd) - m);
+    const erft_vl inside = (x > ERFT_X0) & (x < ERFT_X1);
+    const erft_vd xc = (erft_vd)((erft_vl)x & inside); /* 0.0 outside, as erf_sample */
+    const erft_vi i = __builtin_convertvector((xc - ERFT_X0) * (double)ERFT_STEPS + 0.5, erft_vi);
+    const erft_vd t = ERFT_X0 + __builtin_convertvector(i, erft_vd) * (1.0 / ERFT_STEPS);
+    const erft_vd u = xc - t, t2 = t * t;
+    const erft_vd y0 = {erft[i[0]][0], erft[i[1]][0], erft[i[2]][0], erft[i[3]][0]};
+    const erft_vd y1 = {erft[i[0]][1], erft[i[1]][1], erft[i[2]][1], erft[i[3]][1]};
+    const erft_vd y = y0 + y1 * u * ERFT_BRACKET(t, t2, u);
+    const erft_vd slack = ERFT_SLACK(y);
+    const erft_vi sure =
+        __builtin_convertvector(y - slack, erft_vf) == __builtin_convertvector(y + slack, erft_vf);
+    const erft_vi one = __builtin_convertvector(x >= ERFT_X1, erft_vi);
+    const erft_vi zero = __builtin_convertvector(x <= ERFT_X0, erft_vi);
+    const erft_vi f = (erft_vi) __builtin_convertvector(y, erft_vf);
+    erft_vf o = (erft_vf)((one & (erft_vi)((erft_vf){0} + 1.0f)) | (~one & ~zero & f));
+    const erft_vi redo = ~(one | zero | (__builtin_convertvector(inside, erft_vi) & sure));
+    if (invert) o = 1.0f - o;
+    memcpy(out, &o, sizeof o);
+    if (redo[0] | redo[1] | redo[2] | redo[3])
+        for (int l = 0; l < ERFT_LANES; l++)
+            if (redo[l]) out[l] = erf_exact(pf[l], m[l], sigma, invert);
+}
+#endif
+
+/* out[k] = (float)threshold_erf(p[k], sigma, mu[k]) for k < n, bit for bit (1 - that float when
+ * invert): ERFT_LANES samples at a time where vectors are built. out may be p. */
+INTERNAL_SIMD_CLONES
+static void erf_block(const float *p, const double *mu, int n, double sigma, int invert, float *out)
+{
+    int k = 0;
+#if INTERNAL_SIMD
+    for (; k + ERFT_LANES <= n; k += ERFT_LANES)
+        erf_lanes(p + k, mu + k, sigma, invert, out + k);
+#endif
+    for (; k < n; k++) {
+        const float pk = p[k];
+        float v;
+        if (erf_sample(pk, mu[k], sigma, &v))
+            out[k] = erf_exact(pk, mu[k], sigma, invert);
+        else
+            out[k] = invert ? 1.0f - v : v;
     }
-    for (int k = 0; k < n; k++)
-        if (redo[k]) out[k] = (float)threshold_erf(p[k], sigma, mu[k]);
+}
+
+/* The builtin step position is a pure function of the tone: the last one is remembered, since
+ * neighbouring pixels (flat shading, the background, every pixel without a tone input) share
+ * it. */
+typedef struct tm_memo {
+    double tone, mu;
+} tm_memo;
+
+static inline double memo_mu(tm_memo *memo, const internal_mu_table *tab, double tone)
+{
+    if (tone != memo->tone) {
+        memo->mu = internal_mu_table_eval(tab, tone);
+        memo->tone = tone;
+    }
+    return memo->mu;
+}
+
+/* mu[i] for m pixels of a row: the builtin position for the tone row tr (stride ts; NULL: the
+ * tone param), or the erf mode's fixed mu. */
+static void row_mu(const tm_job *j, const float *tr, ptrdiff_t ts, int m, tm_memo *memo, double *mu)
+{
+    const nprfx_threshold_params *pp = j->p;
+    if (pp->mode != NPRFX_THRESHOLD_BUILTIN || !tr) {
+        const double fixed =
+            pp->mode != NPRFX_THRESHOLD_BUILTIN
+                ? pp->mu
+                : memo_mu(memo, j->mu_table, quantize(pp->tone * pp->tone_gain, pp->steps));
+        for (int i = 0; i < m; i++)
+            mu[i] = fixed;
+        return;
+    }
+    for (int i = 0; i < m; i++, tr += ts)
+        mu[i] = memo_mu(memo, j->mu_table, quantize(tr[0] * pp->tone_gain, pp->steps));
 }
 
 /* The erf and builtin modes over one row whose pattern (and tone, when connected) cover the
- * window's span: row pointers walked by their strides, the mode tested once per row, and the
- * pixels in blocks for erf_block. The same numbers as the general loop in tm_rows. */
-static void erf_row(const tm_job *j, const float *pr, const float *tr, float *o, double *last_tone,
-                    double *mu)
+ * window's span, in blocks for erf_block: the step positions first, then the samples, read and
+ * written in place when the pixels are packed (else through a copy). The same numbers as the
+ * general loop in tm_rows. */
+static void erf_row(const tm_job *j, const float *pr, const float *tr, float *o, tm_memo *memo)
 {
     const nprfx_threshold_params *pp = j->p;
     const ptrdiff_t ps = j->pattern->pixel_stride, os = j->out->pixel_stride;
     const ptrdiff_t ts = tr ? j->tone_in->pixel_stride : 0;
-    const int nout = j->out->channels, builtin = pp->mode == NPRFX_THRESHOLD_BUILTIN;
-    const int per_block = ERFT_BLOCK / nout;
+    const int nout = j->out->channels, per_block = ERFT_BLOCK / nout;
     float pv[ERFT_BLOCK], ov[ERFT_BLOCK];
-    double mv[ERFT_BLOCK];
+    double mp[ERFT_BLOCK], mv[ERFT_BLOCK];
     for (int x = j->window.x0; x < j->window.x1;) {
         const int m = j->window.x1 - x < per_block ? j->window.x1 - x : per_block;
-        /* gather: the pattern's samples and each one's step position */
-        const float *pb = pr;
-        for (int i = 0, k = 0; i < m; i++, pb += ps) {
-            if (builtin) {
-                const double tone = quantize((tr ? tr[0] : pp->tone) * pp->tone_gain, pp->steps);
-                if (tone != *last_tone) {
-                    *mu = internal_mu_table_eval(j->mu_table, tone);
-                    *last_tone = tone;
-                }
-                if (tr) tr += ts;
-            }
-            for (int c = 0; c < nout; c++, k++) {
-                pv[k] = pb[c];
-                mv[k] = *mu;
-            }
+        row_mu(j, tr, ts, m, memo, mp);
+        /* per sample: each pixel's position for each of its channels */
+        const double *ms = mp;
+        if (nout > 1) {
+            for (int i = 0, k = 0; i < m; i++)
+                for (int c = 0; c < nout; c++, k++)
+                    mv[k] = mp[i];
+            ms = mv;
         }
-        erf_block(pv, mv, m * nout, pp->sigma, ov);
-        for (int i = 0, k = 0; i < m; i++, pr += ps, o += os)
-            for (int c = 0; c < nout; c++, k++)
-                o[c] = pp->invert ? 1.0f - ov[k] : ov[k];
+        const float *ps_in = pr;
+        if (ps != nout) {
+            for (int i = 0, k = 0; i < m; i++)
+                for (int c = 0; c < nout; c++, k++)
+                    pv[k] = pr[i * ps + c];
+            ps_in = pv;
+        }
+        float *os_out = os == nout ? o : ov;
+        erf_block(ps_in, ms, m * nout, pp->sigma, pp->invert, os_out);
+        if (os != nout)
+            for (int i = 0, k = 0; i < m; i++)
+                for (int c = 0; c < nout; c++, k++)
+                    o[i * os + c] = ov[k];
         x += m;
+        pr += m * ps;
+        o += m * os;
+        if (tr) tr += m * ts;
     }
 }
 
@@ -372,10 +481,7 @@ static void tm_rows(void *user, int begin, int end, int worker)
     (void)worker;
     const tm_job *j = user;
     const nprfx_threshold_params *pp = j->p;
-    /* The builtin step position is a pure function of the tone: remember the last one, since
-     * neighbouring pixels (and every pixel, with no tone input) share it. */
-    double last_tone = -1.0, mu = pp->mu;
-    const internal_mu_table *tab = j->mu_table;
+    tm_memo memo = {-1.0, pp->mu};
     const int x0 = j->window.x0, x1 = j->window.x1;
     for (int y = j->window.y0 + begin; y < j->window.y0 + end; y++) {
         if (pp->mode != NPRFX_THRESHOLD_MAP) {
@@ -384,7 +490,7 @@ static void tm_rows(void *user, int begin, int end, int worker)
             const int tone_used = j->tone_in && pp->mode == NPRFX_THRESHOLD_BUILTIN;
             const float *tr = tone_used ? row_span(j->tone_in, x0, x1, y) : NULL;
             if (pr && (!tone_used || tr)) {
-                erf_row(j, pr, tr, nprfx_image_at(j->out, x0, y), &last_tone, &mu);
+                erf_row(j, pr, tr, nprfx_image_at(j->out, x0, y), &memo);
                 continue;
             }
         }
@@ -403,10 +509,9 @@ static void tm_rows(void *user, int begin, int end, int worker)
                 }
             } else {
                 /* builtin is the erf threshold at the position mu(tone) */
-                if (pp->mode == NPRFX_THRESHOLD_BUILTIN && tone != last_tone) {
-                    mu = internal_mu_table_eval(tab, tone);
-                    last_tone = tone;
-                }
+                const double mu = pp->mode == NPRFX_THRESHOLD_BUILTIN
+                                      ? memo_mu(&memo, j->mu_table, tone)
+                                      : pp->mu;
                 for (int c = 0; c < nout; c++)
                     o[c] = (float)threshold_erf(p[c], pp->sigma, mu);
             }
