@@ -445,7 +445,7 @@ int internal_graph_packs(int src_channels, const int *idx, int count, unsigned f
     for (int c = 1; c < count; c++)
         contiguous &= idx[c] == idx[0] + c;
     if (!contiguous) return 1;
-    return src_channels > 2 * count && !(flags & NPRFX_INPUT_GATHERED);
+    return src_channels > 2 * count && !(flags & NPRFX_INPUT_IN_PLACE);
 }
 
 nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, const centry *e,

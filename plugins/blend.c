@@ -35,26 +35,27 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "The image blended onto (the colour, c0 = gain_base * base). Sets the output's "
              "channels; with 4 channels the 4th is alpha and passes through unchanged.",
      .channels = 0,
-     .flags = NPRFX_INPUT_MAIN},
+     .flags = NPRFX_INPUT_MAIN | NPRFX_INPUT_IN_PLACE},
     {.name = "layer",
      .label = "Layer",
      .help = "The image blended in (c1 = gain_layer * layer): a pattern, a stroke colour, a paper "
              "or pigment texture. A 1-channel layer is used for every colour channel of base; "
              "otherwise it needs base's colour channels (an extra alpha channel of the layer is "
              "ignored).",
-     .channels = 0},
+     .channels = 0,
+     .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "back",
      .label = "Back",
      .help = "overlayalpha only: the colour under the stroke (the cookbook's backColor). Not "
              "connected: base itself, without gain_base. 1 channel or base's colour channels.",
      .channels = 0,
-     .flags = NPRFX_INPUT_OPTIONAL},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "alpha",
      .label = "Alpha",
      .help = "Per-pixel blend weight a, e.g. a threshold-map output; multiplied by opacity and "
              "clamped to [0, 1]. Not connected: a = opacity.",
      .channels = 1,
-     .flags = NPRFX_INPUT_OPTIONAL},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "coverage",
      .label = "Coverage",
      .help = "Object coverage (the cookbook's isBackground, antialiased): out = coverage * blended"
@@ -62,7 +63,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "including alpha. Not connected: coverage 1 everywhere.",
      .aov = "coverage|Coverage|A",
      .channels = 1,
-     .flags = NPRFX_INPUT_OPTIONAL},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
 };
 
 static const nprfx_param_desc params[P_COUNT] = {

@@ -89,7 +89,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "(1/2000 of a unit) make the per-pixel Jacobian noisy at high resolutions.",
      .aov = "Pref|Pref.XYZ|rest|UV|uv|P|Position",
      .channels = 0,
-     .flags = NPRFX_INPUT_MAIN | NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_MAIN | NPRFX_INPUT_IN_PLACE},
     {.name = "depth",
      .label = "Depth",
      .help = "Depth (view-space z or camera distance, larger = farther) for the depth test and "
@@ -97,14 +97,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "inf in half-float files): no noise there.",
      .aov = "Z|depth.Z|Depth.Z|depth",
      .channels = 1,
-     .flags = NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "id",
      .label = "Object ID",
      .help = "Object index (integers): a kernel reaches only pixels of its own object, and "
              "anchors of different objects get independent points. Not connected: one object.",
      .aov = "id|IndexOB.X|IndexOB|ObjectIndex|object_id",
      .channels = 1,
-     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "orientation",
      .label = "Orientation",
      .help = "Per-pixel orientation added to the orientation param: 1 channel, an angle in "
@@ -112,13 +112,13 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "Read where each kernel's point is, so a kernel keeps one orientation. Ignored when "
              "isotropic.",
      .channels = 0,
-     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "frequency",
      .label = "Frequency Scale",
      .help = "Per-pixel factor on the frequency param (e.g. from the shading, for finer "
              "strokes in the darks), read where each kernel's point is. 1 channel.",
      .channels = 1,
-     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
 };
 
 static const nprfx_param_desc params[P_COUNT] = {

@@ -53,7 +53,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "anchor: name UV channels explicitly (plate:UV.U,UV.V).",
      .aov = "Pref|Pref.XYZ|rest|UV|uv",
      .channels = 0,
-     .flags = NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "tone",
      .label = "Tone",
      .help = "The tone w in [0, 1] (the lighting, e.g. a tone node on the diffuse light) that "
@@ -76,21 +76,21 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "curvature or tangent. Read at each splat's owner pixel and added to orientation. "
              "Not connected: orientation alone.",
      .channels = 0,
-     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "depth",
      .label = "Depth",
      .help = "Depth (larger = farther; background <= 0, >= 1e9, inf or NaN): the visibility "
              "buffer of the first pass and the surface edges of the scatter.",
      .aov = "Z|depth.Z|Depth.Z|depth",
      .channels = 1,
-     .flags = NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "id",
      .label = "Object ID",
      .help = "Object index: a splat reaches only pixels of its own object. Not connected: one "
              "object.",
      .aov = "id|IndexOB.X|IndexOB|ObjectIndex|object_id",
      .channels = 1,
-     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_GATHERED},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "pam",
      .label = "Painterly Art Map",
      .help = "The PAM: one RGB image of N >= 2 square, tileable maps of S x S pixels side by side"

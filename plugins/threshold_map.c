@@ -28,14 +28,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "The pattern p to threshold, usually noise mapped to [0,1] (e.g. coherent-noise or "
              "gabor-splat with its [0,1] output mapping). Every channel is thresholded on its own.",
      .channels = 0,
-     .flags = NPRFX_INPUT_MAIN},
+     .flags = NPRFX_INPUT_MAIN | NPRFX_INPUT_IN_PLACE},
     {.name = "tone",
      .label = "Tone",
      .help = "The second variable of the threshold map (map and builtin modes), in [0,1]: usually "
              "the diffuse intensity. Not connected: the tone param.",
      .aov = "diffuse|diffuse.Y|Diffuse.Y|tone",
      .channels = 1,
-     .flags = NPRFX_INPUT_OPTIONAL},
+     .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "map",
      .label = "Map",
      .help = "map mode: the X-toon threshold map image, any size and 1 to 4 channels, read whole "

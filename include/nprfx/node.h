@@ -61,12 +61,13 @@ typedef struct nprfx_param_desc {
 /* Not pixel-aligned with the frame (a threshold map, a palette): any size, exempt from the
  * same-bounds check of frame inputs, passed whole (its own data window) to render. */
 #define NPRFX_INPUT_UNALIGNED 0x8u
-/* The node gathers what it needs of this input into its own buffers, or reads few of its pixels
- * (a value per splat): it gains nothing from the input's channels being packed together, so a
- * runner passes channels picked out of a wider frame (a plate's Pref out of twenty AOVs) in place
- * instead of copying them out first. Only where the picked channels are adjacent and in order;
- * the node must honour pixel_stride. */
-#define NPRFX_INPUT_GATHERED 0x10u
+/* Packing this input's channels gains the node nothing: it reads each pixel once (a per-pixel
+ * operation streaming rows), gathers what it needs into its own buffers, or reads few pixels (a
+ * value per splat). A runner then passes channels picked out of a wider frame (a plate's R,G,B
+ * out of twenty AOVs) in place instead of copying them out first, which costs a pass over the
+ * whole plate and a frame. Only where the picked channels are adjacent and in order; the node
+ * honours pixel_stride. */
+#define NPRFX_INPUT_IN_PLACE 0x10u
 
 #define NPRFX_FETCH_UNBOUNDED (-1) /* fetch_before/after: any number of frames */
 

@@ -9,7 +9,7 @@
 #   - a graph needing more than --mem-limit fails before its first frame, naming the node and
 #     the sizes, writing nothing;
 #   - the forms of `run --stats` and `bench-graph`;
-#   - an input that gathers its own channels (NPRFX_INPUT_GATHERED: gabor-splat's anchor, depth
+#   - an input that gathers its own channels (NPRFX_INPUT_IN_PLACE: gabor-splat's anchor, depth
 #     and id) reads them in place out of a wide plate, with no packed copy.
 #
 # usage: bash pool.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
