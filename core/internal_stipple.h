@@ -9,6 +9,23 @@
 
 #include "nprfx/stipple.h"
 
+/* The per-pixel passes (Jacobian, outlier search, smoothing) and the block member tests have
+ * AVX2 copies of their fast loops, picked per render (sjob.avx2; docs/design.md §1: each lane
+ * does the baseline loop's IEEE operations in its order, so the output is the same): GCC or
+ * Clang on x86-64. */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__SSE2__)
+#define STIPPLE_X86 1
+#else
+#define STIPPLE_X86 0
+#endif
+/* A helper that a baseline loop and its AVX2 copy both run per element: inlined into each, as
+ * into the loop it came from (GCC's heuristics leave it out of line in the AVX2 copy). */
+#if defined(__GNUC__)
+#define STIPPLE_SHARED static inline __attribute__((always_inline))
+#else
+#define STIPPLE_SHARED static inline
+#endif
+
 /* Drawing tiles of the window (and the stripes of nprfx_stipple_collect). */
 #define STRIPE_ROWS 64
 #define TILE_COLS 256
@@ -147,6 +164,7 @@ typedef struct sjob {
     internal_stencils stencils;    /* render: uniform and multitone discs (cov NULL: none) */
     const internal_levels *levels; /* render: radius discs (NULL: drawn exactly) */
     internal_levels own_levels;    /* ... made for this call when no sequence keeps them */
+    int avx2; /* run the AVX2 loops: p->simd allows them and the CPU has them */
     atomic_int error;
 } sjob;
 
@@ -159,9 +177,10 @@ static inline int internal_usable_j(const pixdata *d, int x, int y, int id)
 /* stipple_jacobian.c: the UV Jacobian of the pixels of r (from the raw data fill_raw wrote),
  * the repair of outlier silhouette pixels in M, and the smoothed area scale of the pixels of R
  * (inside E) into out. */
-void internal_stipple_fill_jacobian(pixdata *d, nprfx_rect r);
-void internal_stipple_repair_outliers(pixdata *d, nprfx_rect M);
-void internal_stipple_smooth_area(pixdata *d, nprfx_rect E, nprfx_rect R, float *out);
+/* avx2: run the AVX2 loops (the CPU has AVX2; sjob.avx2). */
+void internal_stipple_fill_jacobian(pixdata *d, nprfx_rect r, int avx2);
+void internal_stipple_repair_outliers(pixdata *d, nprfx_rect M, int avx2);
+void internal_stipple_smooth_area(pixdata *d, nprfx_rect E, nprfx_rect R, float *out, int avx2);
 
 /* stipple_pixels.c */
 int internal_stipple_reserve(void **p, size_t *cap, size_t n, size_t elem);

@@ -12,11 +12,14 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "internal_ivs.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-
-#include "nprfx/ivs.h"
+#if IVS_X86
+#include <immintrin.h>
+#endif
 
 /* Points per cell of a level's grid, about: coarser grids scan more entries outside the
  * rectangle, finer ones more rows and cells (no better either way for stipple queries). */
@@ -155,7 +158,8 @@ typedef struct scan {
     double u0, v0, u1, v1;
     nprfx_ivs_batch_fn fn;
     void *user;
-    int n; /* samples waiting in the batch */
+    int avx2; /* scan with scan_run_avx2 */
+    int n;    /* samples waiting in the batch */
     long long found;
     int32_t index[SCAN_BATCH];
     double u[SCAN_BATCH], v[SCAN_BATCH];
@@ -237,6 +241,66 @@ static int scan_run(scan *q, const ivs_level *lv, int e, int e1, double dtx, dou
     return 0;
 }
 
+#if IVS_X86
+/* scan_run with AVX2: four entries at a time, the same conversions, sums and comparisons. */
+__attribute__((target("avx2"))) static int scan_run_avx2(scan *q, const ivs_level *lv, int e,
+                                                         int e1, double dtx, double dty)
+{
+    const float *xy = lv->xy;
+    const int32_t *index = lv->index;
+    int32_t *bi = q->index;
+    double *bu = q->u, *bv = q->v;
+    const __m256d du = _mm256_set1_pd(dtx), dv = _mm256_set1_pd(dty);
+    const __m256d lu = _mm256_set1_pd(q->u0), lv_ = _mm256_set1_pd(q->v0);
+    const __m256d hu = _mm256_set1_pd(q->u1), hv = _mm256_set1_pd(q->v1);
+    const __m128i lim = _mm_set1_epi32(q->limit), lane = _mm_setr_epi32(0, 1, 2, 3);
+    /* x0 y0 .. x3 y3 -> x0 .. x3 y0 .. y3 */
+    const __m256i split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+    for (; e < e1; e += SCAN_STEP) {
+        if (q->n > SCAN_BATCH - SCAN_STEP && scan_flush(q)) return 1;
+        int n = q->n;
+        /* entries e + k with k < left */
+        const __m128i left = _mm_set1_epi32(e1 - e);
+        for (int k = 0; k < SCAN_STEP; k += 4) {
+            const int a = e + k;
+            const __m256 p = _mm256_permutevar8x32_ps(_mm256_loadu_ps(xy + 2 * a), split);
+            const __m256d u = _mm256_add_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(p)), du);
+            const __m256d v = _mm256_add_pd(_mm256_cvtps_pd(_mm256_extractf128_ps(p, 1)), dv);
+            const __m128i i = _mm_loadu_si128((const __m128i *)(index + a));
+            const __m128i ok =
+                _mm_and_si128(_mm_cmplt_epi32(i, lim),
+                              _mm_cmplt_epi32(_mm_add_epi32(lane, _mm_set1_epi32(k)), left));
+            const __m256d inu =
+                _mm256_and_pd(_mm256_cmp_pd(u, lu, _CMP_GE_OQ), _mm256_cmp_pd(u, hu, _CMP_LT_OQ));
+            const __m256d inv =
+                _mm256_and_pd(_mm256_cmp_pd(v, lv_, _CMP_GE_OQ), _mm256_cmp_pd(v, hv, _CMP_LT_OQ));
+            const int keep = _mm256_movemask_pd(_mm256_and_pd(
+                _mm256_and_pd(inu, inv), _mm256_castsi256_pd(_mm256_cvtepi32_epi64(ok))));
+            const __m128d u01 = _mm256_castpd256_pd128(u), u23 = _mm256_extractf128_pd(u, 1);
+            const __m128d v01 = _mm256_castpd256_pd128(v), v23 = _mm256_extractf128_pd(v, 1);
+            bi[n] = index[a];
+            _mm_storel_pd(bu + n, u01);
+            _mm_storel_pd(bv + n, v01);
+            n += keep & 1;
+            bi[n] = index[a + 1];
+            _mm_storeh_pd(bu + n, u01);
+            _mm_storeh_pd(bv + n, v01);
+            n += keep >> 1 & 1;
+            bi[n] = index[a + 2];
+            _mm_storel_pd(bu + n, u23);
+            _mm_storel_pd(bv + n, v23);
+            n += keep >> 2 & 1;
+            bi[n] = index[a + 3];
+            _mm_storeh_pd(bu + n, u23);
+            _mm_storeh_pd(bv + n, v23);
+            n += keep >> 3;
+        }
+        q->n = n;
+    }
+    return 0;
+}
+#endif
+
 /* floor(x) for -2^63 <= x < 2^63, as an integer (the conversion is defined there) */
 static inline long long floor_ll(double x)
 {
@@ -303,7 +367,14 @@ static int scan_query(const nprfx_ivs_index *ix, scan *q)
         for (long long cx = cx0; cx <= cx1; tx++) {
             /* cells rx .. rx_end of tile tx: the rest of the row or the rest of this tile */
             int rx_end = cx1 - cx < (long long)(g - 1 - rx) ? rx + (int)(cx1 - cx) : g - 1;
-            if (scan_run(q, lv, start[rx], start[rx_end + 1], (double)tx, dty)) return 1;
+            const int e = start[rx], e1 = start[rx_end + 1];
+#if IVS_X86
+            const int stop = q->avx2 ? scan_run_avx2(q, lv, e, e1, (double)tx, dty)
+                                     : scan_run(q, lv, e, e1, (double)tx, dty);
+#else
+            const int stop = scan_run(q, lv, e, e1, (double)tx, dty);
+#endif
+            if (stop) return 1;
             cx += rx_end - rx + 1;
             rx = 0;
         }
@@ -315,11 +386,13 @@ static int scan_query(const nprfx_ivs_index *ix, scan *q)
     return 0;
 }
 
-long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *ix, int limit, double u0, double v0,
-                                      double u1, double v1, nprfx_ivs_batch_fn fn, void *user)
+long long internal_ivs_index_query_batch(const nprfx_ivs_index *ix, int limit, double u0, double v0,
+                                         double u1, double v1, nprfx_ivs_batch_fn fn, void *user,
+                                         int avx2)
 {
     if (!ix || limit <= 0 || !(u1 > u0) || !(v1 > v0)) return 0;
     scan q;
+    q.avx2 = avx2;
     q.limit = limit > ix->count ? ix->count : limit;
     q.u0 = u0;
     q.v0 = v0;
@@ -331,6 +404,17 @@ long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *ix, int limit, doub
     q.found = 0;
     if (!scan_query(ix, &q)) scan_flush(&q);
     return q.found;
+}
+
+long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *ix, int limit, double u0, double v0,
+                                      double u1, double v1, nprfx_ivs_batch_fn fn, void *user)
+{
+#if IVS_X86
+    const int avx2 = __builtin_cpu_supports("avx2");
+#else
+    const int avx2 = 0;
+#endif
+    return internal_ivs_index_query_batch(ix, limit, u0, v0, u1, v1, fn, user, avx2);
 }
 
 typedef struct visit_each {

@@ -94,6 +94,8 @@ static nprfx_result check_params(nprfx_context *ctx, const nprfx_stipple_params 
 {
     if (!p || p->size < sizeof *p)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: bad params struct");
+    if (p->simd < 0 || p->simd > 2)
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "stipple: no simd path %d", p->simd);
     if (p->mode < 0 || p->mode > NPRFX_STIPPLE_MULTITONE)
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "stipple.mode: no mode %d", p->mode);
     if (!(p->area > 0) || !(p->a0 > 0) || !(p->delta_min >= 0))
@@ -433,6 +435,9 @@ static nprfx_result job_init(sjob *j, nprfx_context *ctx, const nprfx_stipple_pa
     j->in = in;
     j->region = region;
     j->radius = (float)sqrt(p->area / PI_D);
+#if STIPPLE_X86
+    j->avx2 = p->simd != 1 && __builtin_cpu_supports("avx2");
+#endif
     atomic_init(&j->error, NPRFX_OK);
     if (!p->index) {
         j->seq = p->sequence;

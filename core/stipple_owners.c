@@ -17,12 +17,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "internal_ivs.h"
+#include "internal_stipple.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-
-#include "internal_stipple.h"
-#include "nprfx/ivs.h"
+#if STIPPLE_X86
+#include <immintrin.h>
+#endif
 
 /* ---- the footprint of an owner pixel ---- */
 
@@ -113,7 +115,7 @@ static double orient(double ax, double ay, double bx, double by, double sx, doub
 /* Does the owner's footprint contain (u, v)? Half-open quad: the top and left edges belong to
  * this pixel, the others to its neighbours, and each shared edge is evaluated from the same
  * corners in the same order on both sides, so a sample has exactly one owner. */
-static int owns(const owner *o, double u, double v)
+STIPPLE_SHARED int owns(const owner *o, double u, double v)
 {
     double s = o->sigma;
     double ht = orient(o->cu[0], o->cv[0], o->cu[1], o->cv[1], u, v) * s;
@@ -570,33 +572,82 @@ static void block_emit(block_ctx *b)
     b->np = 0;
 }
 
+/* Sample i at (u, v) in the slots of hits: the ownership tests (each slot's owner built on
+ * its first hit), the owned ones put with the samples waiting for emit(). */
+STIPPLE_SHARED void take_hits(block_ctx *b, unsigned hits, int32_t i, double u, double v)
+{
+    while (hits) {
+        const int s = lowest_bit(hits);
+        hits &= hits - 1;
+        owner *o = &b->own[s];
+        if (!(b->built & 1u << s)) {
+            const int r = s / BLOCK, c = s % BLOCK;
+            const size_t a = b->at + (size_t)r * b->st->stride + c;
+            owner_build(b->j, b->d, b->grid, b->st->imax[a], b->st->g[a], b->id[s], o, b->x0 + c,
+                        b->y0 + r);
+            b->built |= 1u << s;
+        }
+        /* written whether owned or not (a quarter are not), kept where owned */
+        if (b->np == PENDING) block_emit(b);
+        b->pslot[b->np] = s;
+        b->pindex[b->np] = i;
+        b->pu[b->np] = u;
+        b->pv[b->np] = v;
+        b->np += owns(o, u, v);
+    }
+}
+
 static int block_batch(void *user, int n, const int32_t *index, const double *u, const double *v)
 {
     block_ctx *b = user;
-    for (int k = 0; k < n; k++) {
-        unsigned hits = member_hits(b, index[k], u[k], v[k]);
-        while (hits) {
-            const int s = lowest_bit(hits);
-            hits &= hits - 1;
-            owner *o = &b->own[s];
-            if (!(b->built & 1u << s)) {
-                const int r = s / BLOCK, c = s % BLOCK;
-                const size_t a = b->at + (size_t)r * b->st->stride + c;
-                owner_build(b->j, b->d, b->grid, b->st->imax[a], b->st->g[a], b->id[s], o,
-                            b->x0 + c, b->y0 + r);
-                b->built |= 1u << s;
-            }
-            /* written whether owned or not (a quarter are not), kept where owned */
-            if (b->np == PENDING) block_emit(b);
-            b->pslot[b->np] = s;
-            b->pindex[b->np] = index[k];
-            b->pu[b->np] = u[k];
-            b->pv[b->np] = v[k];
-            b->np += owns(o, u[k], v[k]);
-        }
-    }
+    for (int k = 0; k < n; k++)
+        take_hits(b, member_hits(b, index[k], u[k], v[k]), index[k], u[k], v[k]);
     return 0;
 }
+
+#if STIPPLE_X86
+/* member_row with AVX2: the four boxes in one vector each, the same comparisons. */
+__attribute__((target("avx2"))) static inline unsigned member_row4(const strip *st, size_t a,
+                                                                   __m256d U, __m256d V, __m128i I)
+{
+    const __m256d lo = _mm256_and_pd(_mm256_cmp_pd(U, _mm256_loadu_pd(st->bu0 + a), _CMP_GE_OQ),
+                                     _mm256_cmp_pd(V, _mm256_loadu_pd(st->bv0 + a), _CMP_GE_OQ));
+    const __m256d hi = _mm256_and_pd(_mm256_cmp_pd(U, _mm256_loadu_pd(st->bu1 + a), _CMP_LE_OQ),
+                                     _mm256_cmp_pd(V, _mm256_loadu_pd(st->bv1 + a), _CMP_LE_OQ));
+    const __m128i l = _mm_cmplt_epi32(I, _mm_loadu_si128((const __m128i *)(st->lim + a)));
+    return (unsigned)_mm256_movemask_pd(_mm256_and_pd(lo, hi)) &
+           (unsigned)_mm_movemask_ps(_mm_castsi128_ps(l));
+}
+
+/* member_hits with AVX2. */
+__attribute__((target("avx2"))) static inline unsigned member_hits_avx2(const block_ctx *b, int i,
+                                                                        double u, double v)
+{
+    const strip *st = b->st;
+    const __m256d U = _mm256_set1_pd(u), V = _mm256_set1_pd(v);
+    const __m128i I = _mm_set1_epi32(i);
+    const size_t a = b->at, w = (size_t)st->stride;
+    unsigned hits = 0;
+    if (b->rows == BLOCK) /* a whole block (all but the last row of blocks): no loop */
+        hits = member_row4(st, a, U, V, I) | member_row4(st, a + w, U, V, I) << BLOCK |
+               member_row4(st, a + 2 * w, U, V, I) << (2 * BLOCK) |
+               member_row4(st, a + 3 * w, U, V, I) << (3 * BLOCK);
+    else
+        for (int r = 0; r < b->rows; r++)
+            hits |= member_row4(st, a + (size_t)r * w, U, V, I) << (BLOCK * r);
+    return hits & b->group;
+}
+
+/* block_batch with AVX2's member tests. */
+__attribute__((target("avx2"))) static int block_batch_avx2(void *user, int n, const int32_t *index,
+                                                            const double *u, const double *v)
+{
+    block_ctx *b = user;
+    for (int k = 0; k < n; k++)
+        take_hits(b, member_hits_avx2(b, index[k], u[k], v[k]), index[k], u[k], v[k]);
+    return 0;
+}
+#endif
 
 /* One query for the slots of `group`: the union of their boxes, the largest of their limits. */
 static void query_group(block_ctx *b, unsigned group, int lim, double u0, double v0, double u1,
@@ -615,7 +666,13 @@ static void query_group(block_ctx *b, unsigned group, int lim, double u0, double
     /* the query's rectangle is half-open, the boxes closed: widen a hair */
     u1 += 1e-12 * (1.0 + fabs(u1));
     v1 += 1e-12 * (1.0 + fabs(v1));
-    nprfx_ivs_index_query_batch(b->ix, lim, u0, v0, u1, v1, block_batch, b);
+#if STIPPLE_X86
+    if (b->j->avx2) {
+        internal_ivs_index_query_batch(b->ix, lim, u0, v0, u1, v1, block_batch_avx2, b, 1);
+        return;
+    }
+#endif
+    internal_ivs_index_query_batch(b->ix, lim, u0, v0, u1, v1, block_batch, b, 0);
 }
 
 /* The block's owners that keep something (as slots), with their objects into b->id. */

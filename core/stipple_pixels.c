@@ -677,9 +677,9 @@ int internal_stipple_prepare(const sjob *j, scratch *s, nprfx_rect E)
                                    sizeof(float));
     if (!ok) return 0;
     fill_raw(j, d, E);
-    internal_stipple_fill_jacobian(d, D1);
-    internal_stipple_repair_outliers(d, M);
-    internal_stipple_smooth_area(d, E, M, s->sdet);
+    internal_stipple_fill_jacobian(d, D1, j->avx2);
+    internal_stipple_repair_outliers(d, M, j->avx2);
+    internal_stipple_smooth_area(d, E, M, s->sdet, j->avx2);
     g->E = E;
     g->gw = ew + 1;
     g->gh = eh + 1;

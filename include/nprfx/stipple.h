@@ -88,6 +88,9 @@ typedef struct nprfx_stipple_params {
     /* NULL, or a counter nprfx_stipple_render adds the number of stipples drawn to: those
      * whose centre lies in the window (so tiles of a frame add up to the frame's count). */
     long long *count;
+    /* Testing: 0 the fastest loops the CPU has, 1 the baseline ISA's (SSE2 on x86-64), 2 AVX2
+     * (where the CPU has it, else as 1). Every path gives bit-identical output. */
+    int simd;
 } nprfx_stipple_params;
 
 #define NPRFX_STIPPLE_CURVE_SIZE 17

@@ -365,6 +365,69 @@ static void test_silhouettes(void)
     CHECK(seam > 0.5 && seam < 1.35);
 }
 
+/* ---- the vector paths ---- */
+
+/* One render of `in` per simd path (nprfx_stipple_params.simd), in the three modes: the AVX2
+ * loops (where the CPU has them) must give the baseline's pixels bit for bit. Returns how many
+ * renders differ. */
+static int simd_differs(const nprfx_stipple_inputs *in, double tile)
+{
+    const int w = nprfx_rect_width(in->frame), h = nprfx_rect_height(in->frame);
+    nprfx_image ref = th_image(w, h, 4, NULL), out = th_image(w, h, 4, NULL);
+    const size_t bytes = sizeof(float) * 4 * (size_t)w * (size_t)h;
+    int bad = 0;
+    for (int mode = 0; mode < 3; mode++) {
+        nprfx_stipple_params p;
+        default_params(&p);
+        p.tile = tile;
+        p.mode = mode;
+        p.simd = 1;
+        CHECK_OK(nprfx_stipple_render(ctx4, &p, in, ref.bounds, &ref));
+        for (int simd = 0; simd <= 2; simd += 2) {
+            p.simd = simd;
+            memset(out.data, 0, bytes);
+            CHECK_OK(nprfx_stipple_render(ctx4, &p, in, out.bounds, &out));
+            bad += memcmp(ref.data, out.data, bytes) != 0;
+        }
+    }
+    nprfx_image_free(&ref);
+    nprfx_image_free(&out);
+    return bad;
+}
+
+static void test_simd_paths(void)
+{
+    /* the warped scene with three objects, some pixels without a UV, and UVs rounded to half
+     * floats' steps in a band (whose differences disagree between sides) */
+    const int w = 240, h = 180;
+    scene s = make_scene(w, h);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float *uv = nprfx_image_at(&s.uv, x, y);
+            if ((x * 7 + y * 13) % 97 == 0) uv[0] = NAN;
+            if (y > 100 && y < 140)
+                for (int c = 0; c < 2; c++)
+                    uv[c] = ldexpf(roundf(ldexpf(uv[c], 10)), -10);
+        }
+    nprfx_stipple_inputs in = {&s.tone, &s.uv, &s.id, s.tone.bounds};
+    int bad = simd_differs(&in, 0.1);
+    free_scene(&s);
+    /* a synthetic shot: spheres' UVs and ids, as the benchmark renders them */
+    nprfx_image plate[3] = {th_image(320, 180, 1, NULL), th_image(320, 180, 2, NULL),
+                            th_image(320, 180, 1, NULL)};
+    const int tc[1] = {th_synth_channel("diffuse")}, ic[1] = {th_synth_channel("id")};
+    const int uc[2] = {th_synth_channel("UV.U"), th_synth_channel("UV.V")};
+    CHECK_OK(nprfx_synth_render_channels(ctx1, "orbit", 3, tc, 1, &plate[0]));
+    CHECK_OK(nprfx_synth_render_channels(ctx1, "orbit", 3, uc, 2, &plate[1]));
+    CHECK_OK(nprfx_synth_render_channels(ctx1, "orbit", 3, ic, 1, &plate[2]));
+    nprfx_stipple_inputs shot = {&plate[0], &plate[1], &plate[2], plate[0].bounds};
+    bad += simd_differs(&shot, 1.0);
+    for (int i = 0; i < 3; i++)
+        nprfx_image_free(&plate[i]);
+    printf("simd paths: %d of 12 renders differ from the baseline's\n", bad);
+    CHECK(bad == 0);
+}
+
 /* ---- determinism through the node ---- */
 
 static const nprfx_node_desc *node;
@@ -788,6 +851,7 @@ int main(void)
     test_exactly_once();
     test_no_duplicates();
     test_silhouettes();
+    test_simd_paths();
     test_determinism();
     test_modes();
     test_disc_area();
