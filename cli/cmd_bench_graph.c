@@ -28,12 +28,24 @@ static void usage(FILE *f)
         "...) or rely on the inputs' AOV hints. The shot is frames 1 to N (default 8), rendered\n"
         "in order. Each frame evaluates every write node's input; with --write DIR the files\n"
         "are written under DIR and timed as output. Reports ms per frame and frames per second\n"
-        "(all frames, and the first apart: it holds a temporal warm-up), the time in the nodes\n"
+        "(all frames, and the first apart: it holds a temporal warm-up; then the frames after\n"
+        "the first alone, a long shot's steady state), the time in the nodes\n"
         "(compute), in the plates (input: synthesis standing in for reads) and in writes\n"
         "(output), and the process's peak memory. --stats adds the per-node table of\n"
         "nprfx run --stats; --mem-limit and --no-pool are as for nprfx run.\n\n"
         "example:\n"
         "  nprfx bench-graph samples/bench/bench_six.json --size 3840x2160 --threads 2\n");
+}
+
+/* The graph's node seconds so far, by kind: compute, read, synth, write. */
+static void seconds_by_kind(nprfx_graph *g, double sec[4])
+{
+    const nprfx_graph_node_stats *st;
+    int n = nprfx_graph_stats(g, &st);
+    for (int k = 0; k < 4; k++)
+        sec[k] = 0.0;
+    for (int i = 0; i < n; i++)
+        sec[st[i].kind & 3] += st[i].seconds;
 }
 
 int nprfx_cmd_bench_graph(int argc, char **argv)
@@ -111,7 +123,8 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
         status = 2;
         goto done;
     }
-    double t0 = nprfx_cli_now(), first = 0;
+    /* seconds by kind: compute, read, synth, write; at1: as they stood after frame 1 */
+    double t0 = nprfx_cli_now(), first = 0, at1[4] = {0, 0, 0, 0};
     for (int f = 1; f <= frames; f++) {
         int written = 0;
         nprfx_result r =
@@ -121,20 +134,29 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
             status = 1;
             goto done;
         }
-        if (f == 1) first = nprfx_cli_now() - t0;
+        if (f == 1) {
+            first = nprfx_cli_now() - t0;
+            seconds_by_kind(g, at1);
+        }
     }
-    double total = nprfx_cli_now() - t0;
-    const nprfx_graph_node_stats *st;
-    int n = nprfx_graph_stats(g, &st);
-    double sec[4] = {0, 0, 0, 0}; /* by kind: compute, read, synth, write */
-    for (int i = 0; i < n; i++)
-        sec[st[i].kind & 3] += st[i].seconds;
+    double total = nprfx_cli_now() - t0, sec[4];
+    seconds_by_kind(g, sec);
     int workers = nprfx_executor_workers(nprfx_context_executor(env.ctx));
     printf("%s %dx%d, %d frame%s, %d thread%s: %.1f ms/frame, %.2f frames/s (first frame %.1f "
            "ms); compute %.1f ms, input %.1f ms, output %.1f ms per frame; peak memory %.0f MiB\n",
            path, w, h, frames, frames == 1 ? "" : "s", workers, workers == 1 ? "" : "s",
            total * 1e3 / frames, frames / total, first * 1e3, sec[0] * 1e3 / frames,
            (sec[1] + sec[2]) * 1e3 / frames, sec[3] * 1e3 / frames, nprfx_cli_peak_mib());
+    if (frames > 1) {
+        /* a shot's steady state: the first frame holds the temporal warm-up and the first
+         * allocation of every buffer, which a long shot spreads over more frames */
+        int m = frames - 1;
+        double rest = total - first;
+        printf("after the first frame: %.1f ms/frame, %.2f frames/s; compute %.1f ms, input %.1f "
+               "ms, output %.1f ms per frame\n",
+               rest * 1e3 / m, m / rest, (sec[0] - at1[0]) * 1e3 / m,
+               (sec[1] + sec[2] - at1[1] - at1[2]) * 1e3 / m, (sec[3] - at1[3]) * 1e3 / m);
+    }
     if (stats) nprfx_cli_print_stats(stdout, g, frames, &plan);
 done:
     nprfx_graph_free(g);

@@ -131,6 +131,15 @@ grep -qE "^frames and caches held at most $num [KMG]iB \(estimate $num [KMG]iB, 
 out=$("$NPRFX" bench-graph "$SRC/samples/bench/bench_six.json" --size 160x90 --frames 3 --threads 1 2>&1)
 echo "$out" | grep -qE "bench_six.json 160x90, 3 frames, 1 thread: $num ms/frame, $num frames/s \(first frame $num ms\); compute $num ms, input $num ms, output 0\.0 ms per frame; peak memory [0-9]+ MiB$" &&
   pass || fail "bench-graph form: $out"
+# the frames after the first apart (a shot's steady state), consistent with the totals
+echo "$out" | grep -qE "^after the first frame: $num ms/frame, $num frames/s; compute $num ms, input $num ms, output 0\.0 ms per frame$" &&
+  pass || fail "bench-graph steady-state form: $out"
+echo "$out" | awk '
+  /frames, 1 thread:/ { match($0, /thread: [0-9.]+/); all = substr($0, RSTART + 8, RLENGTH - 8)
+                        match($0, /first frame [0-9.]+/); first = substr($0, RSTART + 12, RLENGTH - 12) }
+  /^after the first frame:/ { rest = $5 }
+  END { d = all * 3 - (first + rest * 2); exit !(rest > 0 && d < 0.5 && d > -0.5) }' &&
+  pass || fail "bench-graph: the steady state does not add up with the first frame to the total: $out"
 # --write times the files as output, and writes them; read nodes become synthetic plates.
 cat > reads.json <<'JSON'
 {"frames": "1-2", "nodes": {
