@@ -71,13 +71,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      "NaN or any value >= 1e9 (Blender writes 1e10, inf in half-float files): background pixels "
      "get fresh noise every frame. Nuke's ScanlineRender writes 1/z: invert it first. Footage "
      "has none: connect confidence instead (one of the two is needed).",
-     "Z|depth.Z|Depth.Z", 1, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED,
-     NPRFX_FETCH_UNBOUNDED},
+     "Z|depth.Z|Depth.Z", 1, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL | NPRFX_INPUT_IN_PLACE,
+     NPRFX_FETCH_UNBOUNDED, NPRFX_FETCH_UNBOUNDED},
     {"motion_prev", "Motion Prev",
      "Per-pixel offset in pixels (y down) from a pixel to where the same surface point was in "
      "the previous frame. Blender Vector pass: (Vector.X, -Vector.Y). Nuke: (backward.u, "
      "-backward.v).",
-     "motion_prev.X,motion_prev.Y", 2, NPRFX_INPUT_TEMPORAL, NPRFX_FETCH_UNBOUNDED, 0},
+     "motion_prev.X,motion_prev.Y", 2, NPRFX_INPUT_TEMPORAL | NPRFX_INPUT_IN_PLACE,
+     NPRFX_FETCH_UNBOUNDED, 0},
     {"motion_next", "Motion Next",
      "symmetric mode: offset in pixels (y down) to where the surface point will be in the next "
      "frame. Blender: (-Vector.Z, Vector.W). Nuke: (forward.u, -forward.v).",
