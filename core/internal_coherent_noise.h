@@ -29,30 +29,17 @@
 /* Rows per parallel chunk of a step (the compensation ring costs 3 extra rows per chunk). */
 #define INTERNAL_STEP_GRAIN 32
 
-/* NPRFX_CN_SCALAR: build the scalar path only (it computes the same numbers). */
-#if !defined(NPRFX_CN_SCALAR) &&                                                                   \
-    ((defined(__GNUC__) && __GNUC__ >= 12) || (defined(__clang__) && __clang_major__ >= 13))
-#define INTERNAL_VEC 1
-#else
-#define INTERNAL_VEC 0
+/* The build's vector switches (internal_simd.h, shared with the other nodes' vector code):
+ * NPRFX_SCALAR, or NPRFX_CN_SCALAR, builds the scalar path only (it computes the same numbers). */
+#if defined(NPRFX_CN_SCALAR) && !defined(NPRFX_SCALAR)
+#define NPRFX_SCALAR
 #endif
-
-#if INTERNAL_VEC && defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) &&             \
-    defined(__linux__) && !defined(NPRFX_NO_CLONES)
-#define INTERNAL_CLONES                                                                            \
-    __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define INTERNAL_CLONES
-#endif
+#include "internal_simd.h"
+#define INTERNAL_VEC INTERNAL_SIMD
+#define INTERNAL_CLONES INTERNAL_SIMD_CLONES
 
 #if INTERNAL_VEC
-/* Vector helpers are always inlined: no vector type crosses a call (no ABI question). */
-#define INTERNAL_VINLINE static inline __attribute__((always_inline))
-#if defined(__clang__)
-#pragma clang diagnostic ignored "-Wpsabi"
-#elif defined(__GNUC__)
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
+#define INTERNAL_VINLINE INTERNAL_SIMD_INLINE
 typedef float internal_v2f __attribute__((vector_size(8)));
 typedef float internal_v4f __attribute__((vector_size(16)));
 typedef float internal_v8f __attribute__((vector_size(32)));

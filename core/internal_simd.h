@@ -1,5 +1,5 @@
-/* The build's vector switches for nodes outside coherent noise (which keeps its own in
- * internal_coherent_noise.h), never installed.
+/* The build's vector switches, shared by the nodes' vector code (coherent noise maps its own
+ * names onto them in internal_coherent_noise.h), never installed.
  *
  * GCC/Clang vector extensions express vector code (INTERNAL_SIMD); on x86-64 Linux with GCC a
  * hot function marked INTERNAL_SIMD_CLONES is also built for AVX2 and AVX-512 and picked at load
