@@ -4,6 +4,7 @@
 #include "frame_pool.h"
 #include "cli_util.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,7 +16,7 @@ typedef struct idle_buf {
 } idle_buf;
 
 struct nprfx_frame_pool {
-    int disabled;
+    int disabled, poison;
     unsigned epoch;
     idle_buf *idle;
     size_t idle_bytes, fresh_bytes;
@@ -44,8 +45,13 @@ static void zero_floats(nprfx_context *ctx, float *data, size_t floats)
                              parts < 3 ? 1 : (int)parts);
 }
 
+void nprfx_frame_pool_poison(nprfx_frame_pool *p, int on)
+{
+    if (p) p->poison = on;
+}
+
 nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, nprfx_rect bounds,
-                                    int channels, nprfx_image *out, int *reused)
+                                    int channels, int clear, nprfx_image *out, int *reused)
 {
     if (reused) *reused = 0;
     size_t w = (size_t)nprfx_rect_width(bounds), h = (size_t)nprfx_rect_height(bounds);
@@ -61,7 +67,11 @@ nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, npr
             free(b);
             /* calloc's zeros: a node that writes only part of its window, or accumulates into
              * its output (splats), must see what it saw in a fresh frame. */
-            zero_floats(ctx, out->data, floats);
+            if (clear)
+                zero_floats(ctx, out->data, floats);
+            else if (p->poison)
+                for (size_t i = 0; i < floats; i++)
+                    out->data[i] = NAN;
             out->pixel_stride = channels;
             out->row_stride = (ptrdiff_t)(w * (size_t)channels);
             out->channels = channels;

@@ -24,10 +24,14 @@ nprfx_frame_pool *nprfx_frame_pool_create(int disabled);
 /* Frees every idle buffer and the pool. Buffers still out must be released before. */
 void nprfx_frame_pool_destroy(nprfx_frame_pool *p);
 
-/* A zeroed image of bounds x channels, from an idle buffer of the same size when there is one.
- * *reused (may be NULL) tells whether it was. */
+/* An image of bounds x channels, from an idle buffer of the same size when there is one, zeroed
+ * (clear) or not (the caller sets every pixel before reading any). *reused (may be NULL) tells
+ * whether it was. */
 nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, nprfx_rect bounds,
-                                    int channels, nprfx_image *out, int *reused);
+                                    int channels, int clear, nprfx_image *out, int *reused);
+/* Testing: reused buffers handed out uncleared are filled with NaN instead, so that a pixel a
+ * caller fails to set shows in its output rather than an earlier frame's value. */
+void nprfx_frame_pool_poison(nprfx_frame_pool *p, int on);
 /* Give im's pixels (from nprfx_frame_pool_alloc) back to the pool and reset im. */
 void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im);
 

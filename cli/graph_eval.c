@@ -464,7 +464,8 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
     char what[600];
     snprintf(what, sizeof what, "node '%s': input '%s' (channels from '%s')", n->name,
              n->kind == GK_NODE ? n->desc->inputs[k].name : "image", g->nodes[e->node].name);
-    r = internal_graph_frame_alloc(g, (int)(n - g->nodes), what, e->im.bounds, count, &tmp);
+    /* pack_rows sets every pixel */
+    r = internal_graph_frame_alloc_unset(g, (int)(n - g->nodes), what, e->im.bounds, count, &tmp);
     if (r) return r;
     pack_job pj = {&e->im, &tmp, idx, count};
     nprfx_parallel_for(nprfx_context_executor(g->ctx), nprfx_rect_height(tmp.bounds), 16, pack_rows,
@@ -747,7 +748,12 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     if ((r = nprfx_node_output_info(n->ctx, d, n->params, in_ch, &oi))) goto done;
     char what[300]; /* a frame beyond the memory limit is refused, not attempted */
     snprintf(what, sizeof what, "node '%s': output frame", n->name);
-    if ((r = internal_graph_frame_alloc(g, node, what, frame_rect, oi.channels, im))) goto done;
+    /* the windows below cover the frame: a node that sets all of its window gets it unset (a
+     * host's render through the hook makes no such promise) */
+    r = (d->flags & NPRFX_NODE_WRITES_WINDOW) && !g->has_hook
+            ? internal_graph_frame_alloc_unset(g, node, what, frame_rect, oi.channels, im)
+            : internal_graph_frame_alloc(g, node, what, frame_rect, oi.channels, im);
+    if (r) goto done;
     nprfx_render_args a;
     nprfx_value varied[64];
     internal_graph_render_args(g, n, frame, frame_rect, varied, &a);

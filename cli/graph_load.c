@@ -394,6 +394,8 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         g->strip_option = opt->strip_rows;
     g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
     g->pool = nprfx_frame_pool_create(g->no_pool);
+    /* tests: pixels a node leaves unset in a reused frame show as NaN (docs/design.md §1) */
+    if (g->pool && getenv("NPRFX_POOL_POISON")) nprfx_frame_pool_poison(g->pool, 1);
     if (!g->pool) {
         cJSON_Delete(root);
         free(g->base_dir);

@@ -315,8 +315,8 @@ static int make_room(nprfx_graph *g, size_t bytes)
     return g->held_bytes + kept + bytes <= g->mem_limit;
 }
 
-nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
-                                        nprfx_rect bounds, int channels, nprfx_image *im)
+static nprfx_result frame_alloc(nprfx_graph *g, int node, const char *what, nprfx_rect bounds,
+                                int channels, int clear, nprfx_image *im)
 {
     int w = nprfx_rect_width(bounds), h = nprfx_rect_height(bounds);
     nprfx_result r = nprfx_image_limit_check(g->ctx, what, w, h, channels, 0);
@@ -338,7 +338,8 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
                            nprfx_mem_limit_origin());
     }
     int reused = 0;
-    if ((r = nprfx_frame_pool_alloc(g->pool, g->ctx, bounds, channels, im, &reused))) return r;
+    if ((r = nprfx_frame_pool_alloc(g->pool, g->ctx, bounds, channels, clear, im, &reused)))
+        return r;
     g->held_bytes += bytes;
     if (node >= 0 && node < g->count) {
         g->stats[node].bytes += bytes;
@@ -346,6 +347,18 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
     }
     note_peak(g);
     return NPRFX_OK;
+}
+
+nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
+                                        nprfx_rect bounds, int channels, nprfx_image *im)
+{
+    return frame_alloc(g, node, what, bounds, channels, 1, im);
+}
+
+nprfx_result internal_graph_frame_alloc_unset(nprfx_graph *g, int node, const char *what,
+                                              nprfx_rect bounds, int channels, nprfx_image *im)
+{
+    return frame_alloc(g, node, what, bounds, channels, 0, im);
 }
 
 void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im)

@@ -156,6 +156,10 @@ nprfx_result internal_graph_plan_build(nprfx_graph *g);
  * would be passed); errors name `what` ("node 'x': output frame") and the sizes. */
 nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
                                         nprfx_rect bounds, int channels, nprfx_image *im);
+/* The same frame, not cleared when it comes from the pool: for a caller that sets every pixel
+ * before reading any (a node with NPRFX_NODE_WRITES_WINDOW, a channel packing). */
+nprfx_result internal_graph_frame_alloc_unset(nprfx_graph *g, int node, const char *what,
+                                              nprfx_rect bounds, int channels, nprfx_image *im);
 /* The channels of a plate (a read or synth node's result, names/nc) that its readers take, by
  * the selections they would make on it: keep[c] set for each, the count returned; -1 when a
  * reader's selection fails (the reader reports it) or the plate is evaluated for the caller of

@@ -405,6 +405,7 @@ const nprfx_node_desc nprfx_node_gabor_splat = {
     .params = params,
     .num_params = P_COUNT,
     .output = gabor_output,
+    .flags = NPRFX_NODE_WRITES_WINDOW, /* every tile's pixels are normalised and written */
     .render = gabor_render,
     .params_size = sizeof(gnp),
     .version_major = 1,

@@ -197,7 +197,7 @@ const nprfx_node_desc nprfx_node_threshold_map = {
     .num_params = P_COUNT,
     .output = tm_output,
     /* per pixel, or within its footprint; the builtin table is kept between calls */
-    .flags = NPRFX_NODE_ROWS | NPRFX_NODE_STATEFUL,
+    .flags = NPRFX_NODE_ROWS | NPRFX_NODE_STATEFUL | NPRFX_NODE_WRITES_WINDOW,
     .render = tm_render,
     .state_free = nprfx_threshold_state_free,
     .state_bytes = tm_state_bytes,

@@ -179,6 +179,11 @@ typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args, const voi
  * runner may render a frame a strip of rows at a time from inputs that hold only those rows, bit
  * for bit as the whole frame (docs/design.md §1 "Memory"). */
 #define NPRFX_NODE_ROWS 0x8u
+/* Its render sets every output channel of every pixel of the window, whatever its inputs and
+ * params, and reads nothing of its output before setting it: a runner may hand it an output frame
+ * it has not cleared (a reused buffer still holding an earlier frame's pixels), saving a pass over
+ * the frame. Without it, the output arrives zeroed, as nprfx_image_alloc gives it. */
+#define NPRFX_NODE_WRITES_WINDOW 0x10u
 
 struct nprfx_node_desc {
     size_t size;       /* sizeof(nprfx_node_desc) */
