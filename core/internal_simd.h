@@ -16,6 +16,14 @@
 #define INTERNAL_SIMD 0
 #endif
 
+/* GCC or Clang on x86-64: hot loops may have target("avx2") copies, picked at run time with
+ * __builtin_cpu_supports (stipple, the IVS index scan). */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__SSE2__)
+#define INTERNAL_X86 1
+#else
+#define INTERNAL_X86 0
+#endif
+
 #if INTERNAL_SIMD && defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) &&            \
     defined(__linux__) && !defined(NPRFX_NO_CLONES)
 #define INTERNAL_SIMD_CLONES                                                                       \

@@ -7,17 +7,13 @@
 #include <stdatomic.h>
 #include <stddef.h>
 
+#include "internal_simd.h"
 #include "nprfx/stipple.h"
 
 /* The per-pixel passes (Jacobian, outlier search, smoothing) and the block member tests have
- * AVX2 copies of their fast loops, picked per render (sjob.avx2; docs/design.md §1: each lane
- * does the baseline loop's IEEE operations in its order, so the output is the same): GCC or
- * Clang on x86-64. */
-#if defined(__GNUC__) && defined(__x86_64__) && defined(__SSE2__)
-#define STIPPLE_X86 1
-#else
-#define STIPPLE_X86 0
-#endif
+ * AVX2 copies of their fast loops where INTERNAL_X86 (internal_simd.h), picked per render
+ * (sjob.avx2; docs/design.md §1: each lane does the baseline loop's IEEE operations in its
+ * order, so the output is the same). */
 /* A helper that a baseline loop and its AVX2 copy both run per element: inlined into each, as
  * into the loop it came from (GCC's heuristics leave it out of line in the AVX2 copy). */
 #if defined(__GNUC__)

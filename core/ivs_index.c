@@ -17,7 +17,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if IVS_X86
+#if INTERNAL_X86
 #include <immintrin.h>
 #endif
 
@@ -241,7 +241,7 @@ static int scan_run(scan *q, const ivs_level *lv, int e, int e1, double dtx, dou
     return 0;
 }
 
-#if IVS_X86
+#if INTERNAL_X86
 /* scan_run with AVX2: four entries at a time, the same conversions, sums and comparisons. */
 __attribute__((target("avx2"))) static int scan_run_avx2(scan *q, const ivs_level *lv, int e,
                                                          int e1, double dtx, double dty)
@@ -368,7 +368,7 @@ static int scan_query(const nprfx_ivs_index *ix, scan *q)
             /* cells rx .. rx_end of tile tx: the rest of the row or the rest of this tile */
             int rx_end = cx1 - cx < (long long)(g - 1 - rx) ? rx + (int)(cx1 - cx) : g - 1;
             const int e = start[rx], e1 = start[rx_end + 1];
-#if IVS_X86
+#if INTERNAL_X86
             const int stop = q->avx2 ? scan_run_avx2(q, lv, e, e1, (double)tx, dty)
                                      : scan_run(q, lv, e, e1, (double)tx, dty);
 #else
@@ -409,7 +409,7 @@ long long internal_ivs_index_query_batch(const nprfx_ivs_index *ix, int limit, d
 long long nprfx_ivs_index_query_batch(const nprfx_ivs_index *ix, int limit, double u0, double v0,
                                       double u1, double v1, nprfx_ivs_batch_fn fn, void *user)
 {
-#if IVS_X86
+#if INTERNAL_X86
     const int avx2 = __builtin_cpu_supports("avx2");
 #else
     const int avx2 = 0;

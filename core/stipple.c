@@ -435,7 +435,7 @@ static nprfx_result job_init(sjob *j, nprfx_context *ctx, const nprfx_stipple_pa
     j->in = in;
     j->region = region;
     j->radius = (float)sqrt(p->area / PI_D);
-#if STIPPLE_X86
+#if INTERNAL_X86
     j->avx2 = p->simd != 1 && __builtin_cpu_supports("avx2");
 #endif
     atomic_init(&j->error, NPRFX_OK);

@@ -16,7 +16,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if STIPPLE_X86
+#if INTERNAL_X86
 #include <immintrin.h>
 #endif
 
@@ -197,7 +197,7 @@ static int jac_quads(pixdata *d, const jacview *v, size_t k, int x, int xb)
 }
 #endif
 
-#if STIPPLE_X86
+#if INTERNAL_X86
 /* The four lane masks of a 4 x 64-bit mask, as 4 x 32 bits (each lane's low half). */
 __attribute__((target("avx2"))) static inline __m128i narrow_mask(__m256d m)
 {
@@ -414,7 +414,7 @@ void internal_stipple_fill_jacobian(pixdata *d, nprfx_rect r, int avx2)
             for (; x < xa; x++)
                 jac_pixel(d, k0 + (size_t)(x - r.x0), x, up, down);
             const size_t k = k0 + (size_t)(x - r.x0);
-#if STIPPLE_X86
+#if INTERNAL_X86
             if (avx2)
                 x = jac_quads_avx2(d, &v, k, x, xb);
             else
@@ -531,7 +531,7 @@ static inline int outlier_mask4(const pixdata *d, ptrdiff_t k)
 }
 #endif
 
-#if STIPPLE_X86
+#if INTERNAL_X86
 /* exceeds, eight pixels wide. */
 __attribute__((target("avx2"))) static inline __m256 exceeds8(const int *jid, const float *adet,
                                                               ptrdiff_t s, __m256 a, __m256i id)
@@ -595,7 +595,7 @@ void internal_stipple_repair_outliers(pixdata *d, nprfx_rect M, int avx2)
                 const int n = outlier_source(d, k0 + (x - M.x0), x, up, down);
                 if (n) record_fix(&fl, (size_t)(k0 + (x - M.x0)), n - 1);
             }
-#if STIPPLE_X86
+#if INTERNAL_X86
             if (avx2) x = outlier_run_avx2(&fl, k0 + (x - M.x0), x, xb, up, down);
 #endif
             for (; x + 4 <= xb; x += 4) {
@@ -674,7 +674,7 @@ static inline __m128 vertical4(const int *jid, const float *hs, const float *hc,
 }
 #endif
 
-#if STIPPLE_X86
+#if INTERNAL_X86
 /* horizontal4 eight lanes wide, over the n pixels from k (n a multiple of 8). */
 __attribute__((target("avx2"))) static void
 horizontal_run_avx2(const int *jid, const float *adet, float *hs, float *hc, size_t k, size_t n)
@@ -755,7 +755,7 @@ void internal_stipple_smooth_area(pixdata *d, nprfx_rect E, nprfx_rect R, float 
         const size_t k0 = pd_at(d, E.x0, y);
         for (int x = E.x0; x < E.x1; x++) {
             const size_t k = k0 + (size_t)(x - E.x0);
-#if STIPPLE_X86
+#if INTERNAL_X86
             if (avx2 && x >= xa && x + 8 <= xb) { /* the row's interior, eight at a time */
                 const int n = (xb - x) & ~7;
                 horizontal_run_avx2(jid, adet, hs, hc, k, (size_t)n);
@@ -799,7 +799,7 @@ void internal_stipple_smooth_area(pixdata *d, nprfx_rect E, nprfx_rect R, float 
         const ptrdiff_t k0 = (ptrdiff_t)pd_at(d, E.x0, y);
         float *restrict o = out + (size_t)(y - E.y0) * ew;
         int i = 0;
-#if STIPPLE_X86
+#if INTERNAL_X86
         if (avx2) {
             vertical_run_avx2(jid, hs, hc, k0, w, lo, hi, o, ew & ~7);
             i = ew & ~7;

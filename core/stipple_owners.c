@@ -22,7 +22,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if STIPPLE_X86
+#if INTERNAL_X86
 #include <immintrin.h>
 #endif
 
@@ -605,7 +605,7 @@ static int block_batch(void *user, int n, const int32_t *index, const double *u,
     return 0;
 }
 
-#if STIPPLE_X86
+#if INTERNAL_X86
 /* member_row with AVX2: the four boxes in one vector each, the same comparisons. */
 __attribute__((target("avx2"))) static inline unsigned member_row4(const strip *st, size_t a,
                                                                    __m256d U, __m256d V, __m128i I)
@@ -666,7 +666,7 @@ static void query_group(block_ctx *b, unsigned group, int lim, double u0, double
     /* the query's rectangle is half-open, the boxes closed: widen a hair */
     u1 += 1e-12 * (1.0 + fabs(u1));
     v1 += 1e-12 * (1.0 + fabs(v1));
-#if STIPPLE_X86
+#if INTERNAL_X86
     if (b->j->avx2) {
         internal_ivs_index_query_batch(b->ix, lim, u0, v0, u1, v1, block_batch_avx2, b, 1);
         return;
