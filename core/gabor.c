@@ -58,6 +58,9 @@
  *    per-pixel attributes are computed 8 pixels at a time, with scalar code only for pixels at
  *    edges or outside the inputs; patch links are vector masks, and a block whose pixels all
  *    link is one patch without a flood fill; patch footprints are vector reductions;
+ *  - a row of anchor cells is hashed 8 cells at a time, with the points' positions and the
+ *    cheap tests (stagger start, slab around the reference tangent plane) in vectors; only the
+ *    cells that pass go on to the owner search, one by one in their order;
  *  - the owner search's 3 x 3 descent evaluates the 8 neighbours in one vector;
  *  - splatting computes a kernel's row spans and row depths 8 (AVX2: 4) rows at a time, runs
  *    the factor-table recurrences of 4 kernels in the lanes of a vector, and adds rows 8

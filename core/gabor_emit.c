@@ -420,6 +420,126 @@ GV_INLINE void patch_reach_vec(const gconf *G, const gpixels *X, int comp, float
 }
 #endif
 
+/* What every cell of one level of a patch shares. */
+typedef struct cell_row {
+    const gconf *G;
+    const gpixels *X;
+    gblock *b;
+    emit_scratch *scr;
+    int ref, l;
+    double c, ic;
+    double rA0, rA1, rA2, rn0, rn1, rn2; /* the reference pixel's anchor and normal */
+    double slab, xmax;
+    float id;
+    int x0, y0;
+} cell_row;
+
+/* The staggered fade's start of the point with hash h. */
+static inline double stagger_start(uint64_t h)
+{
+    return nprfx_u01(nprfx_mix64(h ^ 0x510e527fade682d1ull));
+}
+
+/* The cheap tests of a cell's point a (hash h), before the owner search: a point whose fade
+ * has not started anywhere it may take its surface from, or (3D) that lies beyond the slab
+ * around the reference tangent plane, has weight 0 whoever owns it. */
+static inline int cell_pass(const cell_row *R, uint64_t h, const double *a)
+{
+    if (R->G->stagger && R->xmax < 2.0 && stagger_start(h) * (1.0 - STAGGER) >= R->xmax) return 0;
+    if (R->G->dims == 3) {
+        double d[3] = {a[0] - R->rA0, a[1] - R->rA1, a[2] - R->rA2};
+        double rn[3] = {R->rn0, R->rn1, R->rn2};
+        if (!(fabs(dot3(d, rn)) < R->slab)) return 0;
+    }
+    return 1;
+}
+
+/* The rest of a cell whose point a passed cell_pass: its owner, level weight and slab test on
+ * the surface at the point, and its kernel. Returns 0 when out of memory. */
+GABOR_BODY int emit_cell(const cell_row *R, uint64_t h, const double *a, const int vec)
+{
+    const gconf *G = R->G;
+    const gpixels *X = R->X;
+    double ux, uy;
+    int q = find_owner(X, R->ref, a, &ux, &uy, vec);
+    if (q < 0) return 1;
+    double As[3], ns[3], mus, fs;
+    int Ls, l = R->l;
+    surface_at(G, X, q, q % PWS + ux, q / PWS + uy, As, ns, &mus);
+    lod_regime(&G->lod, mus, &Ls, &fs);
+    double w2 = lod_w2(Ls, fs, G->W, l);
+    if (G->stagger && Ls >= 0 && l == Ls + 1)
+        w2 = stagger_w2(stagger_x(G->lod.x, fs), stagger_start(h));
+    if (!(w2 > 0.0)) return 1;
+    if (G->dims == 3) {
+        /* a slab of (weighted) thickness c around the surface: 1 / c^3 points per volume give
+         * 1 / c^2 per surface area */
+        double d[3] = {a[0] - As[0], a[1] - As[1], a[2] - As[2]};
+        double x = fabs(dot3(d, ns)) * R->ic;
+        if (!(x < SLAB_OUT)) return 1;
+        if (x > SLAB_IN) {
+            double t = (SLAB_OUT - x) * (1.0 / SLAB_SOFT);
+            w2 *= t * t;
+        }
+    }
+    gpoint pt;
+    int ox = R->x0 + q % PWS, oy = R->y0 + q / PWS;
+    if (!internal_gabor_make_point(G, X, q, ox, oy, ox + ux, oy + uy, w2, h, R->id, &pt)) return 1;
+    return block_push(R->b, R->scr, &pt);
+}
+
+#if GABOR_VEC
+GV_INLINE gv8u gv_mix64(gv8u z)
+{
+    z += 0x9e3779b97f4a7c15ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+/* 21 bits of h (below 2^21) as a double, exactly as the scalar code's conversion */
+#define gv_bits21(h) __builtin_convertvector(__builtin_convertvector((h)&0x1fffff, gv8i), gv8d)
+
+/* A row of cells (ix from ix0 to ix1 at iy, iz) 8 at a time: hashes, points and cell_pass in
+ * the lanes of vectors (the scalar code's integer and IEEE operations lane by lane), then
+ * emit_cell for the cells that pass, in order. Returns 0 when out of memory. */
+GV_INLINE int cell_row_vec(const cell_row *R, uint64_t hl, uint64_t zid, double ix0, double ix1,
+                           double iy, double iz, const int vec)
+{
+    const gconf *G = R->G;
+    const gv8d lane = {0, 1, 2, 3, 4, 5, 6, 7};
+    const double k21 = 1.0 / 2097152.0, c = R->c;
+    uint64_t yb = (uint64_t)(uint32_t)(int32_t)(int64_t)iy;
+    double ay = 0.0;
+    int stag = G->stagger && R->xmax < 2.0, d3 = G->dims == 3;
+    for (double ix = ix0; ix <= ix1; ix += 8.0) {
+        gv8d vx = ix + lane;
+        gv8l xl = __builtin_convertvector(vx, gv8l);
+        gv8u xy = (((gv8u)xl & 0xffffffffull) << 32) | yb;
+        gv8u h = gv_mix64(gv_mix64(hl ^ xy) ^ zid);
+        gv8d a0 = (vx + (gv_bits21(h >> 43) + 0.5) * k21) * c;
+        gv8d a1 = (iy + (gv_bits21(h >> 22) + 0.5) * k21) * c;
+        gv8d a2 = d3 ? (iz + (gv_bits21(h >> 1) + 0.5) * k21) * c : (gv8d){0};
+        gv8l ok = vx <= ix1;
+        if (stag) {
+            gv8u u = gv_mix64(h ^ 0x510e527fade682d1ull) >> 11;
+            gv8d us = __builtin_convertvector((gv8l)u, gv8d) * (1.0 / 9007199254740992.0);
+            ok &= ~(us * (1.0 - STAGGER) >= R->xmax); /* as cell_pass */
+        }
+        if (d3) {
+            gv8d e = (a0 - R->rA0) * R->rn0 + (a1 - R->rA1) * R->rn1 + (a2 - R->rA2) * R->rn2;
+            ok &= gv_absd(e) < R->slab;
+        }
+        for (int k = 0; k < 8; k++) {
+            if (!ok[k]) continue;
+            double a[3] = {a0[k], a1[k], d3 ? a2[k] : ay};
+            if (!emit_cell(R, h[k], a, vec)) return 0;
+        }
+    }
+    return 1;
+}
+#endif
+
 /* Emit the points owned by the pixels of block (bx, by) into b. Returns 0 when out of memory.
  * vec: the vector path, GABOR_ISA_* (a constant in each instance). */
 GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_scratch *scr,
@@ -495,14 +615,23 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
                 cells *= i1[m] - i0[m] + 1.0;
             }
             if (!(cells <= MAX_CELLS)) continue;
-            for (double iz = i0[2]; iz <= i1[2]; iz++)
-                for (double iy = i0[1]; iy <= i1[1]; iy++)
+            cell_row R = {G,     X,     b,     scr,   ref,  l,    c,  ic, rA[0], rA[1],
+                          rA[2], rn[0], rn[1], rn[2], slab, xmax, id, x0, y0};
+            for (double iz = i0[2]; iz <= i1[2]; iz++) {
+                /* the hash's last round folds in iz and the object id */
+                uint64_t zid = ((uint64_t)(uint32_t)(int64_t)iz << 32) | idbits;
+                double az = 0.0;
+                for (double iy = i0[1]; iy <= i1[1]; iy++) {
+#if GABOR_VEC
+                    if (vec) {
+                        if (!cell_row_vec(&R, hl, zid, i0[0], i1[0], iy, iz, vec)) return 0;
+                        continue;
+                    }
+#endif
                     for (double ix = i0[0]; ix <= i1[0]; ix++) {
                         uint64_t xy = ((uint64_t)(uint32_t)(int32_t)(int64_t)ix << 32) |
                                       (uint64_t)(uint32_t)(int32_t)(int64_t)iy;
-                        uint64_t h =
-                            nprfx_mix64(nprfx_mix64(hl ^ xy) ^
-                                        (((uint64_t)(uint32_t)(int64_t)iz << 32) | idbits));
+                        uint64_t h = nprfx_mix64(nprfx_mix64(hl ^ xy) ^ zid);
                         /* three 21-bit uniforms for the position inside the cell */
                         double a[3];
                         a[0] = (ix + ((double)(h >> 43) + 0.5) * (1.0 / 2097152.0)) * c;
@@ -512,45 +641,12 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
                             G->dims == 3
                                 ? (iz + ((double)((h >> 1) & 0x1fffff) + 0.5) * (1.0 / 2097152.0)) *
                                       c
-                                : 0.0;
-                        double ustart = 0.0;
-                        if (G->stagger) {
-                            ustart = nprfx_u01(nprfx_mix64(h ^ 0x510e527fade682d1ull));
-                            if (ustart * (1.0 - STAGGER) >= xmax) continue;
-                        }
-                        if (G->dims == 3) {
-                            double d[3] = {a[0] - rA[0], a[1] - rA[1], a[2] - rA[2]};
-                            if (!(fabs(dot3(d, rn)) < slab)) continue;
-                        }
-                        double ux, uy;
-                        int q = find_owner(X, ref, a, &ux, &uy, vec);
-                        if (q < 0) continue;
-                        double As[3], ns[3], mus, fs;
-                        int Ls;
-                        surface_at(G, X, q, q % PWS + ux, q / PWS + uy, As, ns, &mus);
-                        lod_regime(&G->lod, mus, &Ls, &fs);
-                        double w2 = lod_w2(Ls, fs, G->W, l);
-                        if (G->stagger && Ls >= 0 && l == Ls + 1)
-                            w2 = stagger_w2(stagger_x(G->lod.x, fs), ustart);
-                        if (!(w2 > 0.0)) continue;
-                        if (G->dims == 3) {
-                            /* a slab of (weighted) thickness c around the surface: 1 / c^3
-                             * points per volume give 1 / c^2 per surface area */
-                            double d[3] = {a[0] - As[0], a[1] - As[1], a[2] - As[2]};
-                            double x = fabs(dot3(d, ns)) * ic;
-                            if (!(x < SLAB_OUT)) continue;
-                            if (x > SLAB_IN) {
-                                double t = (SLAB_OUT - x) * (1.0 / SLAB_SOFT);
-                                w2 *= t * t;
-                            }
-                        }
-                        gpoint pt;
-                        int ox = x0 + q % PWS, oy = y0 + q / PWS;
-                        if (!internal_gabor_make_point(G, X, q, ox, oy, ox + ux, oy + uy, w2, h, id,
-                                                       &pt))
-                            continue;
-                        if (!block_push(b, scr, &pt)) return 0;
+                                : az;
+                        if (!cell_pass(&R, h, a)) continue;
+                        if (!emit_cell(&R, h, a, vec)) return 0;
                     }
+                }
+            }
         }
     }
     block_end(b, scr);

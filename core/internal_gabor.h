@@ -49,6 +49,7 @@ typedef float gv8f __attribute__((vector_size(32)));
 typedef int32_t gv8i __attribute__((vector_size(32)));
 typedef double gv8d __attribute__((vector_size(64)));
 typedef int64_t gv8l __attribute__((vector_size(64)));
+typedef uint64_t gv8u __attribute__((vector_size(64)));
 typedef float gv4f __attribute__((vector_size(16)));
 typedef int32_t gv4i __attribute__((vector_size(16)));
 typedef double gv4d __attribute__((vector_size(32)));
