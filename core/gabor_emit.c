@@ -127,15 +127,21 @@ GV_INLINE void descend_vec(const gpixels *X, int q, float id, const double *a, i
 }
 #endif
 
-GABOR_BODY int find_owner(const gpixels *X, int ref, const double *a, double *ox, double *oy,
-                          const int vec)
+GABOR_BODY int find_owner(const gpixels *X, int ref, const double *a, const double *first,
+                          double *ox, double *oy, const int vec)
 {
     int q = ref, prev = -1;
     float id = X->id[ref];
     double ux = 0.0, uy = 0.0, dq = 0.0;
     int fresh = 0; /* dq, ux, uy are q's */
     for (int it = 0; it < OWNER_STEPS; it++) {
-        dq = own_offset(X, q, a, &ux, &uy);
+        if (it == 0 && first) { /* own_offset(X, ref, a), computed by the caller */
+            ux = first[0];
+            uy = first[1];
+            dq = first[2];
+        } else {
+            dq = own_offset(X, q, a, &ux, &uy);
+        }
         fresh = 1;
         if (!(dq < 1e6)) return -1;
         int mx = ifloor(ux + 0.5), my = ifloor(uy + 0.5);
@@ -432,6 +438,7 @@ typedef struct cell_row {
     double slab, xmax;
     float id;
     int x0, y0;
+    double P[6]; /* the reference pixel's J+ (the owner search's first step) */
 } cell_row;
 
 /* The staggered fade's start of the point with hash h. */
@@ -456,12 +463,13 @@ static inline int cell_pass(const cell_row *R, uint64_t h, const double *a)
 
 /* The rest of a cell whose point a passed cell_pass: its owner, level weight and slab test on
  * the surface at the point, and its kernel. Returns 0 when out of memory. */
-GABOR_BODY int emit_cell(const cell_row *R, uint64_t h, const double *a, const int vec)
+GABOR_BODY int emit_cell(const cell_row *R, uint64_t h, const double *a, const double *first,
+                         const int vec)
 {
     const gconf *G = R->G;
     const gpixels *X = R->X;
     double ux, uy;
-    int q = find_owner(X, R->ref, a, &ux, &uy, vec);
+    int q = find_owner(X, R->ref, a, first, &ux, &uy, vec);
     if (q < 0) return 1;
     double As[3], ns[3], mus, fs;
     int Ls, l = R->l;
@@ -526,14 +534,20 @@ GV_INLINE int cell_row_vec(const cell_row *R, uint64_t hl, uint64_t zid, double 
             gv8d us = __builtin_convertvector((gv8l)u, gv8d) * (1.0 / 9007199254740992.0);
             ok &= ~(us * (1.0 - STAGGER) >= R->xmax); /* as cell_pass */
         }
+        gv8d d0 = a0 - R->rA0, d1 = a1 - R->rA1, d2 = a2 - R->rA2;
         if (d3) {
-            gv8d e = (a0 - R->rA0) * R->rn0 + (a1 - R->rA1) * R->rn1 + (a2 - R->rA2) * R->rn2;
+            gv8d e = d0 * R->rn0 + d1 * R->rn1 + d2 * R->rn2;
             ok &= gv_absd(e) < R->slab;
         }
+        if (!gv_any(__builtin_convertvector(ok, gv8i))) continue;
+        /* the owner search's first step: own_offset from the reference pixel */
+        gv8d ux = R->P[0] * d0 + R->P[1] * d1 + R->P[2] * d2;
+        gv8d uy = R->P[3] * d0 + R->P[4] * d1 + R->P[5] * d2;
+        gv8d ax = gv_absd(ux), ayv = gv_absd(uy), dq = gv_seld(ax > ayv, ax, ayv);
         for (int k = 0; k < 8; k++) {
             if (!ok[k]) continue;
-            double a[3] = {a0[k], a1[k], d3 ? a2[k] : ay};
-            if (!emit_cell(R, h[k], a, vec)) return 0;
+            double a[3] = {a0[k], a1[k], d3 ? a2[k] : ay}, first[3] = {ux[k], uy[k], dq[k]};
+            if (!emit_cell(R, h[k], a, first, vec)) return 0;
         }
     }
     return 1;
@@ -615,8 +629,27 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
                 cells *= i1[m] - i0[m] + 1.0;
             }
             if (!(cells <= MAX_CELLS)) continue;
-            cell_row R = {G,     X,     b,     scr,   ref,  l,    c,  ic, rA[0], rA[1],
-                          rA[2], rn[0], rn[1], rn[2], slab, xmax, id, x0, y0};
+            cell_row R = {.G = G,
+                          .X = X,
+                          .b = b,
+                          .scr = scr,
+                          .ref = ref,
+                          .l = l,
+                          .c = c,
+                          .ic = ic,
+                          .rA0 = rA[0],
+                          .rA1 = rA[1],
+                          .rA2 = rA[2],
+                          .rn0 = rn[0],
+                          .rn1 = rn[1],
+                          .rn2 = rn[2],
+                          .slab = slab,
+                          .xmax = xmax,
+                          .id = id,
+                          .x0 = x0,
+                          .y0 = y0};
+            for (int m = 0; m < 6; m++)
+                R.P[m] = X->P[m][ref];
             for (double iz = i0[2]; iz <= i1[2]; iz++) {
                 /* the hash's last round folds in iz and the object id */
                 uint64_t zid = ((uint64_t)(uint32_t)(int64_t)iz << 32) | idbits;
@@ -643,7 +676,7 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
                                       c
                                 : az;
                         if (!cell_pass(&R, h, a)) continue;
-                        if (!emit_cell(&R, h, a, vec)) return 0;
+                        if (!emit_cell(&R, h, a, NULL, vec)) return 0;
                     }
                 }
             }
