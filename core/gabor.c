@@ -62,6 +62,9 @@
  *    cheap tests (stagger start, slab around the reference tangent plane) in vectors; only the
  *    cells that pass go on to the owner search, one by one in their order;
  *  - the owner search's 3 x 3 descent evaluates the 8 neighbours in one vector;
+ *  - a kernel's exp and sincos (its envelope and phase at its first sample) are the project's
+ *    own (core/internal_vmath.h), run for 8 points at a time on the vector paths: the same
+ *    numbers on every path and platform, where libm's differ between C libraries;
  *  - splatting computes a kernel's row spans and row depths 8 (AVX2: 4) rows at a time, runs
  *    the factor-table recurrences of 4 kernels in the lanes of a vector, and adds rows 8
  *    samples at a time with the depth-test mode a constant.

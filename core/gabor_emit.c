@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "internal_gabor.h"
+#include "internal_vmath.h"
 #include "nprfx/rng.h"
 
 #define MAX_CELLS 65536 /* per block, id and level: beyond, the footprint is degenerate */
@@ -461,6 +462,40 @@ static inline int cell_pass(const cell_row *R, uint64_t h, const double *a)
     return 1;
 }
 
+#if GABOR_VEC
+/* The waiting points' exp and sincos, 8 lanes at a time (internal_vmath.h: the numbers of the
+ * scalar path's internal_gabor_make_point), then the points into the block, in their order.
+ * Returns 0 when out of memory. */
+GV_INLINE int points_flush(const gconf *G, gblock *b, emit_scratch *scr)
+{
+    int n = scr->npend;
+    scr->npend = 0;
+    if (!n) return 1;
+    gv8d v[GABOR_ARGS], ex[4], sn[4], cs[4];
+    for (int i = 0; i < GABOR_ARGS; i++) {
+        memcpy(&v[i], scr->pargs[i], sizeof v[i]);
+        for (int k = n; k < 8; k++)
+            v[i][k] = 0.0;
+    }
+    for (int i = 0; i < 4; i++)
+        ex[i] = internal_vm_exp8(v[GABOR_ARG_ENV + i]);
+    int nt = G->uniform_wave ? 2 : 4;
+    for (int i = 0; i < nt; i++)
+        internal_vm_sincos8(v[GABOR_ARG_PHASE + i], &sn[i], &cs[i]);
+    for (int k = 0; k < n; k++) {
+        double e[4], s[4], c[4];
+        for (int i = 0; i < 4; i++) {
+            e[i] = ex[i][k];
+            s[i] = i < nt ? sn[i][k] : 0.0;
+            c[i] = i < nt ? cs[i][k] : 0.0;
+        }
+        internal_gabor_point_end(G, &scr->pend[k], e, s, c);
+        if (!block_push(b, scr, &scr->pend[k])) return 0;
+    }
+    return 1;
+}
+#endif
+
 /* The rest of a cell whose point a passed cell_pass: its owner, level weight and slab test on
  * the surface at the point, and its kernel. Returns 0 when out of memory. */
 GABOR_BODY int emit_cell(const cell_row *R, uint64_t h, const double *a, const double *first,
@@ -490,8 +525,20 @@ GABOR_BODY int emit_cell(const cell_row *R, uint64_t h, const double *a, const d
             w2 *= t * t;
         }
     }
-    gpoint pt;
     int ox = R->x0 + q % PWS, oy = R->y0 + q / PWS;
+#if GABOR_VEC
+    if (vec) { /* its exp and sincos wait for 7 more points */
+        emit_scratch *scr = R->scr;
+        double args[GABOR_ARGS];
+        if (!internal_gabor_point_begin(G, X, q, ox, oy, ox + ux, oy + uy, w2, h, R->id,
+                                        &scr->pend[scr->npend], args))
+            return 1;
+        for (int i = 0; i < GABOR_ARGS; i++)
+            scr->pargs[i][scr->npend] = args[i];
+        return ++scr->npend < 8 || points_flush(G, R->b, scr);
+    }
+#endif
+    gpoint pt;
     if (!internal_gabor_make_point(G, X, q, ox, oy, ox + ux, oy + uy, w2, h, R->id, &pt)) return 1;
     return block_push(R->b, R->scr, &pt);
 }
@@ -682,6 +729,9 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
             }
         }
     }
+#if GABOR_VEC
+    if (vec && !points_flush(G, b, scr)) return 0;
+#endif
     block_end(b, scr);
     return 1;
 }

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "internal_gabor.h"
+#include "internal_vmath.h"
 #include "nprfx/rng.h"
 
 static const double k_cutoff = 0.05; /* kernel envelope at the truncation radius */
@@ -169,22 +170,6 @@ int nprfx_gabor_lod_weights(double mu, int lod_levels, int *first_level, double 
 
 /* ---- a kernel's setup, at emission ----------------------------------------------------------- */
 
-static void axis_start(const gconf *G, double d0, double k, int axis, gaxis *ax)
-{
-    double step = 1.0 / G->ss;
-    ax->g = (float)exp(-G->pa2 * d0 * d0);
-    ax->r = (float)exp(-G->pa2 * (2.0 * d0 * step + step * step));
-    ax->c = (float)cos(k * d0);
-    ax->s = (float)sin(k * d0);
-    if (G->uniform_wave) {
-        ax->cs = axis ? G->csy : G->csx;
-        ax->ss = axis ? G->ssy : G->ssx;
-    } else {
-        ax->cs = (float)cos(k * step);
-        ax->ss = (float)sin(k * step);
-    }
-}
-
 /* Wave vector (cycles per pixel, pixel axes with y down) of a kernel owned at real pixel
  * (rx, ry): orientation from the param, the orientation input or (isotropic) the point's hash;
  * frequency from the param times the frequency input. */
@@ -231,8 +216,8 @@ static double amplitude(int law, uint64_t h)
     }
 }
 
-int internal_gabor_make_point(const gconf *G, const gpixels *X, int o, int ox, int oy, double sx,
-                              double sy, double w2, uint64_t h, float id, gpoint *pt)
+int internal_gabor_point_begin(const gconf *G, const gpixels *X, int o, int ox, int oy, double sx,
+                               double sy, double w2, uint64_t h, float id, gpoint *pt, double *args)
 {
     double z = X->z[o] + X->gz[0][o] * (sx - ox) + X->gz[1][o] * (sy - oy);
     if (!is_surface_depth(z)) return 0;
@@ -260,7 +245,48 @@ int internal_gabor_make_point(const gconf *G, const gpixels *X, int o, int ox, i
     pt->h = h;
     double kx, ky;
     kernel_wave(G, X->rx[o], X->ry[o], h, &kx, &ky);
-    axis_start(G, sample_pos(pt->X0, s) - sx, 2.0 * k_pi * kx, 0, &pt->ax);
-    axis_start(G, sample_pos(pt->Y0, s) - sy, 2.0 * k_pi * ky, 1, &pt->ay);
+    /* per axis: the envelope exp(-pi a^2 d^2) at the first sample (offset d0) and its ratio to
+     * the next, the phase k d0, and (when the wave varies) the phase step */
+    double step = 1.0 / s, k[2] = {2.0 * k_pi * kx, 2.0 * k_pi * ky};
+    double d0[2] = {sample_pos(pt->X0, s) - sx, sample_pos(pt->Y0, s) - sy};
+    for (int a = 0; a < 2; a++) {
+        args[GABOR_ARG_ENV + 2 * a] = -G->pa2 * d0[a] * d0[a];
+        args[GABOR_ARG_ENV + 2 * a + 1] = -G->pa2 * (2.0 * d0[a] * step + step * step);
+        args[GABOR_ARG_PHASE + a] = k[a] * d0[a];
+        args[GABOR_ARG_STEP + a] = k[a] * step;
+    }
+    return 1;
+}
+
+void internal_gabor_point_end(const gconf *G, gpoint *pt, const double *ex, const double *sn,
+                              const double *cs)
+{
+    gaxis *ax[2] = {&pt->ax, &pt->ay};
+    for (int a = 0; a < 2; a++) {
+        ax[a]->g = (float)ex[2 * a];
+        ax[a]->r = (float)ex[2 * a + 1];
+        ax[a]->c = (float)cs[a];
+        ax[a]->s = (float)sn[a];
+        if (G->uniform_wave) {
+            ax[a]->cs = a ? G->csy : G->csx;
+            ax[a]->ss = a ? G->ssy : G->ssx;
+        } else {
+            ax[a]->cs = (float)cs[2 + a];
+            ax[a]->ss = (float)sn[2 + a];
+        }
+    }
+}
+
+int internal_gabor_make_point(const gconf *G, const gpixels *X, int o, int ox, int oy, double sx,
+                              double sy, double w2, uint64_t h, float id, gpoint *pt)
+{
+    double args[GABOR_ARGS], ex[4], sn[4], cs[4];
+    if (!internal_gabor_point_begin(G, X, o, ox, oy, sx, sy, w2, h, id, pt, args)) return 0;
+    for (int i = 0; i < 4; i++)
+        ex[i] = internal_vm_exp(args[GABOR_ARG_ENV + i]);
+    int nt = G->uniform_wave ? 2 : 4;
+    for (int i = 0; i < nt; i++)
+        internal_vm_sincos(args[GABOR_ARG_PHASE + i], &sn[i], &cs[i]);
+    internal_gabor_point_end(G, pt, ex, sn, cs);
     return 1;
 }

@@ -471,11 +471,18 @@ static inline int patch_link(const gconf *G, const gpixels *X, int a, int b)
     return d2 <= 4.0f * e2;
 }
 
+/* The arguments of a kernel's exp and sincos (internal_gabor_point_begin) */
+enum { GABOR_ARG_ENV = 0, GABOR_ARG_PHASE = 4, GABOR_ARG_STEP = 6, GABOR_ARGS = 8 };
+
 /* A worker's emission memory: a block's raw data and pixels, and its row of blocks' inputs. */
 typedef struct emit_scratch {
     gcache C;
     gpixels X;
     gstrip T;
+    /* vector paths: points whose exp and sincos wait to be computed 8 at a time */
+    gpoint pend[8];
+    double pargs[GABOR_ARGS][8];
+    int npend;
     gchunk **chunks; /* the worker's list of point chunks (the job's, which outlives this) */
 } emit_scratch;
 
@@ -527,9 +534,21 @@ typedef struct gjob {
 /* The variance without its frequency-dependent term: var = k1 * (1 + exp(-2 pi F^2 / a^2)). */
 double internal_gabor_variance_k1(const nprfx_gabor_params *p, double a);
 void internal_gabor_lod_table_init(lod_table *t, int W);
-/* Fill a point's screen-space data for a kernel centred at (sx, sy), owned by pixel o. */
+/* Fill a point's screen-space data for a kernel centred at (sx, sy), owned by pixel o; 0 when
+ * the surface's depth there is not a surface's. */
 int internal_gabor_make_point(const gconf *G, const gpixels *X, int o, int ox, int oy, double sx,
                               double sy, double w2, uint64_t h, float id, gpoint *pt);
+/* internal_gabor_make_point in two halves around its exp and sincos, so that the vector paths
+ * compute those for 8 points at once (internal_vmath.h: the same numbers): begin fills the
+ * point but its axes' factors and leaves in args the arguments of exp (GABOR_ARG_ENV: 4, x
+ * then y, envelope and ratio) and of sincos (GABOR_ARG_PHASE: 2, then GABOR_ARG_STEP: 2, used
+ * only when the wave varies: !G->uniform_wave); end stores the results (ex[4], and sn, cs for
+ * the phases then the steps). */
+int internal_gabor_point_begin(const gconf *G, const gpixels *X, int o, int ox, int oy, double sx,
+                               double sy, double w2, uint64_t h, float id, gpoint *pt,
+                               double *args);
+void internal_gabor_point_end(const gconf *G, gpoint *pt, const double *ex, const double *sn,
+                              const double *cs);
 
 /* gabor_pixels.c */
 /* Pack the inputs of [x0, x1) x [y0, y1) (cut to the region) into the strip T. */
