@@ -225,8 +225,21 @@ static uint32_t float_bits(float f)
  * are read here rather than at the owner's centre, so they barely change when the pixel grid
  * slides under the point and ownership passes to a neighbour (no slab-test flips, no weight
  * jumps: no popping). */
-static void surface_at(const gconf *G, const gpixels *X, int q, double gx, double gy, double *A,
-                       double *n, double *mu)
+/* patch_link(G, X, q, c) for a pixel q of the block; vector paths: the links the patch labels
+ * computed for q's 4-neighbours (X->lr, X->ld: the same booleans, patch_link is symmetric) */
+GABOR_BODY int link_of(const gconf *G, const gpixels *X, int q, int c, const int vec)
+{
+    if (vec) {
+        if (c == q + 1) return X->lr[q] != 0;
+        if (c == q - 1) return X->lr[c] != 0;
+        if (c == q + PWS) return X->ld[q] != 0;
+        if (c == q - PWS) return X->ld[c] != 0;
+    }
+    return patch_link(G, X, q, c);
+}
+
+GABOR_BODY void surface_at(const gconf *G, const gpixels *X, int q, double gx, double gy, double *A,
+                           double *n, double *mu, const int vec)
 {
     int i0 = ifloor(gx), j0 = ifloor(gy);
     if (i0 >= 0 && j0 >= 0 && i0 + 1 < PW && j0 + 1 < PW) {
@@ -234,7 +247,7 @@ static void surface_at(const gconf *G, const gpixels *X, int q, double gx, doubl
                           (j0 + 1) * PWS + i0 + 1};
         int ok = 1;
         for (int k = 0; k < 4 && ok; k++)
-            ok = c[k] == q || patch_link(G, X, q, c[k]);
+            ok = c[k] == q || link_of(G, X, q, c[k], vec);
         if (ok) {
             double fx = gx - i0, fy = gy - j0;
             double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
@@ -508,7 +521,7 @@ GABOR_BODY int emit_cell(const cell_row *R, uint64_t h, const double *a, const d
     if (q < 0) return 1;
     double As[3], ns[3], mus, fs;
     int Ls, l = R->l;
-    surface_at(G, X, q, q % PWS + ux, q / PWS + uy, As, ns, &mus);
+    surface_at(G, X, q, q % PWS + ux, q / PWS + uy, As, ns, &mus, vec);
     lod_regime(&G->lod, mus, &Ls, &fs);
     double w2 = lod_w2(Ls, fs, G->W, l);
     if (G->stagger && Ls >= 0 && l == Ls + 1)

@@ -427,11 +427,12 @@ GV_INLINE void block_pixels_body(const gconf *G, const gstrip *T, int bx, int by
  * anchors. */
 #if GABOR_VEC
 /* patch_link between the block's pixels and their right and lower neighbours, 8 at a time (as
- * patch_link lane by lane; it is symmetric). */
+ * patch_link lane by lane; it is symmetric), and between the ring's top row and the block's
+ * first (emission's surface_at reads the links of a block pixel to its 4-neighbours). */
 GV_INLINE void patch_links_vec(const gconf *G, gpixels *X)
 {
     gv8f tol = G->step_tolf + (gv8f){0};
-    for (int j = 1; j <= BLOCK; j++)
+    for (int j = 0; j <= BLOCK; j++)
         for (int i0 = 0; i0 < PWS; i0 += 8) {
             int k = j * PWS + i0;
             gv8f za = gv_loadf(X->z + k), ida = gv_loadf(X->id + k);
