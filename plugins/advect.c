@@ -1,6 +1,6 @@
 /* The advect node: texture coordinates carried along the motion vectors, two staggered layers
  * and their blend weight, as surface-like anchors for footage without UV (Neyret 2003; Bousseau
- * et al. 2007). The recursion, its schedule and its cache live in core/advect.c; this file is the
+ * et al. 2007). The recursion, its schedule and its cache live in core/motion/advect.c; this file is the
  * descriptor and the call into it. */
 #include <stddef.h>
 

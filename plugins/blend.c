@@ -1,6 +1,6 @@
 /* The blend node: the cookbook's compositing functions (alphaBlend, overlay, overlayAlpha),
  * multiply, screen, Bousseau et al.'s pigment density, and the background colour where the
- * coverage AOV is 0. The formulas and the per-pixel loop live in core/blend.c; this file is the
+ * coverage AOV is 0. The formulas and the per-pixel loop live in core/looks/blend.c; this file is the
  * descriptor and the call into it. */
 #include <stddef.h>
 

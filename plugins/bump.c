@@ -1,6 +1,6 @@
 /* The bump node: an image shaded by the relief of a height field (emboss), for painterly
  * brush-fibre relief (Hertzmann 2002) and watercolour paper grain (docs/design.md §3.13). The
- * shading lives in core/bump.c; this file is the descriptor and the call into it. */
+ * shading lives in core/looks/bump.c; this file is the descriptor and the call into it. */
 #include <stddef.h>
 
 #include "nprfx/bump.h"

@@ -1,6 +1,6 @@
 /* The coherent-noise node: Kass & Pesare's depth- and motion-aware recursive noise filter. This
  * file holds its descriptor and hands the param values to core: the recursion is in
- * core/cn_step.c, the render-order independent driver (a per-instance cache of pass states
+ * core/noise/cn_step.c, the render-order independent driver (a per-instance cache of pass states
  * with checkpoints) in core/cn_temporal.c. */
 #include <stdint.h>
 #include <string.h>
@@ -423,7 +423,7 @@ static nprfx_result cn_output(const nprfx_value *pv, const int *ich, nprfx_outpu
     return NPRFX_OK;
 }
 
-/* core/cn_temporal.c renders (nprfx/coherent_noise.h). */
+/* core/noise/cn_temporal.c renders (nprfx/coherent_noise.h). */
 static nprfx_result cn_render(const nprfx_render_args *args, const void *params)
 {
     return nprfx_coherent_noise_render(args, params);

@@ -1,6 +1,6 @@
 /* The lines node: ink lines from AOVs — outlines, depth discontinuities, normal creases and jumps
  * of a custom pass, as stylised renderers draw them (RenderMan's Stylized Lines, MoonRay's toon
- * filter). The math lives in core/lines.c (docs/design.md §3.11); this file is the descriptor and
+ * filter). The math lives in core/looks/lines.c (docs/design.md §3.11); this file is the descriptor and
  * the call into it. */
 #include <stddef.h>
 

@@ -1,5 +1,5 @@
 /* The matte node: object coverage from alpha, depth or object id. The rule and the softening
- * live in core/matte.c; this file is the descriptor and the call into it. */
+ * live in core/looks/matte.c; this file is the descriptor and the call into it. */
 #include <stddef.h>
 
 #include "nprfx/matte.h"

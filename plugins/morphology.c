@@ -1,6 +1,6 @@
 /* The morphology node: grey-scale dilation (max) and erosion (min) over a disc or square
  * footprint, and their compositions open and close (Haralick et al. 1987) — the dilate/erode
- * texture step of Kass & Pesare's Figure 3a. The filter lives in core/morphology.c; this file is
+ * texture step of Kass & Pesare's Figure 3a. The filter lives in core/looks/morphology.c; this file is
  * the descriptor and the call into it. */
 #include <stddef.h>
 

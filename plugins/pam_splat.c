@@ -1,6 +1,6 @@
 /* The pam-splat node: a painterly art map splatted on the surfaces (Yan et al. 2008 §5,
- * docs/design.md §3.7). The algorithm lives in core/pam_splat.c (on the anchored-point scatter of
- * core/anchored_scatter.c) and core/pam.c; this file is the descriptor and the glue. */
+ * docs/design.md §3.7). The algorithm lives in core/pam/pam_splat.c (on the anchored-point scatter of
+ * core/gabor/anchored_scatter.c) and core/pam/pam.c; this file is the descriptor and the glue. */
 #include <stddef.h>
 #include <string.h>
 

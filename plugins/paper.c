@@ -1,6 +1,6 @@
 /* The paper node: a procedural paper, watercolour paper or canvas texture fixed in screen space,
  * the background the style graphs lay their strokes on (docs/design.md §3.12). The texture lives in
- * core/paper.c; this file is the descriptor and the call into it. */
+ * core/looks/paper.c; this file is the descriptor and the call into it. */
 #include <stddef.h>
 #include <string.h>
 

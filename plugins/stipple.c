@@ -1,5 +1,5 @@
 /* The stipple node: instant stippling from UV and shading (Ma et al. 2018). The math lives in
- * core/stipple*.c and core/ivs*.c, the node's params and instance cache in core/stipple_node.c;
+ * core/stipple*.c and core/ivs*.c, the node's params and instance cache in core/stipple/stipple_node.c;
  * the shipped dot sequence is read and the dots exported as CSV/SVG in plugins/support/. This
  * file is the descriptor and the glue. */
 #include <string.h>
@@ -241,7 +241,7 @@ static nprfx_result st_output(const nprfx_value *pv, const int *ich, nprfx_outpu
     return NPRFX_OK;
 }
 
-/* Core renders (core/stipple_node.c); the dot sequence comes from the shipped data file when
+/* Core renders (core/stipple/stipple_node.c); the dot sequence comes from the shipped data file when
  * there is one (plugins/support/data_files.c). */
 static nprfx_result st_render(const nprfx_render_args *a, const void *params)
 {

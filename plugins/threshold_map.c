@@ -1,5 +1,5 @@
 /* The threshold-map node: the cookbook's erf threshold, X-toon threshold maps given as an image,
- * and a built-in map whose step follows the tone. The math lives in core/threshold.c; this
+ * and a built-in map whose step follows the tone. The math lives in core/looks/threshold_map.c; this
  * file is the descriptor and the call into it. */
 #include <stddef.h>
 #include <string.h>

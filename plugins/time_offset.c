@@ -1,7 +1,7 @@
 /* The time-offset node: an input as it is at another frame (Nuke's TimeOffset). Handy for
  * comparing a frame with its neighbours in a graph, e.g. warping frame i-1 onto frame i along the
  * motion vectors to check their convention. The frame arithmetic and the copy live in
- * core/time_offset.c; this file is the descriptor and the call into it. */
+ * core/motion/time_offset.c; this file is the descriptor and the call into it. */
 #include <stddef.h>
 
 #include "nprfx/node.h"

@@ -1,5 +1,5 @@
 /* The tone node: a shading AOV mapped into the [0, 1] tone that threshold-map and the styles
- * expect, with one range for the whole shot. The measuring and the mapping live in core/tone.c;
+ * expect, with one range for the whole shot. The measuring and the mapping live in core/looks/tone.c;
  * this file is the descriptor and the call into it. */
 #include <stddef.h>
 

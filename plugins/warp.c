@@ -1,6 +1,6 @@
 /* The warp node: displaces an image by two channels, out(p) = image(p + amount * offset(p)) — the
  * local image-plane warp of Kass & Pesare's Figure 3a, driven by two channels of coherent noise.
- * The warp lives in core/warp.c; this file is the descriptor and the call into it. */
+ * The warp lives in core/looks/warp.c; this file is the descriptor and the call into it. */
 #include <math.h>
 #include <stddef.h>
 

@@ -1,6 +1,6 @@
 /* The watercolor node: Bousseau, Kaplan, Thollot, Sillion 2006 — wobbling edges, edge darkening,
  * pigment turbulence, dispersion and paper granulation, all through the pigment-density model.
- * The math lives in core/watercolor.c; this file is the descriptor and the call into it. */
+ * The math lives in core/looks/watercolor.c; this file is the descriptor and the call into it. */
 #include <math.h>
 #include <stddef.h>
 
@@ -157,7 +157,7 @@ static nprfx_result watercolor_render(const nprfx_render_args *a, const void *pa
     return nprfx_watercolor_render(a->ctx, params, &in, a->frame, a->window, a->output);
 }
 
-/* The stages' reach (core/watercolor.c grows each stage's rectangle by it): the edge blur's
+/* The stages' reach (core/looks/watercolor.c grows each stage's rectangle by it): the edge blur's
  * taps and gradient, the wobble's displacement, the paper's low-pass, gradient and RMS box. */
 static int watercolor_footprint(const void *params)
 {

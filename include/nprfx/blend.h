@@ -1,7 +1,7 @@
 /* nprfx — compositing formulas and the blend node over an image (style cookbook §4; Bousseau et
  * al. 2006 for pigment density; design: docs/design.md §3.5).
  *
- * Each blend mode is one formula, written once in core/blend.c (as openfx-supportext's
+ * Each blend mode is one formula, written once in core/looks/blend.c (as openfx-supportext's
  * ofxsMerging.h does for merge operators); nprfx_blend_render runs them over an image. All
  * formulas work on one channel value and do not clamp: values are scene-linear floats.
  *

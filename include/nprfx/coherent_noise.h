@@ -130,7 +130,7 @@ NPRFX_API nprfx_result nprfx_cn_smooth(nprfx_context *ctx, const nprfx_cn_params
 /* The variance of a unit innovation field after a Gaussian blur of sigma (1 when sigma is 0). */
 NPRFX_API double nprfx_cn_smoothed_variance(const nprfx_cn_params *p, double sigma);
 
-/* ---- the node: any frame of a shot, in any order (core/cn_temporal.c) ---- */
+/* ---- the node: any frame of a shot, in any order (core/noise/cn_temporal.c) ---- */
 
 /* The node's inputs, in this order in args->inputs and for args->fetch. */
 enum {

@@ -250,7 +250,7 @@ static inline const nprfx_image *nprfx_render_input(const nprfx_render_args *arg
     return args->inputs[i].data ? &args->inputs[i] : NULL;
 }
 
-/* ---- rendering through the descriptor (core/node.c) ---- */
+/* ---- rendering through the descriptor (core/base/node.c) ---- */
 
 /* Render args->window of a node: the one way front ends (runner, OpenFX adapter, tests, library
  * users) run a node. Before the node sees them it checks, once for every node:
@@ -296,7 +296,7 @@ NPRFX_API nprfx_result nprfx_node_footprint(nprfx_context *ctx, const nprfx_node
  * raised on ctx. */
 NPRFX_API nprfx_result nprfx_node_lint(nprfx_context *ctx, const nprfx_node_desc *node);
 
-/* ---- descriptor helpers (core/node.c) ---- */
+/* ---- descriptor helpers (core/base/node.c) ---- */
 
 NPRFX_API int nprfx_node_param_index(const nprfx_node_desc *node, const char *name);
 NPRFX_API int nprfx_node_input_index(const nprfx_node_desc *node, const char *name);

@@ -186,7 +186,7 @@ NPRFX_API nprfx_result nprfx_stipple_sequence_tone_curve(nprfx_context *ctx,
                                                          const nprfx_stipple_params *p,
                                                          float *curve);
 
-/* ---- the stipple node (core/stipple_node.c; its descriptor is plugins/stipple.c) ---- */
+/* ---- the stipple node (core/stipple/stipple_node.c; its descriptor is plugins/stipple.c) ---- */
 
 /* The node's inputs, in its descriptor's order (render_args->inputs). */
 enum {

@@ -2,7 +2,7 @@
  * rendering with temporal coherence and abstraction" (NPAR 2006); docs/design.md §3.14.
  *
  * Every effect is a change of pigment density d applied to the colour C through the paper's
- * model (the blend node's pigment mode, core/blend.c):
+ * model (the blend node's pigment mode, core/looks/blend.c):
  *
  *   pigment(C, d) = C - (C - C^2)(d - 1)        (d = 1: unchanged; d > 1 darker; d < 1 lighter)
  *

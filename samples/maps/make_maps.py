@@ -24,7 +24,7 @@ def threshold(p, sigma, mu):
 
 
 def mean_threshold(sigma, mu):
-    """Mean of threshold(p, sigma, mu) over p uniform in [0,1] (closed form, as core/threshold.c)."""
+    """Mean of threshold(p, sigma, mu) over p uniform in [0,1] (closed form, as core/looks/threshold_map.c)."""
 
     def k(y):  # integral from y to infinity of erfc
         return math.exp(-y * y) / math.sqrt(math.pi) - y * math.erfc(y)

@@ -1,4 +1,4 @@
-/* Unit tests for core/blend.c (each formula against hand-computed numbers) and the blend node
+/* Unit tests for core/looks/blend.c (each formula against hand-computed numbers) and the blend node
  * (broadcast, alpha vs opacity, coverage/background, back, window, errors, determinism across
  * thread counts and tile splits). */
 #include <string.h>

@@ -1,4 +1,4 @@
-/* The bump node (core/bump.c): a flat height leaves the image bit-identical, a linear ramp gives
+/* The bump node (core/looks/bump.c): a flat height leaves the image bit-identical, a linear ramp gives
  * the hand-computed Lambert value, the light's direction picks which slopes brighten, alpha
  * passes through, edges clamp, and the result does not depend on windows or threads; the error
  * paths, through its descriptor. */

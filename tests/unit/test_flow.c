@@ -1,4 +1,4 @@
-/* The flow node's core (core/flow.c, docs/design.md §3.15) with exact test providers (unit tests
+/* The flow node's core (core/motion/flow.c, docs/design.md §3.15) with exact test providers (unit tests
  * link no OpenCV; tests/cli/flow.sh measures OpenCV's DIS): the confidence formula against
  * hand-computed values, luminance, the solve at a fraction of the resolution, the motion
  * convention and the shot's ends, the cache (never changing a result), size mismatch and no

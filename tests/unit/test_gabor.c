@@ -1,4 +1,4 @@
-/* Unit tests for core/gabor.c and the gabor-splat node: the level-of-detail rule (sum of squared
+/* Unit tests for core/gabor/gabor.c and the gabor-splat node: the level-of-detail rule (sum of squared
  * weights = wanted density, continuity, bounded level count), the variance normaliser against a
  * numerical integral, unit variance on a flat plane for each amplitude law and with
  * supersampling, the unit01 mapping, errors, bit-identical output across thread counts, tile

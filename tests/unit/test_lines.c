@@ -1,4 +1,4 @@
-/* lines (core/lines.c, docs/design.md §3.11): ink lines on analytic plates. A disc seen through
+/* lines (core/looks/lines.c, docs/design.md §3.11): ink lines on analytic plates. A disc seen through
  * id, depth and coverage alone: the line sits on the true circle within 0.5 px, its ink mass
  * across the edge is the width within 0.5 px and no angle has a gap. A folded plane: the crease
  * line sits on the fold and vanishes above the fold angle. Exact ink next to a straight edge by

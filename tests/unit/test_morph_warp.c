@@ -1,5 +1,5 @@
 /* morphology, warp and time-offset: the small nodes of Kass & Pesare's Figure 2/3a graphs
- * (core/morphology.c, core/warp.c, core/time_offset.c), checked against hand-computed results
+ * (core/looks/morphology.c, core/looks/warp.c, core/motion/time_offset.c), checked against hand-computed results
  * (footprints, open/close identities, exact displacement of linear ramps, the held frame), through
  * their descriptors and by direct calls of the core functions. */
 #include <math.h>

@@ -1,4 +1,4 @@
-/* The paper node (core/paper.c): exact tileability, no dependence on time, window, tile split or
+/* The paper node (core/looks/paper.c): exact tileability, no dependence on time, window, tile split or
  * thread count, the height's range and mean, kinds and seeds that differ, the canvas weave's
  * period, the colour formula on a flat paper, the optional format input, the error paths and
  * the per-instance cache (the same pixels), through its descriptor. */

@@ -4,7 +4,7 @@
 #include "check.h"
 
 #include "nprfx/nprfx.h"
-#include "synth_geom.h"
+#include "base/synth_geom.h"
 
 enum {
     C_R = 0,

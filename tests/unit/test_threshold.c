@@ -1,11 +1,11 @@
-/* Unit tests for core/threshold.c (erf threshold, its mean, the builtin step position, tone
+/* Unit tests for core/looks/threshold_map.c (erf threshold, its mean, the builtin step position, tone
  * quantisation, bilinear map lookup with its orientation) and the threshold-map node (the three
  * modes, channels, errors, the mean-reproduces-tone property with uniform noise, determinism
  * across thread counts and tile splits). */
 #include <string.h>
 
 #include "check.h"
-#include "internal_threshold.h"
+#include "looks/internal_threshold.h"
 #include "node_harness.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"

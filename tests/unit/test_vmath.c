@@ -6,7 +6,7 @@
 #include <stdint.h>
 
 #include "check.h"
-#include "internal_vmath.h"
+#include "base/internal_vmath.h"
 
 static double arg(uint64_t *s, int range)
 {

@@ -1,4 +1,4 @@
-/* Unit tests for the watercolor node (core/watercolor.c, plugins/watercolor.c): identity when
+/* Unit tests for the watercolor node (core/looks/watercolor.c, plugins/watercolor.c): identity when
  * every effect is off, the pigment densities of the textures against hand-computed values, edge
  * darkening on a step of known height, the exact wobble of a linear-ramp paper and its bound on
  * any paper, coverage over white paper, alpha, the error paths, and bit-identity across thread
@@ -154,7 +154,7 @@ static void test_textures(nprfx_context *ctx)
     CHECK_NEAR(out.data[0], 0.3875, TOL);
     CHECK_NEAR(out.data[1], 0.128, TOL);
     CHECK_NEAR(out.data[2], 0.8595, TOL);
-    /* the same numbers as the blend node's public formula (one formula, core/internal_blend.h) */
+    /* the same numbers as the blend node's public formula (one formula, core/looks/internal_blend.h) */
     double d = nprfx_blend_pigment_density((double)0.8f, 1.5);
     for (int c = 0; c < 3; c++)
         CHECK(out.data[c] == (float)nprfx_blend_pigment(c3[c], d));

@@ -1,8 +1,8 @@
-/* Internal to the IVS index (core/ivs_index.c) and its callers in core, never installed. */
+/* Internal to the IVS index (core/stipple/ivs_index.c) and its callers in core, never installed. */
 #ifndef NPRFX_INTERNAL_IVS_H
 #define NPRFX_INTERNAL_IVS_H
 
-#include "internal_simd.h"
+#include "base/internal_simd.h"
 #include "nprfx/ivs.h"
 
 /* The index scan has an AVX2 copy of its loop where INTERNAL_X86 (internal_simd.h), picked at

@@ -1,5 +1,5 @@
 /* The paper node's per-instance cache: the texture depends on neither the frame nor the time
- * (core/paper.c), so the pixels of the last window rendered serve every later frame with the same
+ * (core/looks/paper.c), so the pixels of the last window rendered serve every later frame with the same
  * params, copied instead of made again (750 ms a 1920x1080 frame of the watercolour kind on two
  * threads). It only saves work: a render with another window or other params makes the pixels
  * anew, bit for bit those of nprfx_paper_render. */
@@ -9,7 +9,7 @@
 #include "nprfx/context.h"
 #include "nprfx/paper.h"
 
-#include "internal_state.h"
+#include "base/internal_state.h"
 
 typedef struct paper_cache {
     pthread_mutex_t lock; /* first: internal_state.h */

@@ -16,7 +16,7 @@
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
 
-#include "internal_state.h"
+#include "base/internal_state.h"
 
 enum { IN_MOTION = NPRFX_ADVECT_IN_MOTION_PREV, IN_CONF = NPRFX_ADVECT_IN_CONFIDENCE };
 

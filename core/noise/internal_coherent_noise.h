@@ -1,4 +1,4 @@
-/* Internal to coherent noise (core/coherent_noise.c, cn_*.c), never installed: the build's
+/* Internal to coherent noise (core/noise/coherent_noise.c, cn_*.c), never installed: the build's
  * vector and clone switches, the noise hash, the kernels and tap tables the files share, and the
  * step's per-pixel kernels (the occlusion test, the vector resampler), which are static inline so
  * that the step's row loops inline them. coherent_noise.h has the maths.
@@ -34,7 +34,7 @@
 #if defined(NPRFX_CN_SCALAR) && !defined(NPRFX_SCALAR)
 #define NPRFX_SCALAR
 #endif
-#include "internal_simd.h"
+#include "base/internal_simd.h"
 #define INTERNAL_VEC INTERNAL_SIMD
 #define INTERNAL_CLONES INTERNAL_SIMD_CLONES
 

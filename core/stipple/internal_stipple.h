@@ -7,7 +7,7 @@
 #include <stdatomic.h>
 #include <stddef.h>
 
-#include "internal_simd.h"
+#include "base/internal_simd.h"
 #include "nprfx/stipple.h"
 
 /* The per-pixel passes (Jacobian, outlier search, smoothing) and the block member tests have
@@ -94,7 +94,7 @@ typedef struct stlist {
     int failed;
 } stlist;
 
-/* Dots drawn from tables of exact stencils, one per centre phase (core/stipple_disc.c):
+/* Dots drawn from tables of exact stencils, one per centre phase (core/stipple/stipple_disc.c):
  * uniform and multitone dots (one radius) at 1/32 px, radius dots (area g a0) from two of
  * RADIUS_LEVELS + 1 areas at 1/16 px. Stencils up to STENCIL_MAX pixels a side (radius ~3.2 px);
  * larger dots are drawn exactly. */

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "internal_gabor.h"
-#include "internal_vmath.h"
+#include "base/internal_vmath.h"
 #include "nprfx/rng.h"
 
 #define MAX_CELLS 65536 /* per block, id and level: beyond, the footprint is degenerate */

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "internal_gabor.h"
-#include "internal_vmath.h"
+#include "base/internal_vmath.h"
 #include "nprfx/rng.h"
 
 static const double k_cutoff = 0.05; /* kernel envelope at the truncation radius */

@@ -15,7 +15,7 @@
 #include "nprfx/exec.h"
 #include "nprfx/node.h"
 
-#include "internal_state.h"
+#include "base/internal_state.h"
 
 enum {
     IN_DEPTH = NPRFX_CN_IN_DEPTH,

@@ -6,8 +6,8 @@
 
 #include "nprfx/threshold.h"
 #include "nprfx/exec.h"
-#include "internal_state.h"
-#include "internal_simd.h"
+#include "base/internal_state.h"
+#include "base/internal_simd.h"
 #include "internal_threshold.h"
 
 #define NPRFX_INV_SQRT_PI 0.56418958354775628695

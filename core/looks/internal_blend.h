@@ -1,5 +1,5 @@
 /* Internal to core/ (never installed): Bousseau et al.'s pigment-density formula, written once and
- * inlined by both the blend node (core/blend.c) and the watercolor node (core/watercolor.c). The
+ * inlined by both the blend node (core/looks/blend.c) and the watercolor node (core/looks/watercolor.c). The
  * public nprfx_blend_pigment* functions call these too; a public function itself would stay a call
  * in a per-pixel loop (in position-independent code it may be interposed). docs/design.md §3.5. */
 #ifndef NPRFX_INTERNAL_BLEND_H

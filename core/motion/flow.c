@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_state.h"
+#include "base/internal_state.h"
 #include "nprfx/exec.h"
 #include "nprfx/flow.h"
 

@@ -39,7 +39,7 @@
  * virtual: they extrapolate the nearest real pixel's anchor and depth along its Jacobian, so
  * kernels keep their density up to the frame edge and slide in smoothly instead of popping.
  *
- * Files: core/anchored_scatter.c runs phase 1 (strips, emission rows; shared with pam-splat,
+ * Files: core/gabor/anchored_scatter.c runs phase 1 (strips, emission rows; shared with pam-splat,
  * internal_scatter.h); this one runs phase 2 (splat tiles, normalisation) and picks its paths;
  * gabor_kernel.c has the params, variance, level-of-detail tables and a kernel's setup;
  * gabor_pixels.c a block's pixel attributes and patch labels; gabor_emit.c its cells, owner search
@@ -63,7 +63,7 @@
  *    cells that pass go on to the owner search, one by one in their order;
  *  - the owner search's 3 x 3 descent evaluates the 8 neighbours in one vector;
  *  - a kernel's exp and sincos (its envelope and phase at its first sample) are the project's
- *    own (core/internal_vmath.h), run for 8 points at a time on the vector paths: the same
+ *    own (core/base/internal_vmath.h), run for 8 points at a time on the vector paths: the same
  *    numbers on every path and platform, where libm's differ between C libraries;
  *  - splatting computes a kernel's row spans and row depths 8 (AVX2: 4) rows at a time, runs
  *    the factor-table recurrences of 4 kernels in the lanes of a vector, and adds rows 8
@@ -106,7 +106,7 @@ static splat_fn pick_splat_fn(int simd)
 #endif
 }
 
-/* ---- the render: phase 2, the splat tiles (phase 1 is core/anchored_scatter.c) --------------- */
+/* ---- the render: phase 2, the splat tiles (phase 1 is core/gabor/anchored_scatter.c) --------------- */
 
 /* A splat worker's buffers, for tiles of up to J->tile x J->tile pixels. */
 typedef struct splat_scratch {

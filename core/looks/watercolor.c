@@ -1,7 +1,7 @@
 /* The watercolor node (Bousseau, Kaplan, Thollot, Sillion, NPAR 2006): wobbling edges from the
  * paper's gradient, edge darkening from the colour gradient, then pigment turbulence, dispersion
  * and paper granulation, every effect a pigment density through the paper's colour model
- * (core/internal_blend.h). Formulas in nprfx/watercolor.h and docs/design.md §3.14.
+ * (core/looks/internal_blend.h). Formulas in nprfx/watercolor.h and docs/design.md §3.14.
  *
  * A render runs in stages over rectangles that shrink towards the window: the paper's low-pass
  * and gradient, the gradient's local RMS, the wobbled colour Q, its blur B, then the output. Each

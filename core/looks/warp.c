@@ -1,5 +1,5 @@
 /* The displacement warp: out(p) = image(p + amount * offset(p)), sampled bilinearly or with the
- * Catmull-Rom bicubic of core/sample.c — the local image-plane warp of Kass & Pesare's Figure 3a,
+ * Catmull-Rom bicubic of core/base/sample.c — the local image-plane warp of Kass & Pesare's Figure 3a,
  * driven by two channels of coherent noise (docs/design.md §3.8). See nprfx/filter.h. */
 #include "nprfx/exec.h"
 #include "nprfx/filter.h"

@@ -1,4 +1,4 @@
-/* The per-instance caches of nodes (core/internal_state.h). */
+/* The per-instance caches of nodes (core/base/internal_state.h). */
 #include <pthread.h>
 #include <stdlib.h>
 

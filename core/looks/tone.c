@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "nprfx/exec.h"
-#include "internal_state.h"
+#include "base/internal_state.h"
 #include "nprfx/tone.h"
 
 /* A shot's measured samples are capped so that a long shot stays in bounded memory (16 MB). */

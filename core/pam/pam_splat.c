@@ -1,7 +1,7 @@
 /* pam-splat: a painterly art map splatted on the surfaces (Yan et al. 2008 §5, docs/design.md
  * §3.7). See nprfx/pam_splat.h for the interface.
  *
- * The splats are the points of gabor-splat's anchored-point scatter (core/anchored_scatter.c):
+ * The splats are the points of gabor-splat's anchored-point scatter (core/gabor/anchored_scatter.c):
  * a constant number per screen area, anchored in Pref or UV, with continuous level-of-detail
  * weights w, each emitted once by its owner pixel with the depth and id of its surface. They
  * are rendered in the three passes of §5.1:
@@ -31,8 +31,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_scatter.h"
-#include "internal_state.h"
+#include "gabor/internal_scatter.h"
+#include "base/internal_state.h"
 #include "nprfx/exec.h"
 #include "nprfx/pam_splat.h"
 #include "nprfx/rng.h"
