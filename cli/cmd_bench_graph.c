@@ -1,4 +1,4 @@
-/* nprfx bench-graph — time a whole graph per frame on synthetic plates (issue 16).
+/* nprfx bench-graph — time a whole graph per frame on synthetic plates.
  *
  * `nprfx bench` times one node; a look is a graph, and what a farm pays is the graph's time and
  * memory per frame. Every read node becomes an in-memory `nprfx synth` scene at --size (the

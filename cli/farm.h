@@ -1,4 +1,4 @@
-/* nprfx farm — a shot rendered in frame chunks by a render manager (issue 18).
+/* nprfx farm — a shot rendered in frame chunks by a render manager.
  *
  * cmd_farm.c checks the request and the graph and splits the frames into chunks; an engine
  * (farm_slurm.c) writes the job files that run `nprfx run GRAPH --frames CHUNK` once per chunk and

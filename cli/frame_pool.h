@@ -1,4 +1,4 @@
-/* nprfx CLI — a pool of frame buffers for the runner (issue 16, docs/design.md §1 "Memory").
+/* nprfx CLI — a pool of frame buffers for the runner (docs/design.md §1 "Memory").
  *
  * A graph allocates the same frames every frame: each node's output has the same size and
  * channels as at the frame before. Fresh frames above glibc's mmap threshold (32 MiB: one 1080p

@@ -1,4 +1,4 @@
-/* nprfx CLI — the graph's memory plan (issue 16, docs/design.md §1 "Memory").
+/* nprfx CLI — the graph's memory plan (docs/design.md §1 "Memory").
  *
  * The cache alone kept every result until its byte bound pushed it out: a graph over 1080p plates
  * held 2 GiB of frames it would never read again. The runner knows the graph, so it plans:

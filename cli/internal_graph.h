@@ -99,7 +99,7 @@ struct nprfx_graph {
     double render_cpu_seconds; /* the process's CPU time (all threads) over the same spans */
     long long render_items;    /* what nodes counted (nprfx_render_args.items) */
     double render_bytes;       /* the frames' bytes the renders read (inputs) and wrote (output) */
-    /* Memory (issue 16, graph_plan.c): frame buffers come from the pool and go back to it; the
+    /* Memory (graph_plan.c): frame buffers come from the pool and go back to it; the
      * plan frees each result once its consumers at the frame have run, unless a temporal node
      * reads its node at other frames. no_pool: neither (plain calloc/free and the cache alone,
      * to check that pooling never changes a pixel). */

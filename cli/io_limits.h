@@ -1,4 +1,4 @@
-/* nprfx CLI — the memory limit and the read time bound (issues 15 and 16).
+/* nprfx CLI — the memory limit and the read time bound.
  *
  * One memory limit covers the images the runner holds: every image it makes in one piece (a plate
  * read from a file, a synth frame, a node's output frame) is checked against it before anything

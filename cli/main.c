@@ -54,8 +54,8 @@ static void usage(FILE *f)
  * lists, its depth window, a strip's planes) is freed at the end of the frame and asked for
  * again at the next. glibc gives memory at the top of a heap back to the kernel once 128 KiB of
  * it are free, and serves blocks above its (adaptive) mmap threshold from fresh mappings, so
- * each frame paid its page faults again: a quarter of the six-node bench graph's compute time
- * (issue 16). The runner keeps what it freed for the next frame instead: resident memory stays
+ * each frame paid its page faults again: a quarter of the six-node bench graph's compute time.
+ * The runner keeps what it freed for the next frame instead: resident memory stays
  * at the shot's high-water mark, which is the peak it reports anyway. Frames themselves are
  * pooled (frame_pool.c); blocks above 64 MiB (8K planes) still get their own mappings. */
 static void keep_freed_memory(void)

@@ -46,7 +46,7 @@
  * and points; gabor_splatting.c adds a tile's kernels to its samples; internal_gabor.h holds what
  * they share (the vector helpers and the level-of-detail rule among it).
  *
- * Speed (issue 5's target: a 1080p frame at N0 = 32 in 150 ms on two cores). The work per
+ * Speed (target: a 1080p frame at N0 = 32 in 150 ms on two cores). The work per
  * frame is about 2.2M pixel attributes, 1.3M anchor cells hashed, 0.75M owner searches, 0.24M
  * kernels and 190M kernel-sample evaluations (N0 = 128: 4x the last three). What keeps it fast:
  *  - the inputs are read from the plates once per row of blocks into a worker's strip (planes),

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Damaged EXRs are refused quickly, in bounded memory, with a message naming the file, and never
-# read into garbage (issue 15). The corpus is generated here from valid EXRs the generator writes
+# read into garbage. The corpus is generated here from valid EXRs the generator writes
 # itself (tests/data/make_damaged.c, plus a mipmapped one from oiiotool); the fuzzers' findings in
 # tests/data/regressions/read/ are replayed with it.
 #
@@ -22,7 +22,7 @@ GEN=${NPRFX_MAKE_DAMAGED:-$(dirname "$NPRFX")/tests/nprfx_make_damaged}
 SCALE=${NPRFX_TEST_TIME_SCALE:-1}
 MEM_MIB=${NPRFX_TEST_MEM_MIB:-512}
 if [ "$SCALE" != 1 ] && [ -z "${NPRFX_TEST_MEM_MIB:-}" ]; then MEM_MIB=2048; fi
-# The memory limit's default is half the physical memory (issue 16): pinned here, so that the
+# The memory limit's default is half the physical memory: pinned here, so that the
 # 12 GiB window below is refused before a read on any machine, as it was with the old 4 GiB.
 export NPRFX_READ_LIMIT=${NPRFX_READ_LIMIT:-4G}
 TIME_BOUND=$(awk -v s="$SCALE" 'BEGIN { print 2 * s }')

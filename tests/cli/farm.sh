@@ -1,4 +1,4 @@
-# nprfx farm without a cluster (issue 18): the Slurm job files for 48 frames in chunks of 5, their
+# nprfx farm without a cluster: the Slurm job files for 48 frames in chunks of 5, their
 # chunks run by hand with SLURM_ARRAY_TASK_ID set (two at a time, last first) and compared exactly
 # with one sequential run, --submit through a stand-in sbatch, `farm check` on a deleted, a
 # truncated and a complete sequence, and the requests refused before anything is written.

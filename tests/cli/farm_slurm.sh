@@ -1,4 +1,4 @@
-# nprfx farm on a real farm (issue 18): a single-node Slurm cluster on this machine (munged,
+# nprfx farm on a real farm: a single-node Slurm cluster on this machine (munged,
 # slurmctld and slurmd started here, their config and state in the work directory, no accounting),
 # 48 frames of a coherent-noise graph submitted in chunks of 5 with --submit, the array and the
 # check job waited for, every frame compared exactly with one sequential `nprfx run`.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Stylizing footage (issue 17): coherent-noise driven by the flow node's motion and confidence,
+# Stylizing footage: coherent-noise driven by the flow node's motion and confidence,
 # on the dolly shot's beauty pass alone (the frames of samples/footage/dolly), measured along the
 # plate's true motion vectors with `nprfx measure`:
 #   - warp correlation of the noise (alpha 0.98, the paper's) along the true motion >= 0.8 with

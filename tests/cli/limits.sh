@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Frames larger than the memory limit are refused up front, naming the size and the limit
-# (issues 15 and 16): nprfx synth --size, a graph's synth node and "format", a graph whose
+# (nprfx synth --size, a graph's synth node and "format", a graph whose
 # planned peak is above it, with NPRFX_READ_LIMIT followed and --mem-limit overriding it. Each
 # refusal must come fast and in little memory: nothing is allocated first.
 set -u
@@ -49,8 +49,8 @@ cat >format.json <<'JSON'
 JSON
 expect_refused 2 "format.json: \"format\" 60000x60000 with 1 channel needs 13.4 GiB, above the" \
     "$NPRFX" run format.json
-# A graph whose frames need more than the limit fails before its first frame (the plan's estimate,
-# issue 16), naming the node and the sizes: paper's 2000x2000 RGBA frame under 20 MiB (the format
+# A graph whose frames need more than the limit fails before its first frame (the plan's estimate),
+# naming the node and the sizes: paper's 2000x2000 RGBA frame under 20 MiB (the format
 # alone fits). Nothing is written.
 sed 's/60000x60000/2000x2000/' format.json >format2.json
 # (paper keeps its last window between frames, so the frame counts twice: once as the output,

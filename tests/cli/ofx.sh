@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The OpenFX path (issue 7): the bundle exports exactly OfxGetNumberOfPlugins and OfxGetPlugin,
+# The OpenFX path: the bundle exports exactly OfxGetNumberOfPlugins and OfxGetPlugin,
 # holds one plug-in per node of `nprfx list`, and every test graph (and every sample graph whose
 # inputs are synthetic or present in the repository) renders bit-identically through the
 # plug-ins (`nprfx-ofxtest run --ofx BUNDLE`, the test host of tests/ofxhost/) and directly

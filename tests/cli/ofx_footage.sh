@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Footage in an OpenFX Filter context (issue 17): coherent-noise and advect applied to a plain
+# Footage in an OpenFX Filter context: coherent-noise and advect applied to a plain
 # footage clip, their motion and confidence computed inside the plug-in by the flow node on the
 # Source clip (plugins/ofx/ofx_derive.c), on the 24 frames of samples/footage/dolly. The test host
 # renders the General graph flow -> node with --footage: the node in the Filter context on the

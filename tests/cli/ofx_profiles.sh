@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The OpenFX adapter in the hosts the test host imitates (issue 13; `nprfx-ofxtest run --profile
+# The OpenFX adapter in the hosts the test host imitates (`nprfx-ofxtest run --profile
 # NAME`, tests/ofxhost/profile.c):
 #  1. strict and natron (General context always, message formatting that drops the arguments):
 #     every test graph renders bit-identically to `nprfx run`. tests/graphs/ uses every node, and

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The runner's frame pool and memory plan (issue 16), on the six-node pipeline of
+# The runner's frame pool and memory plan, on the six-node pipeline of
 # samples/bench/bench_six.json at a small size:
 #   - pixels are bit-identical with and without the pool (--no-pool), at a memory limit just
 #     above the plan's estimate, with a cache so small that results are evicted and rendered

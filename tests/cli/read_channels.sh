@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reading only some channels, and reading by rows (issue 16, docs/design.md §2.3 "Only the
+# Reading only some channels, and reading by rows (docs/design.md §2.3 "Only the
 # channels used"): through `nprfx info --io-test channels|rows`, checked against oiiotool (an
 # independent reader) on every storage a block read meets: scanlines of several chunk heights
 # (zip 16 rows, piz 32, dwab 256, none 1), tiles whose rows the blocks do not align with, MIP maps,

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Strip renders (issue 16, docs/design.md §1 "Memory"): a write whose chain renders by rows
+# Strip renders (docs/design.md §1 "Memory"): a write whose chain renders by rows
 # (reads of EXRs; blend, threshold-map, morphology, warp with a reach) goes a strip of rows at a
 # time.
 #   - the pixels are the whole frame's, bit for bit, at any strip height (1 row, 7 rows against

@@ -1,5 +1,5 @@
-/* nprfx test data — a corpus of damaged EXRs, made from valid ones this program writes itself
- * (issue 15). Nothing is copied from elsewhere: the bases are written with OpenEXRCore's encoder,
+/* nprfx test data — a corpus of damaged EXRs, made from valid ones this program writes itself.
+ * Nothing is copied from elsewhere: the bases are written with OpenEXRCore's encoder,
  * the crafted files byte by byte, and every damaged file is a base with a known defect.
  *
  *   nprfx_make_damaged OUTDIR [EXTRA.exr...]

@@ -1,4 +1,4 @@
-/* libFuzzer target: the image readers of cli/io.h on arbitrary bytes (issue 15).
+/* libFuzzer target: the image readers of cli/io.h on arbitrary bytes.
  *
  * Each input is written to a file (OpenImageIO reads paths) and given to nprfx_io_info and
  * nprfx_io_read, as `nprfx info` and a graph's read node do. Beyond the sanitizers' findings, a

@@ -1,4 +1,4 @@
-/* nprfx OpenFX test host — the frames a render needs (issue 13, item 4: "frames needed equals
+/* nprfx OpenFX test host — the frames a render needs ("frames needed equals
  * the frames it reads"). A host plans its caches and its own fetches from getFramesNeeded: a
  * plug-in that declares more than it reads makes a host render or load frames for nothing (the
  * whole shot, for every frame), one that declares less gets refused or stale frames. So per

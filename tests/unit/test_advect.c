@@ -2,7 +2,7 @@
  * numbers, exact coordinates under a uniform translation, re-seeding (low confidence, non-finite
  * motion, a previous position outside the frame), a frame rendered alone equal to the in-order
  * and the reverse-order result bit for bit, tiles and threads, the frames it declares against
- * those it fetches, error paths, lint; and the figure the issue asks for: stipples anchored on
+ * those it fetches, error paths, lint; and what the node is for: stipples anchored on
  * the advected coordinates follow the motion (few appear or vanish between frames) where
  * screen-anchored stipples do not. */
 #include <math.h>

@@ -1,4 +1,4 @@
-/* coherent-noise on footage (issue 17): the confidence input replaces the depth test. Checked
+/* coherent-noise on footage: the confidence input replaces the depth test. Checked
  * against the node itself with other inputs, exactly:
  *  - confidence 1 everywhere without depth is the same noise as a constant depth without
  *    confidence (the occlusion test of a flat depth never fires);

@@ -973,7 +973,7 @@ static void test_input_mode(nprfx_context *ctx)
  * frame (a bounded number of fetches), and reverse-order rendering stays within a constant factor
  * of it (checkpoints + the recent run). The automatic window (the default) costs about two steps
  * a frame in order, and any frame alone, frame 200,000 of a 200,000-frame shot included, under
- * 2W steps (issue 15: a farm renders frames alone). */
+ * 2W steps (a farm renders frames alone). */
 static void test_cost(nprfx_context *ctx)
 {
     scene s;

@@ -1,7 +1,7 @@
 /* Frames needed: what nprfx_node_frames_needed declares for a frame is exactly the set of frames
  * the node fetches when it renders that frame with an empty cache — no fewer (a host would not
- * have them ready) and no more (a host would render upstream frames for nothing: issue 13 saw
- * coherent-noise ask for the whole shot). Each case renders with a fetch callback that records
+ * have them ready) and no more (a host would render upstream frames for nothing, such as
+ * coherent-noise asking for the whole shot). Each case renders with a fetch callback that records
  * every (input, frame) and compares with the declaration; plus hand-computed spans for the
  * recursion's start, window and symmetric end, the default rule and unconnected inputs. */
 #include <stdio.h>

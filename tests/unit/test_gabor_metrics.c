@@ -1,4 +1,4 @@
-/* Metric tests for the gabor-splat node (docs/design.md §4, issue 5), on synthetic plates rendered
+/* Metric tests for the gabor-splat node (docs/design.md §4), on synthetic plates rendered
  * in memory:
  *   - spectrum: on a flat plane the power spectrum peaks at F0 along w0 (within 5% / 5 degrees);
  *     isotropic mode has no preferred orientation;

@@ -1,4 +1,4 @@
-/* The pam-splat node (docs/design.md §3.7, issue 14) on synthetic plates, through its
+/* The pam-splat node (docs/design.md §3.7) on synthetic plates, through its
  * descriptor:
  *   - BT.601 YUV by hand and round trip; a PAM's tone position by hand; the descriptor's lint;
  *   - Eq. 10 by hand: flat maps give model + (beta dY, gamma dU, gamma dV) exactly;

@@ -1,4 +1,4 @@
-/* The stipple node on moving synthetic scenes (docs/design.md §3.3, issue metrics): dots stay on
+/* The stipple node on moving synthetic scenes (docs/design.md §3.3 and §4): dots stay on
  * the surface from frame to frame (few appear or vanish, kept dots follow the true motion), and
  * the on-screen dot density stays constant through a dolly. */
 #include <math.h>
