@@ -1,18 +1,15 @@
-/* The tone and matte nodes: the mapping and percentiles against hand-computed values, a range
+/* The tone node: the mapping and percentiles against hand-computed values, a range
  * measured once over the shot (the same value maps the same at every frame, whatever the order
- * frames are rendered in), a cache that notices a changed input, coverage, and the matte's rules,
- * softening and tile invariance. */
+ * frames are rendered in), a cache that notices a changed input, and coverage. */
 #include <math.h>
 #include <string.h>
 
 #include "check.h"
 #include "node_harness.h"
 #include "nprfx/exec.h"
-#include "nprfx/matte.h"
 #include "nprfx/tone.h"
 
 extern const nprfx_node_desc nprfx_node_tone;
-extern const nprfx_node_desc nprfx_node_matte;
 
 static float px(const nprfx_image *im, int x, int y)
 {
@@ -271,66 +268,6 @@ static void test_albedo(nprfx_context *ctx)
     nprfx_image_free(&out);
 }
 
-static void test_matte(nprfx_context *ctx)
-{
-    nprfx_matte_params p = {.far = 1e9, .background_id = 0, .soften = 0, .invert = 0};
-    float z_obj = 5, z_sky = INFINITY, z_blender = 1e10f, z_zero = 0, id0 = 0, id3 = 3,
-          id_near0 = 0.2f, a_half = 0.5f;
-    CHECK(nprfx_matte_pixel(&p, NULL, &z_obj, NULL) == 1.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, &z_sky, NULL) == 0.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, &z_blender, NULL) == 0.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, &z_zero, NULL) == 0.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id0) == 0.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_near0) == 0.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id3) == 1.0);
-    CHECK(nprfx_matte_pixel(&p, &a_half, &z_obj, &id3) == 0.5);
-    p.background_id = -1;
-    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id0) == 1.0);
-    p.background_id = 0;
-
-    /* a disc of depth 5 on an infinite background, through the descriptor */
-    const nprfx_node_desc *n = &nprfx_node_matte;
-    enum { S = 40 };
-    nprfx_image in[3], out, whole;
-    memset(in, 0, sizeof in);
-    int di = th_input(n, "depth");
-    in[di] = th_image(S, S, 1, NULL);
-    for (int y = 0; y < S; y++)
-        for (int x = 0; x < S; x++)
-            nprfx_image_at(&in[di], x, y)[0] =
-                (x - 19.3) * (x - 19.3) + (y - 20.6) * (y - 20.6) < 100 ? 5.0f : INFINITY;
-    nprfx_value pv[8];
-    nprfx_node_defaults(n, pv);
-    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, S, S), 1, &out);
-    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, S, S), 1, &whole);
-    CHECK_OK(th_render(ctx, n, in, pv, &whole, whole.bounds));
-    /* softened: 1 deep inside, 0 far outside, in between at the rim, monotone along a ray */
-    CHECK(px(&whole, 19, 21) == 1.0f && px(&whole, 0, 0) == 0.0f);
-    CHECK(px(&whole, 29, 21) > 0.0f && px(&whole, 29, 21) < 1.0f);
-    for (int x = 20; x < S - 1; x++)
-        CHECK(px(&whole, x, 21) >= px(&whole, x + 1, 21));
-    /* tiles agree with the whole frame */
-    for (int t = 0; t < 4; t++) {
-        nprfx_rect win =
-            nprfx_rect_make((t & 1) * 17, (t >> 1) * 23, (t & 1) ? S : 17, (t >> 1) ? S : 23);
-        CHECK_OK(th_render(ctx, n, in, pv, &out, win));
-    }
-    CHECK(memcmp(out.data, whole.data, sizeof(float) * S * S) == 0);
-    /* soften 0: exactly the hard rule; invert */
-    pv[th_param(n, "soften")].v[0] = 0;
-    pv[th_param(n, "invert")].v[0] = 1;
-    CHECK_OK(th_render(ctx, n, in, pv, &out, out.bounds));
-    CHECK(px(&out, 19, 21) == 0.0f && px(&out, 29, 21) == 0.0f && px(&out, 30, 21) == 1.0f);
-    /* no input: the error names the inputs */
-    nprfx_image none[3];
-    memset(none, 0, sizeof none);
-    CHECK(th_render(ctx, n, none, pv, &out, out.bounds) == NPRFX_ERR_MISSING_INPUT);
-    CHECK(strstr(th_error(ctx), "'alpha', 'depth', 'id'") != NULL);
-    nprfx_image_free(&in[di]);
-    nprfx_image_free(&out);
-    nprfx_image_free(&whole);
-}
-
 /* The pixels do not depend on the thread count. */
 static void test_threads(void)
 {
@@ -362,12 +299,10 @@ int main(void)
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     nprfx_context_create(&ci, &ctx);
     CHECK_OK(nprfx_node_lint(ctx, &nprfx_node_tone));
-    CHECK_OK(nprfx_node_lint(ctx, &nprfx_node_matte));
     test_map();
     test_percentile();
     test_shot_range(ctx);
     test_albedo(ctx);
-    test_matte(ctx);
     test_threads();
     nprfx_context_destroy(ctx);
     return check_finish();
