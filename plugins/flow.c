@@ -1,7 +1,7 @@
 /* The flow node: dense optical flow between neighbouring frames of any sequence, in the motion
  * convention of docs/design.md §2, with a confidence per direction (§3.15). For footage without
  * a renderer's motion vectors. The luminance, scaling and confidence live in core/motion/flow.c, the
- * solver in the front end's provider (cli/flow_opencv.cpp); this file is the descriptor and the
+ * solver in the front end's provider (common/flow_opencv.cpp); this file is the descriptor and the
  * call into it. */
 #include <stddef.h>
 #include <string.h>

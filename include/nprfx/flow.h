@@ -1,7 +1,7 @@
 /* nprfx — dense optical flow between neighbouring frames (the `flow` node, docs/design.md §3.15).
  *
  * The solver is not part of the library: core stays C11 + libm, so a front end hands the context
- * a flow provider (the runner and the OpenFX bundle give OpenCV's DIS, cli/flow_opencv.h). Core
+ * a flow provider (the runner and the OpenFX bundle give OpenCV's DIS, common/flow_opencv.h). Core
  * turns any image into luminance, downscales it, calls the provider for each direction, upsamples
  * the flow, and derives a confidence from a forward-backward and a photometric check. */
 #ifndef NPRFX_FLOW_H

@@ -1,6 +1,6 @@
 /* nprfx OpenFX adapter — a node's text export (stipple dots as CSV/SVG) from a host. The runner
  * writes it beside its images; in a host the export param's path is all there is, so the
- * adapter writes it: the path's frame token expanded as the runner expands it (cli/seq.c, built
+ * adapter writes it: the path's frame token expanded as the runner expands it (common/seq.c, built
  * into the bundle), folders created, a temporary name renamed into place so a reader never sees
  * half a file. Tiles of one frame, and repeated renders of it with the same params, write it
  * once. */

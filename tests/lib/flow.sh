@@ -1,5 +1,5 @@
 # Sourced by the CLI tests that render graphs: the flow node needs an optical flow provider
-# (OpenCV, cli/flow_opencv.cpp), which a build without OpenCV lacks. Such a build skips what
+# (OpenCV, common/flow_opencv.cpp), which a build without OpenCV lacks. Such a build skips what
 # needs it instead of failing (.ci/setup installs OpenCV, so CI runs everything).
 
 # flow_missing NPRFX: true when this nprfx has no optical flow provider.

@@ -27,7 +27,7 @@
 
 #include "ofx/ofx_api.h"
 #include "ofx/ofx_derive.h"
-#include "ofx/ofx_names.h"
+#include "ofx_names.h"
 #include "ofx_host.h"
 
 /* ---- property sets (props.c) ----------------------------------------------------------------- */

@@ -1,6 +1,6 @@
 /* The optical flow provider of the runner and the OpenFX bundle: OpenCV's DIS (Kroeger et al.
  * 2016, "Fast Optical Flow using Dense Inverse Search"), behind a C header so that only
- * cli/flow_opencv.cpp sees C++ and OpenCV (docs/design.md §3.15). */
+ * common/flow_opencv.cpp sees C++ and OpenCV (docs/design.md §3.15). */
 #ifndef NPRFX_CLI_FLOW_OPENCV_H
 #define NPRFX_CLI_FLOW_OPENCV_H
 

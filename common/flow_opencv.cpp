@@ -1,4 +1,4 @@
-/* OpenCV's DIS optical flow as an nprfx flow provider (cli/flow_opencv.h; docs/design.md §3.15).
+/* OpenCV's DIS optical flow as an nprfx flow provider (common/flow_opencv.h; docs/design.md §3.15).
  *
  * DIS takes 8-bit grey (CV_8UC1). Core hands in luminance already tone-mapped into [0, 1)
  * (x / (1 + x) of scene-linear luma, nprfx_flow_luminance), so the fixed mapping
