@@ -16,6 +16,7 @@
 #include "nprfx/node.h"
 
 #include "base/internal_state.h"
+#include "cn_cache.h"
 
 enum {
     IN_DEPTH = NPRFX_CN_IN_DEPTH,
@@ -26,116 +27,6 @@ enum {
     IN_CONFIDENCE = NPRFX_CN_IN_CONFIDENCE,
     IN_COUNT = NPRFX_CN_IN_COUNT
 };
-
-/* ---- the state cache ----------------------------------------------------------------------- */
-
-typedef struct cn_slot {
-    int used;
-    int64_t frame;
-    uint64_t fingerprint; /* of the inputs read at this frame */
-    nprfx_cn_state st;    /* value.data NULL until allocated */
-} cn_slot;
-
-typedef struct cn_pass {
-    int dir;
-    int64_t origin;
-    int valid;
-    int K;         /* checkpoint spacing (0: none) */
-    cn_slot *ckpt; /* ncap checkpoints */
-    int ncap;
-    cn_slot *ring; /* the most recent run of states */
-    int nring, ring_next;
-    nprfx_cn_state scratch;
-    /* The depth read by the latest step (frame depth_frame, of the state whose fingerprint is
-     * depth_fp): the next in-order step needs it as the previous depth, and fetching another
-     * frame can be costly in a host (an upstream render, a channel repack). */
-    nprfx_image depth;
-    int64_t depth_frame;
-    uint64_t depth_fp;
-    int depth_valid;
-    /* The depth a step reads at its own frame once the confidence input has gated it: +inf
-     * (background, so fresh noise) where the flow is not trusted. Allocated when first used. */
-    nprfx_image gated;
-} cn_pass;
-
-typedef struct cn_cache {
-    pthread_mutex_t lock; /* first: internal_state.h */
-    uint64_t key;
-    int have_key;
-    cn_pass pass[2]; /* forward, backward */
-    nprfx_image result;
-    int64_t result_frame;
-    uint64_t result_key, result_fp;
-    int has_result;
-} cn_cache;
-
-static void cn_slot_free(cn_slot *s)
-{
-    nprfx_cn_state_free(&s->st);
-    s->used = 0;
-}
-
-static void cn_pass_free(cn_pass *ps)
-{
-    for (int i = 0; i < ps->ncap; i++)
-        cn_slot_free(&ps->ckpt[i]);
-    for (int i = 0; i < ps->nring; i++)
-        cn_slot_free(&ps->ring[i]);
-    free(ps->ckpt);
-    free(ps->ring);
-    nprfx_cn_state_free(&ps->scratch);
-    nprfx_image_free(&ps->depth);
-    nprfx_image_free(&ps->gated);
-    memset(ps, 0, sizeof *ps);
-}
-
-void nprfx_coherent_noise_state_free(void *state)
-{
-    cn_cache *c = state;
-    if (!c) return;
-    cn_pass_free(&c->pass[0]);
-    cn_pass_free(&c->pass[1]);
-    nprfx_image_free(&c->result);
-    internal_state_free(c);
-}
-
-/* FNV-1a over bytes. */
-static uint64_t cn_hash_bytes(uint64_t h, const void *data, size_t n)
-{
-    const unsigned char *b = data;
-    for (size_t i = 0; i < n; i++) {
-        h ^= b[i];
-        h *= 0x100000001b3ull;
-    }
-    return h;
-}
-#define CN_HASH_INIT 0xcbf29ce484222325ull
-static uint64_t cn_hash_f64(uint64_t h, double v)
-{
-    return cn_hash_bytes(h, &v, sizeof v);
-}
-static uint64_t cn_hash_i64(uint64_t h, int64_t v)
-{
-    return cn_hash_bytes(h, &v, sizeof v);
-}
-
-/* A sparse fingerprint of an input view (a fixed 32x32 grid of samples plus its shape): cheap
- * enough for every render call, and enough to notice an upstream change in a host that keeps the
- * instance alive. */
-static uint64_t cn_fingerprint(uint64_t h, const nprfx_image *im)
-{
-    if (!im || !im->data) return cn_hash_bytes(h, "none", 4);
-    h = cn_hash_bytes(h, &im->bounds, sizeof im->bounds);
-    h = cn_hash_bytes(h, &im->channels, sizeof im->channels);
-    int w = nprfx_rect_width(im->bounds), ht = nprfx_rect_height(im->bounds);
-    for (int j = 0; j < 32; j++)
-        for (int i = 0; i < 32; i++) {
-            int x = im->bounds.x0 + (int)(((int64_t)(2 * i + 1) * w) / 64);
-            int y = im->bounds.y0 + (int)(((int64_t)(2 * j + 1) * ht) / 64);
-            h = cn_hash_bytes(h, nprfx_image_at(im, x, y), sizeof(float) * (size_t)im->channels);
-        }
-    return h;
-}
 
 /* ---- one render ---------------------------------------------------------------------------- */
 
@@ -199,7 +90,7 @@ static nprfx_result cn_frame_fingerprint(const cn_run *run, int dir, int64_t f, 
     for (int k = 0; k < 4; k++) {
         if (ins[k] < 0) continue;
         if ((r = cn_fetch(run, ins[k], f, &im))) return r;
-        h = cn_fingerprint(h, &im);
+        h = internal_cn_fingerprint(h, &im);
     }
     *fp = h;
     return NPRFX_OK;
@@ -211,87 +102,23 @@ static nprfx_result cn_slot_ensure(const cn_run *run, nprfx_cn_state *st)
     return nprfx_cn_state_alloc(run->ctx, run->args->frame, run->p.channels, st);
 }
 
-/* Sizes the pass for a span of n frames within the byte budget: checkpoints every K frames and
- * a ring of K recent states (sqrt decomposition: any frame is at most K steps from a checkpoint
- * and in-order or reverse-order rendering recomputes each block once). */
-static void cn_pass_shape(size_t sb, size_t budget, int64_t n, int *K, int *nring, int *ncap)
-{
-    int64_t m = sb ? (int64_t)(budget / sb) : 0;
-    if (n < 1) n = 1;
-    int64_t k = (int64_t)ceil(sqrt((double)n));
-    if (m >= 2 * k + 1) {
-        *K = (int)k;
-        *nring = (int)k;
-    } else if (m >= 2) {
-        *nring = 1;
-        *K = (int)((n + (m - 1) - 1) / (m - 1));
-    } else {
-        *nring = 1;
-        *K = 0;
-    }
-    *ncap = *K > 0 ? (int)(n / *K + 2) : 0;
-}
-
 static nprfx_result cn_pass_configure(const cn_run *run, cn_pass *ps, int dir, int64_t origin,
                                       int64_t n)
 {
     if (ps->valid && ps->dir == dir && ps->origin == origin) return NPRFX_OK;
-    cn_pass_free(ps);
+    internal_cn_pass_free(ps);
     ps->dir = dir;
     ps->origin = origin;
-    cn_pass_shape(nprfx_cn_state_bytes(run->args->frame, run->p.channels), run->budget, n, &ps->K,
+    internal_cn_pass_shape(nprfx_cn_state_bytes(run->args->frame, run->p.channels), run->budget, n, &ps->K,
                   &ps->nring, &ps->ncap);
     ps->ckpt = ps->ncap ? calloc((size_t)ps->ncap, sizeof(cn_slot)) : NULL;
     ps->ring = calloc((size_t)ps->nring, sizeof(cn_slot));
     if ((ps->ncap && !ps->ckpt) || !ps->ring) {
-        cn_pass_free(ps);
+        internal_cn_pass_free(ps);
         return nprfx_error(run->ctx, NPRFX_ERR_OUT_OF_MEMORY, "coherent-noise: out of memory");
     }
     ps->valid = 1;
     return NPRFX_OK;
-}
-
-static cn_slot *cn_pass_find(cn_pass *ps, int64_t f)
-{
-    for (int i = 0; i < ps->nring; i++)
-        if (ps->ring[i].used && ps->ring[i].frame == f) return &ps->ring[i];
-    for (int i = 0; i < ps->ncap; i++)
-        if (ps->ckpt[i].used && ps->ckpt[i].frame == f) return &ps->ckpt[i];
-    return NULL;
-}
-
-/* The saved state nearest to f on the origin side (NULL: none). */
-static cn_slot *cn_pass_nearest(cn_pass *ps, int64_t f)
-{
-    cn_slot *best = NULL;
-    int64_t bd = INT64_MAX;
-    for (int pass = 0; pass < 2; pass++) {
-        cn_slot *s = pass ? ps->ckpt : ps->ring;
-        int n = pass ? ps->ncap : ps->nring;
-        for (int i = 0; i < n; i++) {
-            if (!s[i].used) continue;
-            int64_t d = (f - s[i].frame) * ps->dir;
-            if (d >= 0 && (s[i].frame - ps->origin) * ps->dir >= 0 && d < bd) {
-                bd = d;
-                best = &s[i];
-            }
-        }
-    }
-    return best;
-}
-
-/* Push the scratch state (frame f) into the ring; the replaced buffers become the scratch. */
-static cn_slot *cn_pass_push(cn_pass *ps, int64_t f, uint64_t fp)
-{
-    cn_slot *s = &ps->ring[ps->ring_next];
-    ps->ring_next = (ps->ring_next + 1) % ps->nring;
-    nprfx_cn_state t = s->st;
-    s->st = ps->scratch;
-    ps->scratch = t;
-    s->used = 1;
-    s->frame = f;
-    s->fingerprint = fp;
-    return s;
 }
 
 static nprfx_result cn_pass_checkpoint(const cn_run *run, cn_pass *ps, const cn_slot *s)
@@ -379,13 +206,13 @@ static nprfx_result cn_gate(const cn_run *run, cn_pass *ps, int64_t h, const npr
 static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const cn_slot **out)
 {
     nprfx_result r;
-    cn_slot *s = cn_pass_find(ps, f);
+    cn_slot *s = internal_cn_pass_find(ps, f);
     if (s) {
         *out = s;
         return NPRFX_OK;
     }
     if ((r = cn_slot_ensure(run, &ps->scratch))) return r;
-    const cn_slot *cur = cn_pass_nearest(ps, f);
+    const cn_slot *cur = internal_cn_pass_nearest(ps, f);
     int64_t g;
     if (!cur) {
         nprfx_image src = {0};
@@ -395,7 +222,7 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
         uint64_t fp;
         if ((r = cn_frame_fingerprint(run, ps->dir, g, &fp))) return r;
         if ((r = nprfx_cn_begin(run->ctx, &run->p, g, &src, &ps->scratch))) return r;
-        cn_slot *ns = cn_pass_push(ps, g, fp);
+        cn_slot *ns = internal_cn_pass_push(ps, g, fp);
         if ((r = cn_pass_checkpoint(run, ps, ns))) return r;
         cur = ns;
     }
@@ -413,20 +240,20 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
         if (run->have_zvel && (r = cn_fetch(run, IN_ZVEL, h, &zvel))) return r;
         if (run->p.noise == NPRFX_CN_NOISE_INPUT && (r = cn_fetch(run, IN_SOURCE, h, &src)))
             return r;
-        uint64_t fp = cn_fingerprint(cn_fingerprint(CN_HASH_INIT, &depth), &motion);
-        if (run->p.noise == NPRFX_CN_NOISE_INPUT) fp = cn_fingerprint(fp, &src);
+        uint64_t fp = internal_cn_fingerprint(internal_cn_fingerprint(CN_HASH_INIT, &depth), &motion);
+        if (run->p.noise == NPRFX_CN_NOISE_INPUT) fp = internal_cn_fingerprint(fp, &src);
         nprfx_image gated = depth;
         if (run->have_conf) {
             nprfx_image conf;
             if ((r = cn_fetch(run, IN_CONFIDENCE, h, &conf))) return r;
-            fp = cn_fingerprint(fp, &conf);
+            fp = internal_cn_fingerprint(fp, &conf);
             if ((r = cn_gate(run, ps, h, &depth, &gated))) return r;
         }
         nprfx_cn_inputs in = {&gated, &motion, run->have_zvel ? &zvel : NULL, &depth_prev, &src};
         if ((r = cn_slot_ensure(run, &ps->scratch))) return r;
         if ((r = nprfx_cn_step(run->ctx, &run->p, ps->dir, h, &in, &cur->st, &ps->scratch)))
             return r;
-        cn_slot *ns = cn_pass_push(ps, h, fp);
+        cn_slot *ns = internal_cn_pass_push(ps, h, fp);
         if ((r = cn_pass_checkpoint(run, ps, ns))) return r;
         cn_pass_keep_depth(run->ctx, ps, &depth, h, fp);
         cur = ns;
@@ -434,11 +261,6 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
     }
     *out = cur;
     return NPRFX_OK;
-}
-
-static void cn_pass_invalidate(cn_pass *ps)
-{
-    ps->valid = 0;
 }
 
 /* Rows of win from src into dst (dst->channels channels); unit01: 0.5 + contrast * v. Row-parallel
@@ -551,7 +373,7 @@ double nprfx_coherent_noise_state_bytes(const nprfx_coherent_noise_params *np, i
                                             : INT64_C(1) << 40;
     size_t sb = nprfx_cn_state_bytes(frame, channels);
     int K, nring, ncap;
-    cn_pass_shape(sb, budget, n, &K, &nring, &ncap);
+    internal_cn_pass_shape(sb, budget, n, &K, &nring, &ncap);
     double px = (double)width * height;
     /* a pass: its checkpoints and ring, the depth it keeps and the gated depth */
     double pass = (double)(ncap + nring) * sb + 2.0 * px * sizeof(float);
@@ -702,32 +524,32 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
 
     /* What the pass states depend on (not the output mapping, not the cache size). */
     uint64_t key = CN_HASH_INIT;
-    key = cn_hash_f64(key, run.p.alpha);
-    key = cn_hash_f64(key, run.p.epsilon);
-    key = cn_hash_i64(key, (int64_t)(run.p.noise));
+    key = internal_cn_hash_f64(key, run.p.alpha);
+    key = internal_cn_hash_f64(key, run.p.epsilon);
+    key = internal_cn_hash_i64(key, (int64_t)(run.p.noise));
     if (run.p.noise == NPRFX_CN_NOISE_BANDPASS) {
-        key = cn_hash_f64(key, run.p.sigma_lo);
-        key = cn_hash_f64(key, run.p.sigma_hi);
+        key = internal_cn_hash_f64(key, run.p.sigma_lo);
+        key = internal_cn_hash_f64(key, run.p.sigma_hi);
     }
-    key = cn_hash_i64(key, (int64_t)(run.p.channels));
-    key = cn_hash_i64(key, (int64_t)(run.p.seed));
-    key = cn_hash_i64(key, (int64_t)(run.p.resample));
-    key = cn_hash_f64(key, run.p.motion_scale);
-    key = cn_hash_i64(key, (int64_t)(run.have_zvel));
-    key = cn_hash_i64(key, (int64_t)(run.have_depth));
-    key = cn_hash_i64(key, (int64_t)(run.have_conf));
-    if (run.have_conf) key = cn_hash_f64(key, run.min_conf);
-    key = cn_hash_i64(key, (int64_t)(run.symmetric));
-    key = cn_hash_i64(key, (int64_t)(run.window));
-    key = cn_hash_bytes(key, &args->frame, sizeof args->frame);
-    key = cn_hash_i64(key, np->start);
-    key = cn_hash_i64(key, (int64_t)(args->first_frame));
-    key = cn_hash_i64(key, (int64_t)(args->last_frame));
-    key = cn_hash_i64(key, (int64_t)(run.budget));
+    key = internal_cn_hash_i64(key, (int64_t)(run.p.channels));
+    key = internal_cn_hash_i64(key, (int64_t)(run.p.seed));
+    key = internal_cn_hash_i64(key, (int64_t)(run.p.resample));
+    key = internal_cn_hash_f64(key, run.p.motion_scale);
+    key = internal_cn_hash_i64(key, (int64_t)(run.have_zvel));
+    key = internal_cn_hash_i64(key, (int64_t)(run.have_depth));
+    key = internal_cn_hash_i64(key, (int64_t)(run.have_conf));
+    if (run.have_conf) key = internal_cn_hash_f64(key, run.min_conf);
+    key = internal_cn_hash_i64(key, (int64_t)(run.symmetric));
+    key = internal_cn_hash_i64(key, (int64_t)(run.window));
+    key = internal_cn_hash_bytes(key, &args->frame, sizeof args->frame);
+    key = internal_cn_hash_i64(key, np->start);
+    key = internal_cn_hash_i64(key, (int64_t)(args->first_frame));
+    key = internal_cn_hash_i64(key, (int64_t)(args->last_frame));
+    key = internal_cn_hash_i64(key, (int64_t)(run.budget));
     uint64_t okey = key;
-    okey = cn_hash_f64(okey, smooth);
-    okey = cn_hash_i64(okey, (int64_t)(outmap));
-    okey = cn_hash_f64(okey, contrast);
+    okey = internal_cn_hash_f64(okey, smooth);
+    okey = internal_cn_hash_i64(okey, (int64_t)(outmap));
+    okey = internal_cn_hash_f64(okey, contrast);
 
     /* Causal without smoothing: the output is the forward state itself (mapped), copied to the
      * window straight from the pass; no full-frame result is kept. */
@@ -735,8 +557,8 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
 
     pthread_mutex_lock(&cache->lock);
     if (!cache->have_key || cache->key != key) {
-        cn_pass_free(&cache->pass[0]);
-        cn_pass_free(&cache->pass[1]);
+        internal_cn_pass_free(&cache->pass[0]);
+        internal_cn_pass_free(&cache->pass[1]);
         cache->has_result = 0;
         cache->key = key;
         cache->have_key = 1;
@@ -750,8 +572,8 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
         for (int d = 0; d < 2; d++) {
             cn_pass *ps = &cache->pass[d];
             if (!ps->valid) continue;
-            cn_slot *s = cn_pass_find(ps, run.frame);
-            if (s && d == 0 && s->fingerprint != fp) cn_pass_invalidate(ps);
+            cn_slot *s = internal_cn_pass_find(ps, run.frame);
+            if (s && d == 0 && s->fingerprint != fp) internal_cn_pass_invalidate(ps);
         }
         int64_t aw = run.window > 0 ? 0 : nprfx_coherent_noise_auto_window(np->alpha);
         int64_t nf = shot_known ? args->last_frame - run.start + 1 : 1024;
