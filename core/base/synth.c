@@ -344,13 +344,13 @@ static int intersect(const object_desc *o, const pose *p, sg_vec3 eye, sg_vec3 d
     const double tmin = 1e-6;
     switch (o->kind) {
     case SHAPE_PLANE:
-        return nprfx_sg_hit_plane(oo, od, tmin, tmax, hit);
+        return internal_sg_hit_plane(oo, od, tmin, tmax, hit);
     case SHAPE_SPHERE:
-        return nprfx_sg_hit_sphere(oo, od, o->a, tmin, tmax, hit);
+        return internal_sg_hit_sphere(oo, od, o->a, tmin, tmax, hit);
     case SHAPE_BOX:
-        return nprfx_sg_hit_box(oo, od, o->a, tmin, tmax, hit);
+        return internal_sg_hit_box(oo, od, o->a, tmin, tmax, hit);
     case SHAPE_TORUS:
-        return nprfx_sg_hit_torus(oo, od, o->a, o->b, tmin, tmax, hit);
+        return internal_sg_hit_torus(oo, od, o->a, o->b, tmin, tmax, hit);
     }
     return 0;
 }

@@ -67,7 +67,7 @@ static int quadratic_roots(const double *c, double a, double b, double *roots)
     return n;
 }
 
-int nprfx_sg_poly_roots(const double *c, int deg, double a, double b, double *roots)
+int internal_sg_poly_roots(const double *c, int deg, double a, double b, double *roots)
 {
     if (!(a <= b)) return 0;
     while (deg > 0 && c[deg] == 0)
@@ -84,7 +84,7 @@ int nprfx_sg_poly_roots(const double *c, int deg, double a, double b, double *ro
     double dc[4], crit[4], edges[6];
     for (int i = 1; i <= deg; i++)
         dc[i - 1] = i * c[i];
-    int ncrit = nprfx_sg_poly_roots(dc, deg - 1, a, b, crit);
+    int ncrit = internal_sg_poly_roots(dc, deg - 1, a, b, crit);
     int nedges = 0;
     edges[nedges++] = a;
     for (int i = 0; i < ncrit; i++)
@@ -108,7 +108,7 @@ int nprfx_sg_poly_roots(const double *c, int deg, double a, double b, double *ro
     return n;
 }
 
-int nprfx_sg_hit_plane(sg_vec3 o, sg_vec3 d, double tmin, double tmax, sg_hit *hit)
+int internal_sg_hit_plane(sg_vec3 o, sg_vec3 d, double tmin, double tmax, sg_hit *hit)
 {
     if (d.z == 0) return 0;
     double t = -o.z / d.z;
@@ -127,7 +127,7 @@ static double wrap01(double x)
     return x >= 1.0 ? 0.0 : x;
 }
 
-int nprfx_sg_hit_sphere(sg_vec3 o, sg_vec3 d, double r, double tmin, double tmax, sg_hit *hit)
+int internal_sg_hit_sphere(sg_vec3 o, sg_vec3 d, double r, double tmin, double tmax, sg_hit *hit)
 {
     double a = sg_dot(d, d), b = sg_dot(o, d), c = sg_dot(o, o) - r * r;
     double disc = b * b - a * c;
@@ -151,7 +151,7 @@ int nprfx_sg_hit_sphere(sg_vec3 o, sg_vec3 d, double r, double tmin, double tmax
     return 1;
 }
 
-int nprfx_sg_hit_box(sg_vec3 o, sg_vec3 d, double h, double tmin, double tmax, sg_hit *hit)
+int internal_sg_hit_box(sg_vec3 o, sg_vec3 d, double h, double tmin, double tmax, sg_hit *hit)
 {
     const double oa[3] = {o.x, o.y, o.z}, da[3] = {d.x, d.y, d.z};
     double tnear = -INFINITY, tfar = INFINITY;
@@ -202,7 +202,7 @@ int nprfx_sg_hit_box(sg_vec3 o, sg_vec3 d, double h, double tmin, double tmax, s
     return 1;
 }
 
-int nprfx_sg_hit_torus(sg_vec3 o, sg_vec3 d, double R, double r, double tmin, double tmax,
+int internal_sg_hit_torus(sg_vec3 o, sg_vec3 d, double R, double r, double tmin, double tmax,
                        sg_hit *hit)
 {
     /* Work with a unit direction from where the ray enters the bounding sphere, so the
@@ -231,7 +231,7 @@ int nprfx_sg_hit_torus(sg_vec3 o, sg_vec3 d, double R, double r, double tmin, do
     cf[1] = 4 * qb * e - 2 * R4 * (q.x * dn.x + q.y * dn.y);
     cf[0] = e * e - R4 * (q.x * q.x + q.y * q.y);
     double roots[4];
-    int n = nprfx_sg_poly_roots(cf, 4, 0.0, end - base, roots);
+    int n = internal_sg_poly_roots(cf, 4, 0.0, end - base, roots);
     double s = -1;
     for (int i = 0; i < n; i++)
         if (base + roots[i] > smin) {

@@ -107,18 +107,18 @@ typedef struct sg_hit {
  * The ray is o + t d with d not necessarily unit length; t is in the caller's parameter. */
 
 /* The plane z = 0 (normal +z); uv = (x, y). */
-int nprfx_sg_hit_plane(sg_vec3 o, sg_vec3 d, double tmin, double tmax, sg_hit *hit);
+int internal_sg_hit_plane(sg_vec3 o, sg_vec3 d, double tmin, double tmax, sg_hit *hit);
 /* The sphere of radius r about the origin; u = longitude around +y in [0,1), v = colatitude in
  * [0,1] (0 at +y). */
-int nprfx_sg_hit_sphere(sg_vec3 o, sg_vec3 d, double r, double tmin, double tmax, sg_hit *hit);
+int internal_sg_hit_sphere(sg_vec3 o, sg_vec3 d, double r, double tmin, double tmax, sg_hit *hit);
 /* The cube [-h, h]^3; uv in [0,1]^2 per face from the two coordinates across the face. */
-int nprfx_sg_hit_box(sg_vec3 o, sg_vec3 d, double h, double tmin, double tmax, sg_hit *hit);
+int internal_sg_hit_box(sg_vec3 o, sg_vec3 d, double h, double tmin, double tmax, sg_hit *hit);
 /* The torus about the z axis with major radius R and tube radius r; u around the axis, v around
  * the tube, both in [0,1). */
-int nprfx_sg_hit_torus(sg_vec3 o, sg_vec3 d, double R, double r, double tmin, double tmax,
+int internal_sg_hit_torus(sg_vec3 o, sg_vec3 d, double R, double r, double tmin, double tmax,
                        sg_hit *hit);
 
 /* Real roots of sum c[i] x^i (deg <= 4) inside [a, b], ascending; returns their count.  */
-int nprfx_sg_poly_roots(const double *c, int deg, double a, double b, double *roots);
+int internal_sg_poly_roots(const double *c, int deg, double a, double b, double *roots);
 
 #endif

@@ -92,29 +92,29 @@ static void test_poly_roots(void)
     /* (x-1)(x-2)(x-3)(x-4) = x^4 - 10x^3 + 35x^2 - 50x + 24 */
     const double c[5] = {24, -50, 35, -10, 1};
     double r[4];
-    CHECK(nprfx_sg_poly_roots(c, 4, 0, 5, r) == 4);
+    CHECK(internal_sg_poly_roots(c, 4, 0, 5, r) == 4);
     for (int i = 0; i < 4; i++)
         CHECK_NEAR(r[i], i + 1, 1e-12);
-    CHECK(nprfx_sg_poly_roots(c, 4, 2.5, 3.5, r) == 1);
+    CHECK(internal_sg_poly_roots(c, 4, 2.5, 3.5, r) == 1);
     CHECK_NEAR(r[0], 3, 1e-12);
     const double none[3] = {1, 0, 1}; /* x^2 + 1 */
-    CHECK(nprfx_sg_poly_roots(none, 2, -10, 10, r) == 0);
+    CHECK(internal_sg_poly_roots(none, 2, -10, 10, r) == 0);
 }
 
 /* Known hits, and every torus hit of a fan of rays lies on the surface with an outward normal. */
 static void test_shapes(void)
 {
     sg_hit hit;
-    CHECK(nprfx_sg_hit_torus(sg_v(1, 0, 5), sg_v(0, 0, -1), 1, 0.35, 1e-9, INFINITY, &hit));
+    CHECK(internal_sg_hit_torus(sg_v(1, 0, 5), sg_v(0, 0, -1), 1, 0.35, 1e-9, INFINITY, &hit));
     CHECK_NEAR(hit.t, 4.65, 1e-12);
     CHECK_NEAR(hit.n.z, 1, 1e-12);
-    CHECK(!nprfx_sg_hit_torus(sg_v(0, 0, 5), sg_v(0, 0, -1), 1, 0.35, 1e-9, INFINITY, &hit));
-    CHECK(nprfx_sg_hit_sphere(sg_v(0, 0, 5), sg_v(0, 0, -2), 1, 1e-9, INFINITY, &hit));
+    CHECK(!internal_sg_hit_torus(sg_v(0, 0, 5), sg_v(0, 0, -1), 1, 0.35, 1e-9, INFINITY, &hit));
+    CHECK(internal_sg_hit_sphere(sg_v(0, 0, 5), sg_v(0, 0, -2), 1, 1e-9, INFINITY, &hit));
     CHECK_NEAR(hit.t, 2, 1e-12);
-    CHECK(nprfx_sg_hit_box(sg_v(0.2, 0.1, 5), sg_v(0, 0, -1), 0.5, 1e-9, INFINITY, &hit));
+    CHECK(internal_sg_hit_box(sg_v(0.2, 0.1, 5), sg_v(0, 0, -1), 0.5, 1e-9, INFINITY, &hit));
     CHECK_NEAR(hit.t, 4.5, 1e-12);
     CHECK(hit.n.z == 1 && hit.p.z == 0.5);
-    CHECK(nprfx_sg_hit_plane(sg_v(0.3, 0.4, 2), sg_v(0.1, 0, -1), 1e-9, INFINITY, &hit));
+    CHECK(internal_sg_hit_plane(sg_v(0.3, 0.4, 2), sg_v(0.1, 0, -1), 1e-9, INFINITY, &hit));
     CHECK_NEAR(hit.p.x, 0.5, 1e-15);
     int hits = 0;
     double worst = 0, worst_n = 0;
@@ -122,7 +122,7 @@ static void test_shapes(void)
     for (int j = 0; j < 200; j++)
         for (int i = 0; i < 200; i++) {
             sg_vec3 d = sg_v(-0.2 + (i - 100) * 0.0071, 0.1 + (j - 100) * 0.0069, -1);
-            if (!nprfx_sg_hit_torus(eye, d, 1, 0.35, 1e-9, INFINITY, &hit)) continue;
+            if (!internal_sg_hit_torus(eye, d, 1, 0.35, 1e-9, INFINITY, &hit)) continue;
             hits++;
             double rho = sqrt(hit.p.x * hit.p.x + hit.p.y * hit.p.y);
             double e = fabs(hypot(rho - 1, hit.p.z) - 0.35);
