@@ -23,34 +23,34 @@
 #define NPRFX_OFX_EXPORT
 #endif
 
-ofx_suites nprfx_ofx_g;
+ofx_suites ofx_g;
 
 /* ---- memory ---------------------------------------------------------------------------------- */
 
 /* Through the host's memory suite when it has one (hosts account plug-in memory that way);
  * the choice is fixed at load, so alloc and free always pair up. */
-void *nprfx_ofx_alloc(size_t bytes)
+void *ofx_alloc(size_t bytes)
 {
     void *p = NULL;
-    if (nprfx_ofx_g.mem) {
-        if (nprfx_ofx_g.mem->memoryAlloc(NULL, bytes ? bytes : 1, &p) != kOfxStatOK) return NULL;
+    if (ofx_g.mem) {
+        if (ofx_g.mem->memoryAlloc(NULL, bytes ? bytes : 1, &p) != kOfxStatOK) return NULL;
         return p;
     }
     return malloc(bytes ? bytes : 1);
 }
 
-void nprfx_ofx_free(void *p)
+void ofx_free(void *p)
 {
     if (!p) return;
-    if (nprfx_ofx_g.mem)
-        nprfx_ofx_g.mem->memoryFree(p);
+    if (ofx_g.mem)
+        ofx_g.mem->memoryFree(p);
     else
         free(p);
 }
 
 static void *zalloc(size_t bytes)
 {
-    void *p = nprfx_ofx_alloc(bytes);
+    void *p = ofx_alloc(bytes);
     if (p) memset(p, 0, bytes);
     return p;
 }
@@ -61,30 +61,29 @@ static void *zalloc(size_t bytes)
  * stop the plug-in from loading, so these ignore the status on purpose. */
 static void set_str(OfxPropertySetHandle p, const char *name, int i, const char *v)
 {
-    (void)nprfx_ofx_g.prop->propSetString(p, name, i, v);
+    (void)ofx_g.prop->propSetString(p, name, i, v);
 }
 static void set_int(OfxPropertySetHandle p, const char *name, int i, int v)
 {
-    (void)nprfx_ofx_g.prop->propSetInt(p, name, i, v);
+    (void)ofx_g.prop->propSetInt(p, name, i, v);
 }
 static void set_dbl(OfxPropertySetHandle p, const char *name, int i, double v)
 {
-    (void)nprfx_ofx_g.prop->propSetDouble(p, name, i, v);
+    (void)ofx_g.prop->propSetDouble(p, name, i, v);
 }
 
 static OfxPropertySetHandle clip_props(OfxImageClipHandle clip)
 {
     OfxPropertySetHandle p = NULL;
-    if (!clip || nprfx_ofx_g.fx->clipGetPropertySet(clip, &p) != kOfxStatOK) return NULL;
+    if (!clip || ofx_g.fx->clipGetPropertySet(clip, &p) != kOfxStatOK) return NULL;
     return p;
 }
 
-int nprfx_ofx_clip_connected(OfxImageClipHandle clip)
+int ofx_clip_connected(OfxImageClipHandle clip)
 {
     OfxPropertySetHandle p = clip_props(clip);
     int v = 0;
-    if (p && nprfx_ofx_g.prop->propGetInt(p, kOfxImageClipPropConnected, 0, &v) != kOfxStatOK)
-        v = 0;
+    if (p && ofx_g.prop->propGetInt(p, kOfxImageClipPropConnected, 0, &v) != kOfxStatOK) v = 0;
     return v;
 }
 
@@ -129,7 +128,7 @@ static pthread_once_t plugins_once = PTHREAD_ONCE_INIT;
 
 static void set_host(OfxHost *host)
 {
-    nprfx_ofx_g.host = host;
+    ofx_g.host = host;
 }
 
 static void init_plugins(void)
@@ -172,41 +171,40 @@ NPRFX_OFX_EXPORT OfxPlugin *OfxGetPlugin(int nth)
 /* The module is BUNDLE/Contents/ARCH/nprfx.ofx; its data sit in BUNDLE/Contents/Resources. */
 static void find_data_dir(void)
 {
-    nprfx_ofx_g.data_dir[0] = 0;
+    ofx_g.data_dir[0] = 0;
     Dl_info info;
     if (!dladdr((void *)&OfxGetPlugin, &info) || !info.dli_fname) return;
-    char path[sizeof nprfx_ofx_g.data_dir];
+    char path[sizeof ofx_g.data_dir];
     if (snprintf(path, sizeof path, "%s", info.dli_fname) >= (int)sizeof path) return;
     for (int up = 0; up < 2; up++) { /* drop the file name, then the architecture folder */
         char *slash = strrchr(path, '/');
         if (!slash) return;
         *slash = 0;
     }
-    snprintf(nprfx_ofx_g.data_dir, sizeof nprfx_ofx_g.data_dir, "%.4000s/Resources", path);
+    snprintf(ofx_g.data_dir, sizeof ofx_g.data_dir, "%.4000s/Resources", path);
 }
 
 static OfxStatus load(void)
 {
-    OfxHost *h = nprfx_ofx_g.host;
+    OfxHost *h = ofx_g.host;
     if (!h || !h->fetchSuite) return kOfxStatErrMissingHostFeature;
-    nprfx_ofx_g.prop = h->fetchSuite(h->host, kOfxPropertySuite, 1);
-    nprfx_ofx_g.fx = h->fetchSuite(h->host, kOfxImageEffectSuite, 1);
-    nprfx_ofx_g.param = h->fetchSuite(h->host, kOfxParameterSuite, 1);
-    nprfx_ofx_g.mt = h->fetchSuite(h->host, kOfxMultiThreadSuite, 1);
-    nprfx_ofx_g.mem = h->fetchSuite(h->host, kOfxMemorySuite, 1);
-    nprfx_ofx_g.msg = h->fetchSuite(h->host, kOfxMessageSuite, 1);
-    nprfx_ofx_g.msg2 = h->fetchSuite(h->host, kOfxMessageSuite, 2);
-    if (!nprfx_ofx_g.msg && nprfx_ofx_g.msg2) /* V2 begins with V1's one function */
-        nprfx_ofx_g.msg = (const OfxMessageSuiteV1 *)nprfx_ofx_g.msg2;
-    if (!nprfx_ofx_g.prop || !nprfx_ofx_g.fx || !nprfx_ofx_g.param)
-        return kOfxStatErrMissingHostFeature;
+    ofx_g.prop = h->fetchSuite(h->host, kOfxPropertySuite, 1);
+    ofx_g.fx = h->fetchSuite(h->host, kOfxImageEffectSuite, 1);
+    ofx_g.param = h->fetchSuite(h->host, kOfxParameterSuite, 1);
+    ofx_g.mt = h->fetchSuite(h->host, kOfxMultiThreadSuite, 1);
+    ofx_g.mem = h->fetchSuite(h->host, kOfxMemorySuite, 1);
+    ofx_g.msg = h->fetchSuite(h->host, kOfxMessageSuite, 1);
+    ofx_g.msg2 = h->fetchSuite(h->host, kOfxMessageSuite, 2);
+    if (!ofx_g.msg && ofx_g.msg2) /* V2 begins with V1's one function */
+        ofx_g.msg = (const OfxMessageSuiteV1 *)ofx_g.msg2;
+    if (!ofx_g.prop || !ofx_g.fx || !ofx_g.param) return kOfxStatErrMissingHostFeature;
     /* A host that does not say is taken at its word of the spec's default, which is access. */
     int temporal = 1;
-    if (nprfx_ofx_g.prop->propGetInt(h->host, kOfxImageEffectPropTemporalClipAccess, 0,
-                                     &temporal) != kOfxStatOK)
+    if (ofx_g.prop->propGetInt(h->host, kOfxImageEffectPropTemporalClipAccess, 0, &temporal) !=
+        kOfxStatOK)
         temporal = 1;
-    nprfx_ofx_g.temporal = temporal != 0;
-    nprfx_ofx_g.flow = nprfx_flow_opencv(); /* NULL without OpenCV: nothing is derived */
+    ofx_g.temporal = temporal != 0;
+    ofx_g.flow = nprfx_flow_opencv(); /* NULL without OpenCV: nothing is derived */
     find_data_dir();
     return kOfxStatOK;
 }
@@ -217,7 +215,7 @@ static OfxStatus load(void)
 static int filter_derives(const nprfx_node_desc *d)
 {
     ofx_derive_plan plan;
-    return nprfx_ofx_derive_plan(d, nprfx_ofx_g.temporal, &plan);
+    return ofx_derive_make_plan(d, ofx_g.temporal, &plan);
 }
 
 /* The Filter context has exactly one input, Source: offered when the node has a main input and
@@ -236,7 +234,7 @@ static int filter_capable(const nprfx_node_desc *d)
  * only in the Filter context on footage, where the plug-in keeps the previous Source frame. */
 static int filter_only(const nprfx_node_desc *d)
 {
-    return (d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) && !nprfx_ofx_g.temporal;
+    return (d->flags & NPRFX_NODE_NEEDS_OTHER_FRAMES) && !ofx_g.temporal;
 }
 
 static int has_temporal_input(const nprfx_node_desc *d)
@@ -258,11 +256,11 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
                  "and the host offers no temporal clip access "
                  "(kOfxImageEffectPropTemporalClipAccess = 0)",
                  d->id);
-        nprfx_ofx_post(fx, kOfxMessageLog, why);
+        ofx_post(fx, kOfxMessageLog, why);
         return kOfxStatErrMissingHostFeature;
     }
     OfxPropertySetHandle p;
-    if (nprfx_ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
+    if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
     set_str(p, kOfxPropLabel, 0, d->label);
     set_str(p, kOfxPropShortLabel, 0, d->label);
     set_str(p, kOfxPropLongLabel, 0, d->label);
@@ -315,8 +313,7 @@ static OfxStatus describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     set_int(p, kOfxImageEffectPluginPropHostFrameThreading, 0, 0);
     set_int(p, kOfxImageEffectPropSupportsMultiResolution, 0, 1);
     set_int(p, kOfxImageEffectPropSupportsTiles, 0, 1);
-    set_int(p, kOfxImageEffectPropTemporalClipAccess, 0,
-            has_temporal_input(d) && nprfx_ofx_g.temporal);
+    set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, has_temporal_input(d) && ofx_g.temporal);
     set_int(p, kOfxImageEffectPropSupportsMultipleClipDepths, 0, 0);
     set_int(p, kOfxImageEffectPropSupportsMultipleClipPARs, 0, 0);
     set_int(p, kOfxImageEffectPluginPropFieldRenderTwiceAlways, 0, 0);
@@ -369,7 +366,7 @@ static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
     if ((int)p->type < 0 || (int)p->type >= (int)(sizeof types / sizeof types[0]))
         return kOfxStatErrUnsupported;
     OfxPropertySetHandle pp;
-    OfxStatus st = nprfx_ofx_g.param->paramDefine(ps, types[p->type], p->name, &pp);
+    OfxStatus st = ofx_g.param->paramDefine(ps, types[p->type], p->name, &pp);
     if (st != kOfxStatOK) return st;
     set_str(pp, kOfxPropLabel, 0, p->label ? p->label : p->name);
     set_str(pp, kOfxParamPropScriptName, 0, p->name);
@@ -451,7 +448,7 @@ static OfxStatus define_selector(OfxParamSetHandle ps, const nprfx_node_desc *d,
     if (n < 2) return kOfxStatOK; /* nothing to choose */
     nprfx_ofx_selector_name(d, k, name, name_size);
     OfxPropertySetHandle pp;
-    OfxStatus st = nprfx_ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, name, &pp);
+    OfxStatus st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, name, &pp);
     if (st != kOfxStatOK) return st;
     char label[NPRFX_OFX_NAME_MAX + 16];
     snprintf(label, sizeof label, "%s Channels", in->label ? in->label : clip);
@@ -485,7 +482,7 @@ static OfxStatus define_selector(OfxParamSetHandle ps, const nprfx_node_desc *d,
 static OfxPropertySetHandle define_clip(OfxImageEffectHandle fx, const char *name)
 {
     OfxPropertySetHandle p = NULL;
-    if (nprfx_ofx_g.fx->clipDefine(fx, name, &p) != kOfxStatOK) return NULL;
+    if (ofx_g.fx->clipDefine(fx, name, &p) != kOfxStatOK) return NULL;
     return p;
 }
 
@@ -493,8 +490,7 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
                                      OfxPropertySetHandle in_args)
 {
     char *context = NULL;
-    if (nprfx_ofx_g.prop->propGetString(in_args, kOfxImageEffectPropContext, 0, &context) !=
-            kOfxStatOK ||
+    if (ofx_g.prop->propGetString(in_args, kOfxImageEffectPropContext, 0, &context) != kOfxStatOK ||
         !context)
         return kOfxStatErrValue;
     int general = !strcmp(context, kOfxImageEffectContextGeneral);
@@ -504,9 +500,9 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
     /* Footage: Source is the picture the flow is computed on; it feeds the main input too unless
      * that is itself derived (advect's motion_prev). */
     ofx_derive_plan plan;
-    int derives = !general && nprfx_ofx_derive_plan(d, nprfx_ofx_g.temporal, &plan);
+    int derives = !general && ofx_derive_make_plan(d, ofx_g.temporal, &plan);
     int main = nprfx_ofx_main_input(d);
-    int temporal = (d->flags & NPRFX_NODE_TEMPORAL) && nprfx_ofx_g.temporal;
+    int temporal = (d->flags & NPRFX_NODE_TEMPORAL) && ofx_g.temporal;
     int maskable = general && nprfx_ofx_maskable(d);
 
     OfxPropertySetHandle cp = define_clip(fx, NPRFX_OFX_OUTPUT_CLIP);
@@ -547,9 +543,9 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
     }
 
     OfxParamSetHandle ps;
-    if (nprfx_ofx_g.fx->getParamSet(fx, &ps) != kOfxStatOK) return kOfxStatErrBadHandle;
+    if (ofx_g.fx->getParamSet(fx, &ps) != kOfxStatOK) return kOfxStatErrBadHandle;
     OfxPropertySetHandle page = NULL;
-    if (nprfx_ofx_g.param->paramDefine(ps, kOfxParamTypePage, "Controls", &page) == kOfxStatOK)
+    if (ofx_g.param->paramDefine(ps, kOfxParamTypePage, "Controls", &page) == kOfxStatOK)
         set_str(page, kOfxPropLabel, 0, "Controls");
     else
         page = NULL; /* a host without pages lays params out itself */
@@ -571,8 +567,7 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
     if (maskable) {
         OfxPropertySetHandle pp;
         nprfx_ofx_extra_param(d, "maskInvert", name, sizeof name);
-        if ((st = nprfx_ofx_g.param->paramDefine(ps, kOfxParamTypeBoolean, name, &pp)) !=
-            kOfxStatOK)
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeBoolean, name, &pp)) != kOfxStatOK)
             return st;
         set_str(pp, kOfxPropLabel, 0, "Invert Mask");
         set_int(pp, kOfxParamPropDefault, 0, 0);
@@ -580,7 +575,7 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
         set_str(pp, kOfxParamPropHint, 0, "Use 1 - Mask instead of the Mask.");
         add_page_child(page, &nchildren, name);
         nprfx_ofx_extra_param(d, "mix", name, sizeof name);
-        if ((st = nprfx_ofx_g.param->paramDefine(ps, kOfxParamTypeDouble, name, &pp)) != kOfxStatOK)
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeDouble, name, &pp)) != kOfxStatOK)
             return st;
         set_str(pp, kOfxPropLabel, 0, "Mix");
         set_dbl(pp, kOfxParamPropDefault, 0, 1.0);
@@ -599,12 +594,12 @@ static OfxStatus describe_in_context(const nprfx_node_desc *d, OfxImageEffectHan
 
 /* ---- instances ------------------------------------------------------------------------------- */
 
-ofx_instance *nprfx_ofx_instance(OfxImageEffectHandle fx)
+ofx_instance *ofx_instance_get(OfxImageEffectHandle fx)
 {
     OfxPropertySetHandle p;
     void *v = NULL;
-    if (!fx || nprfx_ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK ||
-        nprfx_ofx_g.prop->propGetPointer(p, kOfxPropInstanceData, 0, &v) != kOfxStatOK)
+    if (!fx || ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK ||
+        ofx_g.prop->propGetPointer(p, kOfxPropInstanceData, 0, &v) != kOfxStatOK)
         return NULL;
     return v;
 }
@@ -613,12 +608,12 @@ static void instance_free(ofx_instance *inst)
 {
     if (!inst) return;
     if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
-    nprfx_ofx_derive_forget(inst);
+    ofx_instance_forget_footage(inst);
     pthread_mutex_destroy(&inst->lock);
-    nprfx_ofx_free(inst->clips);
-    nprfx_ofx_free(inst->params);
-    nprfx_ofx_free(inst->selectors);
-    nprfx_ofx_free(inst);
+    ofx_free(inst->clips);
+    ofx_free(inst->params);
+    ofx_free(inst->selectors);
+    ofx_free(inst);
 }
 
 static OfxStatus create_instance(const nprfx_node_desc *d, OfxImageEffectHandle fx)
@@ -637,7 +632,7 @@ static OfxStatus create_instance(const nprfx_node_desc *d, OfxImageEffectHandle 
         instance_free(inst);
         return kOfxStatErrMemory;
     }
-    const OfxImageEffectSuiteV1 *fxs = nprfx_ofx_g.fx;
+    const OfxImageEffectSuiteV1 *fxs = ofx_g.fx;
     if (fxs->clipGetHandle(fx, NPRFX_OFX_OUTPUT_CLIP, &inst->output, NULL) != kOfxStatOK) {
         instance_free(inst);
         return kOfxStatErrBadHandle;
@@ -654,16 +649,15 @@ static OfxStatus create_instance(const nprfx_node_desc *d, OfxImageEffectHandle 
     OfxPropertySetHandle ep;
     char *context = NULL;
     if (fxs->getPropertySet(fx, &ep) == kOfxStatOK &&
-        nprfx_ofx_g.prop->propGetString(ep, kOfxImageEffectPropContext, 0, &context) ==
-            kOfxStatOK &&
+        ofx_g.prop->propGetString(ep, kOfxImageEffectPropContext, 0, &context) == kOfxStatOK &&
         context && !strcmp(context, kOfxImageEffectContextFilter))
-        inst->derive = nprfx_ofx_derive_plan(d, nprfx_ofx_g.temporal, &inst->plan);
+        inst->derive = ofx_derive_make_plan(d, ofx_g.temporal, &inst->plan);
     OfxParamSetHandle ps;
     if (fxs->getParamSet(fx, &ps) != kOfxStatOK) {
         instance_free(inst);
         return kOfxStatErrBadHandle;
     }
-    const OfxParameterSuiteV1 *pm = nprfx_ofx_g.param;
+    const OfxParameterSuiteV1 *pm = ofx_g.param;
     for (int i = 0; i < d->num_params; i++)
         if (pm->paramGetHandle(ps, d->params[i].name, &inst->params[i], NULL) != kOfxStatOK) {
             instance_free(inst);
@@ -684,7 +678,7 @@ static OfxStatus create_instance(const nprfx_node_desc *d, OfxImageEffectHandle 
     }
     OfxPropertySetHandle p;
     if (fxs->getPropertySet(fx, &p) != kOfxStatOK ||
-        nprfx_ofx_g.prop->propSetPointer(p, kOfxPropInstanceData, 0, inst) != kOfxStatOK) {
+        ofx_g.prop->propSetPointer(p, kOfxPropInstanceData, 0, inst) != kOfxStatOK) {
         instance_free(inst);
         return kOfxStatErrBadHandle;
     }
@@ -693,11 +687,11 @@ static OfxStatus create_instance(const nprfx_node_desc *d, OfxImageEffectHandle 
 
 static OfxStatus destroy_instance(OfxImageEffectHandle fx)
 {
-    ofx_instance *inst = nprfx_ofx_instance(fx);
+    ofx_instance *inst = ofx_instance_get(fx);
     if (!inst) return kOfxStatErrBadHandle;
     OfxPropertySetHandle p;
-    if (nprfx_ofx_g.fx->getPropertySet(fx, &p) == kOfxStatOK)
-        (void)nprfx_ofx_g.prop->propSetPointer(p, kOfxPropInstanceData, 0, NULL);
+    if (ofx_g.fx->getPropertySet(fx, &p) == kOfxStatOK)
+        (void)ofx_g.prop->propSetPointer(p, kOfxPropInstanceData, 0, NULL);
     instance_free(inst);
     return kOfxStatOK;
 }
@@ -712,7 +706,7 @@ static void drop_state(ofx_instance *inst)
     inst->export_done = 0;
     /* Without temporal access the node cannot recompute its history: the next frame restarts
      * the effect, as after a cut (the kept Source frame goes with it). */
-    nprfx_ofx_derive_forget(inst);
+    ofx_instance_forget_footage(inst);
     pthread_mutex_unlock(&inst->lock);
 }
 
@@ -728,8 +722,8 @@ static OfxStatus instance_changed(ofx_instance *inst, OfxPropertySetHandle in_ar
 {
     char *type = NULL, *name = NULL;
     if (in_args) {
-        (void)nprfx_ofx_g.prop->propGetString(in_args, kOfxPropType, 0, &type);
-        (void)nprfx_ofx_g.prop->propGetString(in_args, kOfxPropName, 0, &name);
+        (void)ofx_g.prop->propGetString(in_args, kOfxPropType, 0, &type);
+        (void)ofx_g.prop->propGetString(in_args, kOfxPropName, 0, &name);
     }
     if (type && name && !strcmp(type, kOfxTypeParameter)) {
         char mix[NPRFX_OFX_NAME_MAX], inv[NPRFX_OFX_NAME_MAX];
@@ -743,21 +737,20 @@ static OfxStatus instance_changed(ofx_instance *inst, OfxPropertySetHandle in_ar
 
 /* ---- selections, frames, ranges -------------------------------------------------------------- */
 
-OfxStatus nprfx_ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod)
+OfxStatus ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod)
 {
     const nprfx_node_desc *d = inst->desc;
     for (int k = 0; k < d->num_inputs; k++) {
         if (d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) continue;
-        if (!nprfx_ofx_clip_connected(inst->clips[k])) continue;
-        if (nprfx_ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], time, rod) == kOfxStatOK)
+        if (!ofx_clip_connected(inst->clips[k])) continue;
+        if (ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], time, rod) == kOfxStatOK)
             return kOfxStatOK;
     }
     OfxPropertySetHandle p;
     double off[2] = {0, 0}, size[2] = {0, 0};
-    if (nprfx_ofx_g.fx->getPropertySet(inst->fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
-    (void)nprfx_ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectOffset, 2, off);
-    if (nprfx_ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectSize, 2, size) !=
-            kOfxStatOK ||
+    if (ofx_g.fx->getPropertySet(inst->fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
+    (void)ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectOffset, 2, off);
+    if (ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectSize, 2, size) != kOfxStatOK ||
         size[0] <= 0 || size[1] <= 0)
         return kOfxStatFailed;
     rod->x1 = off[0];
@@ -767,12 +760,11 @@ OfxStatus nprfx_ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *
     return kOfxStatOK;
 }
 
-void nprfx_ofx_shot_range(const ofx_instance *inst, double *first, double *last)
+void ofx_shot_range(const ofx_instance *inst, double *first, double *last)
 {
     double r[2] = {0, 0};
     OfxPropertySetHandle p = clip_props(inst->output);
-    if (!p ||
-        nprfx_ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropFrameRange, 2, r) != kOfxStatOK)
+    if (!p || ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropFrameRange, 2, r) != kOfxStatOK)
         r[0] = r[1] = 0;
     *first = r[0];
     *last = r[1];
@@ -784,12 +776,12 @@ static OfxStatus region_of_definition(ofx_instance *inst, OfxPropertySetHandle i
                                       OfxPropertySetHandle out_args)
 {
     double t = 0;
-    (void)nprfx_ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
     OfxRectD rod;
-    OfxStatus st = nprfx_ofx_frame_rod(inst, t, &rod);
+    OfxStatus st = ofx_frame_rod(inst, t, &rod);
     if (st != kOfxStatOK) return kOfxStatReplyDefault;
     double v[4] = {rod.x1, rod.y1, rod.x2, rod.y2};
-    return nprfx_ofx_g.prop->propSetDoubleN(out_args, kOfxImageEffectPropRegionOfDefinition, 4, v);
+    return ofx_g.prop->propSetDoubleN(out_args, kOfxImageEffectPropRegionOfDefinition, 4, v);
 }
 
 static void set_clip_rect(OfxPropertySetHandle out_args, const char *prefix, const char *clip,
@@ -797,7 +789,7 @@ static void set_clip_rect(OfxPropertySetHandle out_args, const char *prefix, con
 {
     char name[NPRFX_OFX_NAME_MAX + 64];
     snprintf(name, sizeof name, "%s%s", prefix, clip);
-    (void)nprfx_ofx_g.prop->propSetDoubleN(out_args, name, n, v);
+    (void)ofx_g.prop->propSetDoubleN(out_args, name, n, v);
 }
 
 /* The frames input k's clip is read at, as n ranges (none: the host's default, the frame). */
@@ -820,13 +812,13 @@ static OfxStatus regions_of_interest(ofx_instance *inst, OfxPropertySetHandle in
                                      OfxPropertySetHandle out_args)
 {
     double t = 0, roi[4] = {0, 0, 0, 0};
-    (void)nprfx_ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
-    (void)nprfx_ofx_g.prop->propGetDoubleN(in_args, kOfxImageEffectPropRegionOfInterest, 4, roi);
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
+    (void)ofx_g.prop->propGetDoubleN(in_args, kOfxImageEffectPropRegionOfInterest, 4, roi);
     char clip[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < inst->desc->num_inputs; k++) {
         OfxRectD rod;
         if (!inst->clips[k] ||
-            nprfx_ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], t, &rod) != kOfxStatOK)
+            ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], t, &rod) != kOfxStatOK)
             continue;
         double v[4] = {rod.x1, rod.y1, rod.x2, rod.y2};
         nprfx_ofx_clip_name(inst->desc, k, clip, sizeof clip);
@@ -846,8 +838,8 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
 {
     const nprfx_node_desc *d = inst->desc;
     double t = 0, first, last;
-    (void)nprfx_ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
-    nprfx_ofx_shot_range(inst, &first, &last);
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
+    ofx_shot_range(inst, &first, &last);
     size_t np = (size_t)d->num_params + 1, ni = (size_t)d->num_inputs + 1;
     nprfx_value *values = calloc(np, sizeof *values);
     char **strings = calloc(np, sizeof *strings);
@@ -858,30 +850,30 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
         status = kOfxStatErrMemory;
         goto done;
     }
-    nprfx_ofx_input_channels(inst, t, 0, channels);
+    ofx_input_channels(inst, t, 0, channels);
     int time = (int)floor(t + 0.5);
     nprfx_frames_query q = {time, (int)floor(first + 0.5), (int)floor(last + 0.5), channels};
     /* A param the host holds out of range fails the render with its message; here the defaults
      * stand in, so the frame itself is still declared. */
-    if (nprfx_ofx_eval_params(inst, ctx, t, 0, values, strings) != NPRFX_OK)
+    if (ofx_eval_params(inst, ctx, t, 0, values, strings) != NPRFX_OK)
         nprfx_node_defaults(d, values);
     int main = nprfx_ofx_main_input(d);
-    if (inst->derive && main >= 0 && nprfx_ofx_clip_connected(inst->clips[main])) {
+    if (inst->derive && main >= 0 && ofx_clip_connected(inst->clips[main])) {
         /* Footage: Source at the frames the flow reads for each derived input's frames, and at
          * the main input's own when Source feeds it; one frame where the host cannot give
          * others (the plug-in keeps the previous one). */
         nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
         int n = 1;
         r[0].first = r[0].last = time;
-        if (nprfx_ofx_g.temporal)
-            n = nprfx_ofx_derive_frames(d, &inst->plan, values, &q, !inst->plan.count[main], r);
+        if (ofx_g.temporal)
+            n = ofx_derive_frames(d, &inst->plan, values, &q, !inst->plan.count[main], r);
         set_frame_ranges(out_args, d, main, r, n);
     }
     for (int k = 0; k < d->num_inputs && !inst->derive; k++) {
         if (!inst->clips[k] || !channels[k]) continue;
         nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
         int n = 0;
-        if (!nprfx_ofx_g.temporal) {
+        if (!ofx_g.temporal) {
             r[0].first = r[0].last = time;
             n = 1;
         } else if (nprfx_node_frames_needed(ctx, d, values, &q, k, r, &n) != NPRFX_OK) {
@@ -889,7 +881,7 @@ static OfxStatus frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
         }
         set_frame_ranges(out_args, d, k, r, n);
     }
-    if (inst->mask && nprfx_ofx_clip_connected(inst->mask)) {
+    if (inst->mask && ofx_clip_connected(inst->mask)) {
         double r[2] = {t, t};
         set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, NPRFX_OFX_MASK_CLIP, r, 2);
     }
@@ -908,7 +900,7 @@ static void set_clip_string(OfxPropertySetHandle out_args, const char *prefix, c
 {
     char name[NPRFX_OFX_NAME_MAX + 64];
     snprintf(name, sizeof name, "%s%s", prefix, clip);
-    (void)nprfx_ofx_g.prop->propSetString(out_args, name, 0, v);
+    (void)ofx_g.prop->propSetString(out_args, name, 0, v);
 }
 
 /* Output components and premultiplication from what the node will output: the channel count
@@ -930,9 +922,9 @@ static OfxStatus clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_a
     (void)nprfx_context_create(NULL, &ctx);
     /* Values the host holds out of range fail the render, with the message; until then the
      * defaults decide the channel count. */
-    if (!strings || nprfx_ofx_eval_params(inst, ctx, 0, 1, values, strings) != NPRFX_OK)
+    if (!strings || ofx_eval_params(inst, ctx, 0, 1, values, strings) != NPRFX_OK)
         nprfx_node_defaults(d, values);
-    nprfx_ofx_input_channels(inst, 0, 1, in_ch);
+    ofx_input_channels(inst, 0, 1, in_ch);
     int main = nprfx_ofx_main_input(d);
     nprfx_output_info oi;
     int nout = nprfx_node_output_info(ctx, d, values, in_ch, &oi) == NPRFX_OK ? oi.channels : 4;
@@ -944,15 +936,14 @@ static OfxStatus clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_a
     free(in_ch);
 
     const char *src_comp = NULL, *src_premult = NULL;
-    if (main >= 0 && nprfx_ofx_clip_connected(inst->clips[main])) {
+    if (main >= 0 && ofx_clip_connected(inst->clips[main])) {
         OfxPropertySetHandle sp = clip_props(inst->clips[main]);
         char *s = NULL;
-        if (sp &&
-            nprfx_ofx_g.prop->propGetString(sp, kOfxImageEffectPropComponents, 0, &s) == kOfxStatOK)
+        if (sp && ofx_g.prop->propGetString(sp, kOfxImageEffectPropComponents, 0, &s) == kOfxStatOK)
             src_comp = s;
         s = NULL;
-        if (sp && nprfx_ofx_g.prop->propGetString(sp, kOfxImageEffectPropPreMultiplication, 0,
-                                                  &s) == kOfxStatOK)
+        if (sp && ofx_g.prop->propGetString(sp, kOfxImageEffectPropPreMultiplication, 0, &s) ==
+                      kOfxStatOK)
             src_premult = s;
     }
     const char *comp = kOfxImageComponentRGBA, *premult = kOfxImageOpaque;
@@ -971,11 +962,10 @@ static OfxStatus clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_a
         nprfx_ofx_clip_name(d, k, clip, sizeof clip);
         set_clip_string(out_args, kOfxImageClipPropDepthPrefix, clip, kOfxBitDepthFloat);
     }
-    (void)nprfx_ofx_g.prop->propSetString(out_args, kOfxImageEffectPropPreMultiplication, 0,
-                                          premult);
+    (void)ofx_g.prop->propSetString(out_args, kOfxImageEffectPropPreMultiplication, 0, premult);
     /* Random numbers hash the frame (docs/design.md §1): the output varies with time even when the
      * inputs do not. */
-    (void)nprfx_ofx_g.prop->propSetInt(out_args, kOfxImageEffectFrameVarying, 0, 1);
+    (void)ofx_g.prop->propSetInt(out_args, kOfxImageEffectFrameVarying, 0, 1);
     return kOfxStatOK;
 }
 
@@ -992,15 +982,15 @@ static OfxStatus main_entry(int index, const char *action, const void *handle,
         nprfx_stipple_shipped_release(); /* the process-wide dot sequence; instances keep theirs */
         return kOfxStatOK;
     }
-    if (!nprfx_ofx_g.prop || !nprfx_ofx_g.fx || !nprfx_ofx_g.param) return kOfxStatErrFatal;
+    if (!ofx_g.prop || !ofx_g.fx || !ofx_g.param) return kOfxStatErrFatal;
     if (!strcmp(action, kOfxActionDescribe)) return describe(d, fx);
     if (!strcmp(action, kOfxImageEffectActionDescribeInContext))
         return describe_in_context(d, fx, in_args);
     if (!strcmp(action, kOfxActionCreateInstance)) return create_instance(d, fx);
-    ofx_instance *inst = nprfx_ofx_instance(fx);
+    ofx_instance *inst = ofx_instance_get(fx);
     if (!inst) return kOfxStatErrBadHandle;
     if (!strcmp(action, kOfxActionDestroyInstance)) return destroy_instance(fx);
-    if (!strcmp(action, kOfxImageEffectActionRender)) return nprfx_ofx_render(inst, in_args);
+    if (!strcmp(action, kOfxImageEffectActionRender)) return ofx_render(inst, in_args);
     if (!strcmp(action, kOfxImageEffectActionGetRegionOfDefinition))
         return region_of_definition(inst, in_args, out_args);
     if (!strcmp(action, kOfxImageEffectActionGetRegionsOfInterest))

@@ -19,7 +19,7 @@
 #define NPRFX_OFX_DERIVE_MAX_INPUTS 16
 
 /* The flow node's descriptor; NULL where the registry has none of a shape these arrays hold. */
-static inline const nprfx_node_desc *nprfx_ofx_flow_node(void)
+static inline const nprfx_node_desc *ofx_flow_node(void)
 {
     const nprfx_node_desc *f = nprfx_node_find(NPRFX_OFX_FLOW_NODE);
     return f && f->num_inputs == 1 && f->num_params <= NPRFX_OFX_DERIVE_MAX_PARAMS ? f : NULL;
@@ -29,8 +29,8 @@ static inline const nprfx_node_desc *nprfx_ofx_flow_node(void)
  * whose channel names `src` gives: their indices into idx (at most 4), and how many. 0 when the
  * alternative names a channel src lacks, is a layer form (no channel of that exact name), or has
  * another count than the input takes; -1 when the hint has no alternative `alt`. */
-static inline int nprfx_ofx_aov_match(const nprfx_input_desc *in, int alt,
-                                      const nprfx_output_info *src, int *idx)
+static inline int ofx_aov_match(const nprfx_input_desc *in, int alt, const nprfx_output_info *src,
+                                int *idx)
 {
     const char *s = in->aov;
     for (int i = 0; s && i < alt; i++)
@@ -58,9 +58,9 @@ static inline int nprfx_ofx_aov_match(const nprfx_input_desc *in, int alt,
 /* Whether input k of d names channels of the flow node's whole output (its default params).
  * Whether the adapter derives it in a given host also depends on that host (ofx_derive.c: the
  * flow provider, temporal clip access). */
-static inline int nprfx_ofx_derivable(const nprfx_node_desc *d, int k)
+static inline int ofx_derivable(const nprfx_node_desc *d, int k)
 {
-    const nprfx_node_desc *f = nprfx_ofx_flow_node();
+    const nprfx_node_desc *f = ofx_flow_node();
     if (!f || d == f || k < 0 || k >= d->num_inputs || !d->inputs[k].aov) return 0;
     nprfx_value v[NPRFX_OFX_DERIVE_MAX_PARAMS];
     int ich[1] = {4}, idx[4];
@@ -68,7 +68,7 @@ static inline int nprfx_ofx_derivable(const nprfx_node_desc *d, int k)
     nprfx_node_defaults(f, v);
     if (nprfx_node_output_info(NULL, f, v, ich, &oi) != NPRFX_OK) return 0;
     for (int alt = 0;; alt++) {
-        int n = nprfx_ofx_aov_match(&d->inputs[k], alt, &oi, idx);
+        int n = ofx_aov_match(&d->inputs[k], alt, &oi, idx);
         if (n) return n > 0;
     }
 }

@@ -77,7 +77,7 @@ static nprfx_result write_file(nprfx_context *ctx, const char *path, const char 
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_ofx_export(ofx_instance *inst, const nprfx_render_args *a)
+nprfx_result ofx_export(ofx_instance *inst, const nprfx_render_args *a)
 {
     const nprfx_node_desc *d = inst->desc;
     nprfx_result r = NPRFX_OK;

@@ -34,7 +34,7 @@ typedef struct ofx_suites {
      * the module's own path on load; empty when unknown. */
     char data_dir[4096];
 } ofx_suites;
-extern ofx_suites nprfx_ofx_g;
+extern ofx_suites ofx_g;
 
 /* How a node's inputs are derived from the Source clip with the flow node (ofx_derive.c): the
  * flow's param values (its defaults, with the output choice that covers what the inputs take and
@@ -51,15 +51,15 @@ typedef struct ofx_derive_plan {
 
 /* The plan for node d in a host with (1) or without (0) temporal clip access; returns plan->any.
  * Without a flow provider, or for a node without derivable inputs, nothing is derived. */
-int nprfx_ofx_derive_plan(const nprfx_node_desc *d, int temporal, ofx_derive_plan *plan);
+int ofx_derive_make_plan(const nprfx_node_desc *d, int temporal, ofx_derive_plan *plan);
 
 /* The frames of the Source clip a derived render of q->time reads: the frames the node reads its
  * derived inputs at, each widened by the frames the flow node reads to compute it, and the
  * frames it reads the main input at when Source feeds that too (main_fed). Up to
  * NPRFX_MAX_FRAME_RANGES merged ranges into r; returns how many. */
-int nprfx_ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
-                            const nprfx_value *values, const nprfx_frames_query *q, int main_fed,
-                            nprfx_frame_range *r);
+int ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
+                      const nprfx_value *values, const nprfx_frames_query *q, int main_fed,
+                      nprfx_frame_range *r);
 
 /* One plug-in instance: the handles looked up once at creation, and the node's state slot. */
 typedef struct ofx_instance {
@@ -90,46 +90,46 @@ typedef struct ofx_instance {
 
 /* Forget the kept frames and the flow's cache (with lock held or before the instance is
  * shared). */
-void nprfx_ofx_derive_forget(ofx_instance *inst);
+void ofx_instance_forget_footage(ofx_instance *inst);
 
-void *nprfx_ofx_alloc(size_t bytes);
-void nprfx_ofx_free(void *p);
+void *ofx_alloc(size_t bytes);
+void ofx_free(void *p);
 
-ofx_instance *nprfx_ofx_instance(OfxImageEffectHandle fx);
-int nprfx_ofx_clip_connected(OfxImageClipHandle clip);
+ofx_instance *ofx_instance_get(OfxImageEffectHandle fx);
+int ofx_clip_connected(OfxImageClipHandle clip);
 
 /* The channels input k reads at `time`: its selector's option, or the only option. */
-void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current,
-                               int *first, int *count);
+void ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current, int *first,
+                         int *count);
 
 /* The effect's frame (whole image domain) in canonical coordinates at `time`: the region of
  * definition of the first connected input that is aligned with the frame (as the runner takes
  * the first connected input's bounds), else the project. */
-OfxStatus nprfx_ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod);
+OfxStatus ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod);
 
 /* The shot's first and last frame: the output clip's frame range. */
-void nprfx_ofx_shot_range(const ofx_instance *inst, double *first, double *last);
+void ofx_shot_range(const ofx_instance *inst, double *first, double *last);
 
 /* Post a message of `type` (kOfxMessage...) through the message suite, as finished text. */
-void nprfx_ofx_post(void *handle, const char *type, const char *message);
+void ofx_post(void *handle, const char *type, const char *message);
 /* Post an error to the host: a persistent message on the effect where the host has message
  * suite V2, else a message; nothing without a message suite. */
-void nprfx_ofx_post_error(ofx_instance *inst, const char *message);
+void ofx_post_error(ofx_instance *inst, const char *message);
 /* A successful render takes down the persistent error of an earlier one. */
-void nprfx_ofx_clear_error(ofx_instance *inst);
+void ofx_clear_error(ofx_instance *inst);
 
 /* Param values at `time` (or the current ones), checked as the runner checks them; STRING
  * values are copied into strings[i] (free each with free()). Errors name the param. */
-nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
-                                   int current, nprfx_value *values, char **strings);
+nprfx_result ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
+                             int current, nprfx_value *values, char **strings);
 
 /* The channel count each input gives at `time` (0 where its clip is not connected). */
-void nprfx_ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels);
+void ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels);
 
 /* Write the node's text export of the frame a render made (render args with window = frame),
  * when its export param is set; once per frame and params (tiles do not repeat it). */
-nprfx_result nprfx_ofx_export(ofx_instance *inst, const nprfx_render_args *a);
+nprfx_result ofx_export(ofx_instance *inst, const nprfx_render_args *a);
 
-OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args);
+OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args);
 
 #endif

@@ -19,19 +19,19 @@ static void as_format(const char *message, char *text, size_t size)
     text[n] = 0;
 }
 
-void nprfx_ofx_post(void *handle, const char *type, const char *message)
+void ofx_post(void *handle, const char *type, const char *message)
 {
-    if (!nprfx_ofx_g.msg || !nprfx_ofx_g.msg->message || !message) return;
+    if (!ofx_g.msg || !ofx_g.msg->message || !message) return;
     char text[2048];
     as_format(message[0] ? message : "nprfx: an error without a message", text, sizeof text);
-    (void)nprfx_ofx_g.msg->message(handle, type, "", text);
+    (void)ofx_g.msg->message(handle, type, "", text);
 }
 
-void nprfx_ofx_post_error(ofx_instance *inst, const char *message)
+void ofx_post_error(ofx_instance *inst, const char *message)
 {
-    const OfxMessageSuiteV2 *m2 = nprfx_ofx_g.msg2;
+    const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->setPersistentMessage) {
-        nprfx_ofx_post(inst->fx, kOfxMessageError, message);
+        ofx_post(inst->fx, kOfxMessageError, message);
         return;
     }
     char text[2048];
@@ -40,12 +40,12 @@ void nprfx_ofx_post_error(ofx_instance *inst, const char *message)
     if (m2->setPersistentMessage(inst->fx, kOfxMessageError, "", text) == kOfxStatOK)
         __atomic_store_n(&inst->persistent, 1, __ATOMIC_RELAXED);
     else
-        nprfx_ofx_post(inst->fx, kOfxMessageError, message);
+        ofx_post(inst->fx, kOfxMessageError, message);
 }
 
-void nprfx_ofx_clear_error(ofx_instance *inst)
+void ofx_clear_error(ofx_instance *inst)
 {
-    const OfxMessageSuiteV2 *m2 = nprfx_ofx_g.msg2;
+    const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->clearPersistentMessage) return;
     if (__atomic_exchange_n(&inst->persistent, 0, __ATOMIC_RELAXED))
         (void)m2->clearPersistentMessage(inst->fx);

@@ -6,11 +6,11 @@
 
 #include "ofx_internal.h"
 
-nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
-                                   int current, nprfx_value *values, char **strings)
+nprfx_result ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
+                             int current, nprfx_value *values, char **strings)
 {
     const nprfx_node_desc *d = inst->desc;
-    const OfxParameterSuiteV1 *pm = nprfx_ofx_g.param;
+    const OfxParameterSuiteV1 *pm = ofx_g.param;
     for (int i = 0; i < d->num_params; i++) {
         const nprfx_param_desc *p = &d->params[i];
         OfxParamHandle h = inst->params[i];
@@ -56,8 +56,8 @@ nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx,
     return NPRFX_OK;
 }
 
-void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current,
-                               int *first, int *count)
+void ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current, int *first,
+                         int *count)
 {
     const nprfx_input_desc *in = &inst->desc->inputs[k];
     int opts[NPRFX_OFX_CHAN_OPTIONS];
@@ -65,9 +65,8 @@ void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, in
     int choice = nprfx_ofx_selector_default(in);
     if (inst->selectors[k]) {
         int v = choice;
-        OfxStatus st = current
-                           ? nprfx_ofx_g.param->paramGetValue(inst->selectors[k], &v)
-                           : nprfx_ofx_g.param->paramGetValueAtTime(inst->selectors[k], time, &v);
+        OfxStatus st = current ? ofx_g.param->paramGetValue(inst->selectors[k], &v)
+                               : ofx_g.param->paramGetValueAtTime(inst->selectors[k], time, &v);
         if (st == kOfxStatOK && v >= 0 && v < n) choice = v;
     }
     if (choice >= n) choice = 0;
@@ -75,17 +74,17 @@ void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, in
     *count = nprfx_ofx_chan_options[opts[choice]].count;
 }
 
-void nprfx_ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
+void ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
 {
     /* Derived inputs have their flow channels once there is footage to derive them from. */
     int main = nprfx_ofx_main_input(inst->desc);
-    int footage = inst->derive && main >= 0 && nprfx_ofx_clip_connected(inst->clips[main]);
+    int footage = inst->derive && main >= 0 && ofx_clip_connected(inst->clips[main]);
     for (int k = 0; k < inst->desc->num_inputs; k++) {
         int first = 0, count = 0;
         if (inst->derive && inst->plan.count[k])
             count = footage ? inst->plan.count[k] : 0;
-        else if (nprfx_ofx_clip_connected(inst->clips[k]))
-            nprfx_ofx_input_selection(inst, k, time, current, &first, &count);
+        else if (ofx_clip_connected(inst->clips[k]))
+            ofx_input_selection(inst, k, time, current, &first, &count);
         channels[k] = count;
     }
 }

@@ -18,7 +18,7 @@
 #include "flow_opencv.h"
 #include "ofx_internal.h"
 
-#define G nprfx_ofx_g
+#define G ofx_g
 
 /* ---- the executor on the host's multithread suite -------------------------------------------- */
 
@@ -99,7 +99,7 @@ typedef struct ofx_img {
 static void img_release(ofx_img *im)
 {
     if (im->h) G.fx->clipReleaseImage(im->h);
-    nprfx_ofx_free(im->conv);
+    ofx_free(im->conv);
     memset(im, 0, sizeof *im);
 }
 
@@ -117,7 +117,7 @@ static OfxStatus img_to_float(ofx_img *im)
 {
     int w = im->b.x2 - im->b.x1, h = im->b.y2 - im->b.y1, n = w * im->ncomp;
     if (w <= 0 || h <= 0) return kOfxStatOK;
-    float *f = nprfx_ofx_alloc((size_t)n * (size_t)h * sizeof *f);
+    float *f = ofx_alloc((size_t)n * (size_t)h * sizeof *f);
     if (!f) return kOfxStatErrMemory;
     for (int y = 0; y < h; y++) {
         const char *row = im->data + (ptrdiff_t)y * im->row_bytes;
@@ -246,7 +246,7 @@ static nprfx_result img_view(const ofx_img *im, int f, int first, int count, npr
         return NPRFX_OK;
     }
     int w = im->b.x2 - im->b.x1, h = im->b.y2 - im->b.y1;
-    float *px = nprfx_ofx_alloc((size_t)w * (size_t)h * (size_t)count * sizeof(float));
+    float *px = ofx_alloc((size_t)w * (size_t)h * (size_t)count * sizeof(float));
     if (!px) return NPRFX_ERR_OUT_OF_MEMORY;
     for (int y = im->b.y1; y < im->b.y2; y++)
         for (int x = im->b.x1; x < im->b.x2; x++) {
@@ -314,7 +314,7 @@ typedef struct render_call {
 static void fetched_release(fetched *s)
 {
     img_release(&s->img);
-    nprfx_ofx_free(s->scratch);
+    ofx_free(s->scratch);
     s->scratch = NULL;
 }
 
@@ -526,7 +526,7 @@ static void derive_continue(render_call *rc, int t)
     if (!follows) {
         if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
         inst->state = NULL;
-        nprfx_ofx_derive_forget(inst);
+        ofx_instance_forget_footage(inst);
         inst->seg_start = t;
     }
     if (inst->seg_start > rc->first_frame) rc->first_frame = inst->seg_start;
@@ -568,7 +568,7 @@ static void derive_release(render_call *rc)
         nprfx_image_free(&rc->dring[i]);
     for (int k = 0; k < NPRFX_OFX_DERIVE_MAX_INPUTS; k++)
         nprfx_image_free(&rc->dcur[k]);
-    nprfx_ofx_free(rc->src_scratch);
+    ofx_free(rc->src_scratch);
 }
 
 /* ---- output ---------------------------------------------------------------------------------- */
@@ -654,7 +654,7 @@ static OfxRectI to_pixels(OfxRectD r, double sx, double sy, double par)
     return p;
 }
 
-OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
+OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 {
     const nprfx_node_desc *d = inst->desc;
     const OfxPropertySuiteV1 *ps = G.prop;
@@ -670,7 +670,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     ci.executor = &host_executor;
-    ci.data_dir = nprfx_ofx_g.data_dir[0] ? nprfx_ofx_g.data_dir : NULL;
+    ci.data_dir = ofx_g.data_dir[0] ? ofx_g.data_dir : NULL;
     ci.flow = nprfx_flow_opencv(); /* the flow node's solver; NULL without OpenCV */
     render_call rc;
     memset(&rc, 0, sizeof rc);
@@ -706,7 +706,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 
     /* the frame, in host pixels at this render scale */
     OfxRectD rod;
-    if (nprfx_ofx_frame_rod(inst, time, &rod) != kOfxStatOK) {
+    if (ofx_frame_rod(inst, time, &rod) != kOfxStatOK) {
         r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
                         "%s: no input is connected and the host gives no project size", d->id);
         goto done;
@@ -722,13 +722,13 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     OfxRectI wr = {win[0], win[1], win[2], win[3]};
     nprfx_rect host_window = flip_rect(wr, rc.f);
 
-    if ((r = nprfx_ofx_eval_params(inst, rc.ctx, time, 0, values, strings))) goto done;
+    if ((r = ofx_eval_params(inst, rc.ctx, time, 0, values, strings))) goto done;
     nprfx_node_apply_render_scale(d, values, scale[0]);
 
     for (int k = 0; k < d->num_inputs; k++) {
-        if (!nprfx_ofx_clip_connected(inst->clips[k])) continue;
+        if (!ofx_clip_connected(inst->clips[k])) continue;
         if (inst->derive && inst->plan.count[k]) continue; /* below */
-        nprfx_ofx_input_selection(inst, k, time, 0, &rc.first[k], &rc.count[k]);
+        ofx_input_selection(inst, k, time, 0, &rc.first[k], &rc.count[k]);
         OfxStatus st = img_fetch(inst->clips[k], time, 1, &rc.cur[k].img);
         if (st == kOfxStatFailed) continue; /* no image at this time: as if not connected */
         if (st != kOfxStatOK) {
@@ -747,7 +747,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     }
 
     double first = 0, last = 0;
-    nprfx_ofx_shot_range(inst, &first, &last);
+    ofx_shot_range(inst, &first, &last);
     rc.first_frame = round_frame(first);
     rc.last_frame = round_frame(last);
     /* A stateful node's cache, and the flow's and the kept frames of footage, are shared by the
@@ -759,7 +759,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     if (inst->derive) {
         /* Footage: the derived inputs from the flow node run on Source (ofx_derive.c). */
         int main = nprfx_ofx_main_input(d);
-        if (!nprfx_ofx_clip_connected(inst->clips[main])) {
+        if (!ofx_clip_connected(inst->clips[main])) {
             r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
                             "%s: the Source clip is not connected: it is the footage this effect "
                             "computes its motion from",
@@ -836,8 +836,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         if (inst->mask_invert &&
             G.param->paramGetValueAtTime(inst->mask_invert, time, &inv) == kOfxStatOK)
             fj.mask_invert = inv != 0;
-        if (nprfx_ofx_clip_connected(inst->mask) &&
-            img_fetch(inst->mask, time, 1, &mask) == kOfxStatOK) {
+        if (ofx_clip_connected(inst->mask) && img_fetch(inst->mask, time, 1, &mask) == kOfxStatOK) {
             if ((r = img_view(&mask, rc.f, mask.ncomp == 4 ? 3 : 0, 1, &mask_view, &mask_scratch)))
                 goto done;
             fj.mask = &mask_view;
@@ -876,7 +875,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         if (d->export_text && scale[0] == 1.0 && scale[1] == 1.0) {
             a.window = frame;
             a.output = NULL;
-            if ((r = nprfx_ofx_export(inst, &a))) goto done;
+            if ((r = ofx_export(inst, &a))) goto done;
         }
     }
     /* Pixels the host asked for outside the frame: transparent black. */
@@ -886,7 +885,7 @@ OfxStatus nprfx_ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
                 for (int c = 0; c < out.ncomp; c++)
                     img_store(&out, x, rc.f - y, c, 0.0f);
     status = kOfxStatOK;
-    nprfx_ofx_clear_error(inst);
+    ofx_clear_error(inst);
 
 done:
     if (locked) pthread_mutex_unlock(&inst->lock);
@@ -894,7 +893,7 @@ done:
     if (r) {
         char msg[1024];
         nprfx_context_last_error(rc.ctx, msg, sizeof msg);
-        nprfx_ofx_post_error(inst, msg);
+        ofx_post_error(inst, msg);
     }
     derive_release(&rc);
     for (int i = 0; i < RING; i++)
@@ -902,8 +901,8 @@ done:
     for (int k = 0; rc.cur && k < d->num_inputs; k++)
         fetched_release(&rc.cur[k]);
     img_release(&mask);
-    nprfx_ofx_free(mask_scratch);
-    nprfx_ofx_free(res_scratch);
+    ofx_free(mask_scratch);
+    ofx_free(res_scratch);
     if (res_owned) nprfx_image_free(&res);
     img_release(&out);
     for (int i = 0; strings && i < d->num_params; i++)
