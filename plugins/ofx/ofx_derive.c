@@ -6,12 +6,14 @@
  * Which inputs: those whose AOV hint names flow output channels (ofx_derive.h). Which flow
  * params: the flow node's defaults, with its output choice narrowed to the fewest channels that
  * cover the inputs' first alternatives the host can serve; a host without temporal clip access
- * can serve only flows to the previous frame, which the plug-in keeps (ofx_render.c). This file
- * plans that and says which Source frames a render reads; ofx_render.c computes it. */
+ * can serve only flows to the previous frame, which the plug-in keeps (ofx_footage.c). This file
+ * plans that and says which Source frames a render reads; ofx_footage.c computes it. */
 #include <stdlib.h>
 #include <string.h>
 
-#include "ofx_internal.h"
+#include "ofx_derive.h"
+#include "ofx_names.h"
+#include "ofx_suites.h"
 
 /* Whether flow params `v` read only the frame and the one before (what an in-order host without
  * temporal clip access lets the plug-in keep), asked of the flow node itself. */
@@ -185,14 +187,4 @@ int ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
         }
     }
     return n;
-}
-
-void ofx_instance_forget_footage(ofx_instance *inst)
-{
-    nprfx_image_free(&inst->kept_src);
-    nprfx_image_free(&inst->kept_flow);
-    inst->kept = 0;
-    if (inst->flow_state && inst->plan.flow && inst->plan.flow->state_free)
-        inst->plan.flow->state_free(inst->flow_state);
-    inst->flow_state = NULL;
 }

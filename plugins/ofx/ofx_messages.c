@@ -1,10 +1,11 @@
-/* nprfx OpenFX adapter — telling the user: errors go to the host's message suite as finished
- * text, as a persistent message on the effect where the host has suite version 2 (a host shows
- * it on the node until cleared), else as a plain message. */
+/* nprfx OpenFX adapter — telling the user (declared in ofx_messages.h): errors go to the host's
+ * message suite as finished text, as a persistent message on the effect where the host has suite
+ * version 2 (a host shows it on the node until cleared), else as a plain message. */
 #include <stdio.h>
 #include <string.h>
 
-#include "ofx_internal.h"
+#include "ofx_messages.h"
+#include "ofx_suites.h"
 
 /* The text as a format that prints itself: '%' doubled, so no conversion is left. Some hosts
  * (Natron 2.5) hand their va_list to a second variadic formatter, so a "%s" argument comes out

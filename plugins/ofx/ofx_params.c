@@ -1,10 +1,13 @@
-/* nprfx OpenFX adapter — reading an instance's settings back from the host: param values (at a
- * time, or as they are now) and the channels each input clip gives through its selector. The
- * actions that need them (render, getFramesNeeded, getClipPreferences) share these. */
+/* nprfx OpenFX adapter — reading an instance's settings back from the host (declared in
+ * ofx_params.h): param values (at a time, or as they are now), the channels each input clip gives
+ * through its selector, the effect's frame and the shot's frame range. The render and the actions
+ * that answer the host before it (ofx_actions.c) share these. */
 #include <stdlib.h>
 #include <string.h>
 
-#include "ofx_internal.h"
+#include "ofx_names.h"
+#include "ofx_params.h"
+#include "ofx_suites.h"
 
 nprfx_result ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
                              int current, nprfx_value *values, char **strings)
@@ -87,4 +90,37 @@ void ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int
             ofx_input_selection(inst, k, time, current, &first, &count);
         channels[k] = count;
     }
+}
+
+OfxStatus ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod)
+{
+    const nprfx_node_desc *d = inst->desc;
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) continue;
+        if (!ofx_clip_connected(inst->clips[k])) continue;
+        if (ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], time, rod) == kOfxStatOK)
+            return kOfxStatOK;
+    }
+    OfxPropertySetHandle p;
+    double off[2] = {0, 0}, size[2] = {0, 0};
+    if (ofx_g.fx->getPropertySet(inst->fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
+    (void)ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectOffset, 2, off);
+    if (ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectSize, 2, size) != kOfxStatOK ||
+        size[0] <= 0 || size[1] <= 0)
+        return kOfxStatFailed;
+    rod->x1 = off[0];
+    rod->y1 = off[1];
+    rod->x2 = off[0] + size[0];
+    rod->y2 = off[1] + size[1];
+    return kOfxStatOK;
+}
+
+void ofx_shot_range(const ofx_instance *inst, double *first, double *last)
+{
+    double r[2] = {0, 0};
+    OfxPropertySetHandle p = ofx_clip_props(inst->output);
+    if (!p || ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropFrameRange, 2, r) != kOfxStatOK)
+        r[0] = r[1] = 0;
+    *first = r[0];
+    *last = r[1];
 }
