@@ -1,6 +1,7 @@
 /* nprfx OpenFX adapter — a render's inputs derived from the Source clip with the flow node
- * (ofx_footage.c), for an instance whose plan derives some (inst->derive). Called with inst->lock
- * held, as the instance's kept frames and flow cache are shared by its renders. */
+ * (ofx_footage.c), for an instance whose plan derives some (inst->derive). All but
+ * ofx_footage_release are called with inst->lock held, as the instance's kept frames and flow
+ * cache are shared by its renders. */
 #ifndef NPRFX_OFX_FOOTAGE_H
 #define NPRFX_OFX_FOOTAGE_H
 

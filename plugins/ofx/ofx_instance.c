@@ -7,8 +7,7 @@
 #include "ofx_names.h"
 #include "ofx_suites.h"
 
-/* ---- create, destroy
- * ------------------------------------------------------------------------------- */
+/* ---- lookup, create, destroy ----------------------------------------------------------------- */
 
 ofx_instance *ofx_instance_get(OfxImageEffectHandle fx)
 {
@@ -111,6 +110,8 @@ OfxStatus ofx_instance_destroy(OfxImageEffectHandle fx)
     instance_free(inst);
     return kOfxStatOK;
 }
+
+/* ---- what a change drops --------------------------------------------------------------------- */
 
 /* Drop the node's cache: it only ever saves work, and a changed param or clip may make it
  * stale (the runner drops it on --set likewise). */

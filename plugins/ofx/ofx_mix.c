@@ -5,7 +5,8 @@
 #include "ofx_image.h"
 #include "ofx_mix.h"
 
-/* The host component values for a result pixel with n channels (see clip preferences). */
+/* The host component values for a result pixel with n channels (as ofx_clip_preferences in
+ * ofx_actions.c declares the output). */
 static void result_rgba(const float *px, int n, float rgba[4])
 {
     switch (n) {

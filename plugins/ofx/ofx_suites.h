@@ -1,7 +1,7 @@
 /* nprfx OpenFX adapter — the host as the plug-in sees it: the suites fetched on load, what the
  * host can do (temporal clip access, the flow provider, the bundle's data folder), memory through
  * the host, and shorthands for properties. The bottom of the adapter: every other file may use
- * this one, and it uses none of them. Nothing here is exported from the bundle. */
+ * this one, and it uses none of them but ofx_api.h. Nothing here is exported from the bundle. */
 #ifndef NPRFX_OFX_SUITES_H
 #define NPRFX_OFX_SUITES_H
 
