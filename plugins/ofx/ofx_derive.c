@@ -6,12 +6,14 @@
  * Which inputs: those whose AOV hint names flow output channels (ofx_derive.h). Which flow
  * params: the flow node's defaults, with its output choice narrowed to the fewest channels that
  * cover the inputs' first alternatives the host can serve; a host without temporal clip access
- * can serve only flows to the previous frame, which the plug-in keeps (ofx_render.c). This file
- * plans that and says which Source frames a render reads; ofx_render.c computes it. */
+ * can serve only flows to the previous frame, which the plug-in keeps (ofx_footage.c). This file
+ * plans that and says which Source frames a render reads; ofx_footage.c computes it. */
 #include <stdlib.h>
 #include <string.h>
 
-#include "ofx_internal.h"
+#include "ofx_derive.h"
+#include "ofx_names.h"
+#include "ofx_suites.h"
 
 /* Whether flow params `v` read only the frame and the one before (what an in-order host without
  * temporal clip access lets the plug-in keep), asked of the flow node itself. */
@@ -55,11 +57,11 @@ static int outputs(const nprfx_node_desc *f, const nprfx_value *v, nprfx_output_
     return nprfx_node_output_info(NULL, f, v, ich, oi) == NPRFX_OK;
 }
 
-int nprfx_ofx_derive_plan(const nprfx_node_desc *d, int temporal, ofx_derive_plan *plan)
+int ofx_derive_make_plan(const nprfx_node_desc *d, int temporal, ofx_derive_plan *plan)
 {
     memset(plan, 0, sizeof *plan);
-    const nprfx_node_desc *f = nprfx_ofx_flow_node();
-    if (!f || !nprfx_ofx_g.flow || d == f || d->num_inputs > NPRFX_OFX_DERIVE_MAX_INPUTS) return 0;
+    const nprfx_node_desc *f = ofx_flow_node();
+    if (!f || !ofx_g.flow || d == f || d->num_inputs > NPRFX_OFX_DERIVE_MAX_INPUTS) return 0;
     /* Per input, the first alternative of its hint some servable configuration outputs: the
      * runner's choice against a flow node's whole output where every configuration is
      * servable (temporal access), else the first one that needs no later frame. */
@@ -69,12 +71,12 @@ int nprfx_ofx_derive_plan(const nprfx_node_desc *d, int temporal, ofx_derive_pla
     nprfx_output_info oi;
     int idx[4];
     for (int k = 0; k < d->num_inputs; k++) {
-        if (!nprfx_ofx_derivable(d, k)) continue;
+        if (!ofx_derivable(d, k)) continue;
         for (int alt = 0; !nwant[k]; alt++) {
             int n = 0, more = 0;
             for (int c = 0; candidate(f, c, v) && n <= 0; c++) {
                 if (!outputs(f, v, &oi)) continue;
-                n = nprfx_ofx_aov_match(&d->inputs[k], alt, &oi, idx);
+                n = ofx_aov_match(&d->inputs[k], alt, &oi, idx);
                 if (n >= 0) more = 1;
                 if (n > 0 && !temporal && !served_without_temporal(f, v)) n = 0;
                 for (int j = 0; j < n; j++)
@@ -155,9 +157,9 @@ static int add_range(nprfx_frame_range *r, int n, int a, int b)
     return m;
 }
 
-int nprfx_ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
-                            const nprfx_value *values, const nprfx_frames_query *q, int main_fed,
-                            nprfx_frame_range *r)
+int ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
+                      const nprfx_value *values, const nprfx_frames_query *q, int main_fed,
+                      nprfx_frame_range *r)
 {
     int n = 0, main = nprfx_ofx_main_input(d);
     int src_ch[1] = {4};
@@ -185,14 +187,4 @@ int nprfx_ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *pla
         }
     }
     return n;
-}
-
-void nprfx_ofx_derive_forget(ofx_instance *inst)
-{
-    nprfx_image_free(&inst->kept_src);
-    nprfx_image_free(&inst->kept_flow);
-    inst->kept = 0;
-    if (inst->flow_state && inst->plan.flow && inst->plan.flow->state_free)
-        inst->plan.flow->state_free(inst->flow_state);
-    inst->flow_state = NULL;
 }

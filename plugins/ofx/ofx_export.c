@@ -1,9 +1,9 @@
-/* nprfx OpenFX adapter — a node's text export (stipple dots as CSV/SVG) from a host. The runner
- * writes it beside its images; in a host the export param's path is all there is, so the
- * adapter writes it: the path's frame token expanded as the runner expands it (common/seq.c, built
- * into the bundle), folders created, a temporary name renamed into place so a reader never sees
- * half a file. Tiles of one frame, and repeated renders of it with the same params, write it
- * once. */
+/* nprfx OpenFX adapter — a node's text export (stipple dots as CSV/SVG) written from a host
+ * (declared in ofx_export.h). The runner writes it beside its images; in a host the export
+ * param's path is all there is, so the adapter writes it: the path's frame token expanded as the
+ * runner expands it (common/seq.h, linked into the bundle), folders created, a temporary name
+ * renamed into place so a reader never sees half a file. Tiles of one frame, and repeated
+ * renders of it with the same params, write it once. */
 #define _POSIX_C_SOURCE 200809L /* mkdir, getpid */
 #include <errno.h>
 #include <math.h>
@@ -13,7 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "ofx_internal.h"
+#include "ofx_export.h"
 #include "seq.h"
 
 /* FNV-1a over what the export is made of. */
@@ -77,7 +77,7 @@ static nprfx_result write_file(nprfx_context *ctx, const char *path, const char 
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_ofx_export(ofx_instance *inst, const nprfx_render_args *a)
+nprfx_result ofx_export(ofx_instance *inst, const nprfx_render_args *a)
 {
     const nprfx_node_desc *d = inst->desc;
     nprfx_result r = NPRFX_OK;

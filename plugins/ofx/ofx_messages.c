@@ -1,10 +1,11 @@
-/* nprfx OpenFX adapter — telling the user: errors go to the host's message suite as finished
- * text, as a persistent message on the effect where the host has suite version 2 (a host shows
- * it on the node until cleared), else as a plain message. */
+/* nprfx OpenFX adapter — telling the user (declared in ofx_messages.h): errors go to the host's
+ * message suite as finished text, as a persistent message on the effect where the host has suite
+ * version 2 (a host shows it on the node until cleared), else as a plain message. */
 #include <stdio.h>
 #include <string.h>
 
-#include "ofx_internal.h"
+#include "ofx_messages.h"
+#include "ofx_suites.h"
 
 /* The text as a format that prints itself: '%' doubled, so no conversion is left. Some hosts
  * (Natron 2.5) hand their va_list to a second variadic formatter, so a "%s" argument comes out
@@ -19,19 +20,19 @@ static void as_format(const char *message, char *text, size_t size)
     text[n] = 0;
 }
 
-void nprfx_ofx_post(void *handle, const char *type, const char *message)
+void ofx_post(void *handle, const char *type, const char *message)
 {
-    if (!nprfx_ofx_g.msg || !nprfx_ofx_g.msg->message || !message) return;
+    if (!ofx_g.msg || !ofx_g.msg->message || !message) return;
     char text[2048];
     as_format(message[0] ? message : "nprfx: an error without a message", text, sizeof text);
-    (void)nprfx_ofx_g.msg->message(handle, type, "", text);
+    (void)ofx_g.msg->message(handle, type, "", text);
 }
 
-void nprfx_ofx_post_error(ofx_instance *inst, const char *message)
+void ofx_post_error(ofx_instance *inst, const char *message)
 {
-    const OfxMessageSuiteV2 *m2 = nprfx_ofx_g.msg2;
+    const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->setPersistentMessage) {
-        nprfx_ofx_post(inst->fx, kOfxMessageError, message);
+        ofx_post(inst->fx, kOfxMessageError, message);
         return;
     }
     char text[2048];
@@ -40,12 +41,12 @@ void nprfx_ofx_post_error(ofx_instance *inst, const char *message)
     if (m2->setPersistentMessage(inst->fx, kOfxMessageError, "", text) == kOfxStatOK)
         __atomic_store_n(&inst->persistent, 1, __ATOMIC_RELAXED);
     else
-        nprfx_ofx_post(inst->fx, kOfxMessageError, message);
+        ofx_post(inst->fx, kOfxMessageError, message);
 }
 
-void nprfx_ofx_clear_error(ofx_instance *inst)
+void ofx_clear_error(ofx_instance *inst)
 {
-    const OfxMessageSuiteV2 *m2 = nprfx_ofx_g.msg2;
+    const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->clearPersistentMessage) return;
     if (__atomic_exchange_n(&inst->persistent, 0, __ATOMIC_RELAXED))
         (void)m2->clearPersistentMessage(inst->fx);

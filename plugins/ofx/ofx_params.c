@@ -1,16 +1,19 @@
-/* nprfx OpenFX adapter — reading an instance's settings back from the host: param values (at a
- * time, or as they are now) and the channels each input clip gives through its selector. The
- * actions that need them (render, getFramesNeeded, getClipPreferences) share these. */
+/* nprfx OpenFX adapter — reading an instance's settings back from the host (declared in
+ * ofx_params.h): param values (at a time, or as they are now), the channels each input clip gives
+ * through its selector, the effect's frame and the shot's frame range. The render and the actions
+ * that answer the host before it (ofx_actions.c) share these. */
 #include <stdlib.h>
 #include <string.h>
 
-#include "ofx_internal.h"
+#include "ofx_names.h"
+#include "ofx_params.h"
+#include "ofx_suites.h"
 
-nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
-                                   int current, nprfx_value *values, char **strings)
+nprfx_result ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx, OfxTime time,
+                             int current, nprfx_value *values, char **strings)
 {
     const nprfx_node_desc *d = inst->desc;
-    const OfxParameterSuiteV1 *pm = nprfx_ofx_g.param;
+    const OfxParameterSuiteV1 *pm = ofx_g.param;
     for (int i = 0; i < d->num_params; i++) {
         const nprfx_param_desc *p = &d->params[i];
         OfxParamHandle h = inst->params[i];
@@ -56,8 +59,8 @@ nprfx_result nprfx_ofx_eval_params(const ofx_instance *inst, nprfx_context *ctx,
     return NPRFX_OK;
 }
 
-void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current,
-                               int *first, int *count)
+void ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int current, int *first,
+                         int *count)
 {
     const nprfx_input_desc *in = &inst->desc->inputs[k];
     int opts[NPRFX_OFX_CHAN_OPTIONS];
@@ -65,9 +68,8 @@ void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, in
     int choice = nprfx_ofx_selector_default(in);
     if (inst->selectors[k]) {
         int v = choice;
-        OfxStatus st = current
-                           ? nprfx_ofx_g.param->paramGetValue(inst->selectors[k], &v)
-                           : nprfx_ofx_g.param->paramGetValueAtTime(inst->selectors[k], time, &v);
+        OfxStatus st = current ? ofx_g.param->paramGetValue(inst->selectors[k], &v)
+                               : ofx_g.param->paramGetValueAtTime(inst->selectors[k], time, &v);
         if (st == kOfxStatOK && v >= 0 && v < n) choice = v;
     }
     if (choice >= n) choice = 0;
@@ -75,17 +77,50 @@ void nprfx_ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, in
     *count = nprfx_ofx_chan_options[opts[choice]].count;
 }
 
-void nprfx_ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
+void ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
 {
     /* Derived inputs have their flow channels once there is footage to derive them from. */
     int main = nprfx_ofx_main_input(inst->desc);
-    int footage = inst->derive && main >= 0 && nprfx_ofx_clip_connected(inst->clips[main]);
+    int footage = inst->derive && main >= 0 && ofx_clip_connected(inst->clips[main]);
     for (int k = 0; k < inst->desc->num_inputs; k++) {
         int first = 0, count = 0;
         if (inst->derive && inst->plan.count[k])
             count = footage ? inst->plan.count[k] : 0;
-        else if (nprfx_ofx_clip_connected(inst->clips[k]))
-            nprfx_ofx_input_selection(inst, k, time, current, &first, &count);
+        else if (ofx_clip_connected(inst->clips[k]))
+            ofx_input_selection(inst, k, time, current, &first, &count);
         channels[k] = count;
     }
+}
+
+OfxStatus ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod)
+{
+    const nprfx_node_desc *d = inst->desc;
+    for (int k = 0; k < d->num_inputs; k++) {
+        if (d->inputs[k].flags & NPRFX_INPUT_UNALIGNED) continue;
+        if (!ofx_clip_connected(inst->clips[k])) continue;
+        if (ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], time, rod) == kOfxStatOK)
+            return kOfxStatOK;
+    }
+    OfxPropertySetHandle p;
+    double off[2] = {0, 0}, size[2] = {0, 0};
+    if (ofx_g.fx->getPropertySet(inst->fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
+    (void)ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectOffset, 2, off);
+    if (ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropProjectSize, 2, size) != kOfxStatOK ||
+        size[0] <= 0 || size[1] <= 0)
+        return kOfxStatFailed;
+    rod->x1 = off[0];
+    rod->y1 = off[1];
+    rod->x2 = off[0] + size[0];
+    rod->y2 = off[1] + size[1];
+    return kOfxStatOK;
+}
+
+void ofx_shot_range(const ofx_instance *inst, double *first, double *last)
+{
+    double r[2] = {0, 0};
+    OfxPropertySetHandle p = ofx_clip_props(inst->output);
+    if (!p || ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropFrameRange, 2, r) != kOfxStatOK)
+        r[0] = r[1] = 0;
+    *first = r[0];
+    *last = r[1];
 }

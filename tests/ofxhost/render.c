@@ -47,7 +47,7 @@ static int choose_context(nprfx_ofx_host *h, hplugin *pl, const nprfx_render_arg
     int main = nprfx_ofx_main_input(d), only_main = 1, derivable = 0;
     for (int k = 0; k < d->num_inputs; k++) {
         only_main &= k == main || !a->inputs[k].data;
-        derivable |= nprfx_ofx_derivable(d, k);
+        derivable |= ofx_derivable(d, k);
     }
     if (!h->profile->filter) return 0;
     if (h->profile->general) return pl->filter && only_main && (footage || !derivable);
@@ -273,7 +273,7 @@ static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int f
     for (int k = 0; k < d->num_inputs; k++) {
         if (!a->inputs[k].data) continue;
         /* on footage a derived main input is Source read whole: no selector */
-        if (ni->footage && nprfx_ofx_derivable(d, k)) continue;
+        if (ni->footage && ofx_derivable(d, k)) continue;
         int n = a->inputs[k].channels;
         int opt = nprfx_ofx_selector_find(&d->inputs[k], 0, n);
         if (n > 4 || opt < 0) {
@@ -510,13 +510,13 @@ static int flow_output_choice(const nprfx_node_desc *f, int i, const nprfx_value
 static nprfx_result footage_args(nprfx_ofx_host *h, const nprfx_render_args *a, footage_call *fc,
                                  int *use)
 {
-    const nprfx_node_desc *d = a->node, *f = nprfx_ofx_flow_node();
+    const nprfx_node_desc *d = a->node, *f = ofx_flow_node();
     *use = 0;
     if (!h->footage || !f || d == f || d->num_inputs > NPRFX_OFX_DERIVE_MAX_INPUTS) return NPRFX_OK;
     const nprfx_value *fp = NULL;
     int main = nprfx_ofx_main_input(d), via = -1;
     for (int k = 0; k < d->num_inputs; k++) {
-        if (!a->inputs[k].data || !nprfx_ofx_derivable(d, k)) continue;
+        if (!a->inputs[k].data || !ofx_derivable(d, k)) continue;
         const nprfx_value *p = NULL;
         const nprfx_node_desc *up = nprfx_graph_hook_upstream(a->fetch_user, k, &p);
         if (up != f || (fp && p != fp))
@@ -547,7 +547,7 @@ static nprfx_result footage_args(nprfx_ofx_host *h, const nprfx_render_args *a, 
     fc->args = *a;
     fc->main = main;
     for (int k = 0; k < d->num_inputs; k++) {
-        if (!a->inputs[k].data || nprfx_ofx_derivable(d, k)) continue;
+        if (!a->inputs[k].data || ofx_derivable(d, k)) continue;
         if (k != main)
             return nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
                                "--footage: input '%s' of %s has no clip in the Filter context",
@@ -582,7 +582,7 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
     nprfx_ofx_host *h = user;
     /* A flow node of the General graph: the runner's, whose result only sizes the frame of the
      * node it feeds (that node's plug-in computes its own from Source). */
-    if (h->footage && a->node == nprfx_ofx_flow_node()) return nprfx_node_render(a);
+    if (h->footage && a->node == ofx_flow_node()) return nprfx_node_render(a);
     footage_call fc;
     int use = 0;
     nprfx_result r = footage_args(h, a, &fc, &use);

@@ -1,0 +1,19 @@
+/* nprfx OpenFX adapter — what the host is told about a node before any instance exists
+ * (ofx_describe.c). */
+#ifndef NPRFX_OFX_DESCRIBE_H
+#define NPRFX_OFX_DESCRIBE_H
+
+#include "nprfx/node.h"
+#include "ofx_api.h"
+
+/* The describe action: the effect's properties for node d (label, help, grouping, version,
+ * contexts, depths, threading, tiles, temporal access). kOfxStatErrMissingHostFeature, with a
+ * logged reason, for a node that needs other frames in a host that cannot give them. */
+OfxStatus ofx_describe(const nprfx_node_desc *d, OfxImageEffectHandle fx);
+
+/* The describeInContext action: the clips and params of d in the context in_args names
+ * (General, or Filter where d can run on one clip); kOfxStatErrUnsupported in any other. */
+OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle fx,
+                                  OfxPropertySetHandle in_args);
+
+#endif
