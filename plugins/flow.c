@@ -106,12 +106,12 @@ static const char *const out_names[NPRFX_FLOW_CHANNELS] = {"motion_prev.X",   "m
                                                            "motion_next.X",   "motion_next.Y",
                                                            "confidence.prev", "confidence.next"};
 
-static nprfx_result flow_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result flow_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
     int which[NPRFX_FLOW_CHANNELS];
-    out->channels = nprfx_flow_output_channels((int)pv[P_OUTPUT].v[0], which);
+    out->channels = nprfx_flow_output_channels(((const fp *)params)->output, which);
     for (int c = 0; c < out->channels; c++)
         out->names[c] = out_names[which[c]];
     return out->channels ? NPRFX_OK : NPRFX_ERR_OUT_OF_RANGE;

@@ -316,11 +316,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 1},
 };
 
-static nprfx_result gabor_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result gabor_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = pv[P_POINTS].v[0] != 0.0 ? 2 : 1;
+    out->channels = ((const gnp *)params)->points ? 2 : 1;
     out->names[0] = "Y";
     if (out->channels == 2) out->names[1] = "points";
     return NPRFX_OK;

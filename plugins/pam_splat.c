@@ -301,9 +301,9 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 10},
 };
 
-static nprfx_result pam_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result pam_output(const void *params, const int *ich, nprfx_output_info *out)
 {
-    (void)pv;
+    (void)params;
     memset(out, 0, sizeof *out);
     out->channels = ich[IN_COLOR] == 4 ? 4 : 3;
     if (ich[IN_COLOR] && ich[IN_COLOR] != 3 && ich[IN_COLOR] != 4) {

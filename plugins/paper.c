@@ -192,11 +192,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choice_help = output_help},
 };
 
-static nprfx_result paper_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result paper_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = (int)pv[P_OUTPUT].v[0] == NPRFX_PAPER_HEIGHT ? 1 : 4;
+    out->channels = ((const pp *)params)->output == NPRFX_PAPER_HEIGHT ? 1 : 4;
     return NPRFX_OK;
 }
 

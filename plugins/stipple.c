@@ -228,11 +228,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .flags = NPRFX_PARAM_PATH | NPRFX_PARAM_EXPORT},
 };
 
-static nprfx_result st_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result st_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = pv[P_COVERAGE].v[0] != 0.0 ? 5 : 4;
+    out->channels = ((const sp *)params)->coverage ? 5 : 4;
     out->names[0] = "R";
     out->names[1] = "G";
     out->names[2] = "B";

@@ -124,10 +124,10 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 1},
 };
 
-static nprfx_result tm_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result tm_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     memset(out, 0, sizeof *out);
-    nprfx_result r = nprfx_threshold_output_channels((int)pv[P_MODE].v[0], ich[IN_PATTERN],
+    nprfx_result r = nprfx_threshold_output_channels(((const tp *)params)->mode, ich[IN_PATTERN],
                                                      ich[IN_MAP], &out->channels);
     if (r == NPRFX_ERR_MISSING_INPUT)
         out->problem = "mode 'map' needs the 'map' input (an X-toon map image, e.g. "
