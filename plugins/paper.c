@@ -7,7 +7,7 @@
 #include "nprfx/node.h"
 #include "nprfx/paper.h"
 
-enum { IN_IMAGE, IN_COUNT };
+enum { IN_IMAGE = NPRFX_PAPER_IN_IMAGE, IN_COUNT = NPRFX_PAPER_IN_COUNT };
 enum {
     P_KIND,
     P_SCALE,
@@ -207,7 +207,7 @@ static double paper_state_bytes(const void *params, const nprfx_state_query *q)
 
 static nprfx_result paper_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_paper_render_cached(a->ctx, params, a->window, a->output, a->state);
+    return nprfx_paper_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_paper = {

@@ -7,7 +7,12 @@
 #include "nprfx/node.h"
 #include "nprfx/threshold.h"
 
-enum { IN_PATTERN, IN_TONE, IN_MAP, IN_COUNT };
+enum {
+    IN_PATTERN = NPRFX_THRESHOLD_MAP_IN_PATTERN,
+    IN_TONE = NPRFX_THRESHOLD_MAP_IN_TONE,
+    IN_MAP = NPRFX_THRESHOLD_MAP_IN_MAP,
+    IN_COUNT = NPRFX_THRESHOLD_MAP_IN_COUNT
+};
 enum { P_MODE, P_SIGMA, P_MU, P_TONE, P_TONE_GAIN, P_STEPS, P_INVERT, P_COUNT };
 enum { MODE_COUNT = NPRFX_THRESHOLD_MODE_COUNT };
 typedef nprfx_threshold_params tp;
@@ -140,9 +145,7 @@ static nprfx_result tm_output(const void *params, const int *ich, nprfx_output_i
 
 static nprfx_result tm_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_threshold_render_cached(
-        a->ctx, params, &a->inputs[IN_PATTERN], nprfx_render_input(a, IN_TONE),
-        nprfx_render_input(a, IN_MAP), a->window, a->output, a->state);
+    return nprfx_threshold_map_render(a, params);
 }
 
 static double tm_state_bytes(const void *params, const nprfx_state_query *q)

@@ -201,8 +201,7 @@ struct nprfx_node_desc {
      * (input_channels[i] is 0 for an unconnected input). `params` is the node's typed params
      * struct, bound and checked as for render (NULL when the node declares no params_size).
      * Called through nprfx_node_output_info. */
-    nprfx_result (*output)(const void *params, const int *input_channels,
-                           nprfx_output_info *out);
+    nprfx_result (*output)(const void *params, const int *input_channels, nprfx_output_info *out);
     unsigned flags;
     nprfx_render_fn render;
     void (*state_free)(void *state);
@@ -249,7 +248,7 @@ struct nprfx_node_desc {
 /* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
 static inline const nprfx_image *nprfx_render_input(const nprfx_render_args *args, int i)
 {
-    return args->inputs[i].data ? &args->inputs[i] : NULL;
+    return args->inputs && args->inputs[i].data ? &args->inputs[i] : NULL;
 }
 
 /* ---- rendering through the descriptor (core/base/node.c) ---- */
