@@ -113,10 +113,10 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choice_help = output_help},
 };
 
-static nprfx_result advect_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result advect_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
-    out->channels = nprfx_advect_output_channels((int)pv[P_OUTPUT].v[0], out->names);
+    out->channels = nprfx_advect_output_channels(((const ap *)params)->output, out->names);
     return out->channels ? NPRFX_OK : NPRFX_ERR_OUT_OF_RANGE;
 }
 

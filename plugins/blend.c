@@ -7,7 +7,14 @@
 #include "nprfx/blend.h"
 #include "nprfx/node.h"
 
-enum { IN_BASE, IN_LAYER, IN_BACK, IN_ALPHA, IN_COVERAGE, IN_COUNT };
+enum {
+    IN_BASE = NPRFX_BLEND_IN_BASE,
+    IN_LAYER = NPRFX_BLEND_IN_LAYER,
+    IN_BACK = NPRFX_BLEND_IN_BACK,
+    IN_ALPHA = NPRFX_BLEND_IN_ALPHA,
+    IN_COVERAGE = NPRFX_BLEND_IN_COVERAGE,
+    IN_COUNT = NPRFX_BLEND_IN_COUNT
+};
 enum { P_MODE, P_FACTOR, P_OPACITY, P_GAIN_BASE, P_GAIN_LAYER, P_BACKGROUND, P_COUNT };
 typedef nprfx_blend_params bp;
 
@@ -135,9 +142,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result blend_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_blend_render(a->ctx, params, &a->inputs[IN_BASE], &a->inputs[IN_LAYER],
-                              nprfx_render_input(a, IN_BACK), nprfx_render_input(a, IN_ALPHA),
-                              nprfx_render_input(a, IN_COVERAGE), a->window, a->output);
+    return nprfx_blend_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_blend = {

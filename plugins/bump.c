@@ -6,7 +6,11 @@
 #include "nprfx/bump.h"
 #include "nprfx/node.h"
 
-enum { IN_IMAGE, IN_HEIGHT, IN_COUNT };
+enum {
+    IN_IMAGE = NPRFX_BUMP_IN_IMAGE,
+    IN_HEIGHT = NPRFX_BUMP_IN_HEIGHT,
+    IN_COUNT = NPRFX_BUMP_IN_COUNT
+};
 enum { P_STRENGTH, P_AZIMUTH, P_ELEVATION, P_AMOUNT, P_SPECULAR, P_SHININESS, P_COUNT };
 typedef nprfx_bump_params bp;
 
@@ -98,8 +102,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result bump_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_bump_render(a->ctx, params, &a->inputs[IN_IMAGE], &a->inputs[IN_HEIGHT], a->frame,
-                             a->window, a->output);
+    return nprfx_bump_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_bump = {

@@ -408,17 +408,18 @@ static const char help[] =
     "and the filter carries the previous value on alone there (0 at a restart), so it never "
     "travels along the motion into other pixels or frames.";
 
-static nprfx_result cn_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result cn_output(const void *params, const int *ich, nprfx_output_info *out)
 {
+    const cnp *p = params;
     memset(out, 0, sizeof *out);
-    if ((int)pv[P_NOISE].v[0] == NPRFX_CN_NOISE_INPUT) {
+    if (p->noise == NPRFX_CN_NOISE_INPUT) {
         out->problem = "noise = input needs the 'source' input (the clip to make coherent)";
         if (ich[IN_SOURCE] <= 0) return NPRFX_ERR_MISSING_INPUT;
         out->problem = NULL;
         out->channels = ich[IN_SOURCE] > 4 ? 4 : ich[IN_SOURCE];
         return NPRFX_OK;
     }
-    out->channels = (int)pv[P_CHANNELS].v[0];
+    out->channels = p->channels;
     if (out->channels < 1 || out->channels > 4) return NPRFX_ERR_OUT_OF_RANGE;
     return NPRFX_OK;
 }

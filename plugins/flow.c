@@ -9,7 +9,7 @@
 #include "nprfx/flow.h"
 #include "nprfx/node.h"
 
-enum { IN_IMAGE, IN_COUNT };
+enum { IN_IMAGE = NPRFX_FLOW_IN_IMAGE, IN_COUNT = NPRFX_FLOW_IN_COUNT };
 enum { P_PRESET, P_SCALE, P_CONSISTENCY, P_PHOTOMETRIC, P_OUTPUT, P_COUNT };
 typedef nprfx_flow_params fp;
 
@@ -106,12 +106,12 @@ static const char *const out_names[NPRFX_FLOW_CHANNELS] = {"motion_prev.X",   "m
                                                            "motion_next.X",   "motion_next.Y",
                                                            "confidence.prev", "confidence.next"};
 
-static nprfx_result flow_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result flow_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
     int which[NPRFX_FLOW_CHANNELS];
-    out->channels = nprfx_flow_output_channels((int)pv[P_OUTPUT].v[0], which);
+    out->channels = nprfx_flow_output_channels(((const fp *)params)->output, which);
     for (int c = 0; c < out->channels; c++)
         out->names[c] = out_names[which[c]];
     return out->channels ? NPRFX_OK : NPRFX_ERR_OUT_OF_RANGE;
@@ -119,9 +119,7 @@ static nprfx_result flow_output(const nprfx_value *pv, const int *ich, nprfx_out
 
 static nprfx_result flow_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_flow_render(a->ctx, params, &a->inputs[IN_IMAGE], a->time, a->first_frame,
-                             a->last_frame, a->fetch, a->fetch_user, IN_IMAGE, a->state, a->window,
-                             a->output);
+    return nprfx_flow_render(a, params);
 }
 
 /* The neighbours within the shot (nprfx_node_frames_needed adds the frame itself). */

@@ -1,13 +1,21 @@
 /* The gabor-splat node: NPR Gabor noise anchored on surfaces through position/UV AOVs (Benard et
- * al. 2010, docs/design.md §3.2). The algorithm lives in core/gabor*.c; this file is the descriptor
- * and the glue from param values to nprfx_gabor_params. */
+ * al. 2010, docs/design.md §3.2). The algorithm lives in core/gabor/; this file is the descriptor,
+ * binding the params into nprfx_gabor_splat_params (most of them its nprfx_gabor_params), and the
+ * call into core/gabor/gabor_splat.c. */
 #include <stddef.h>
 #include <string.h>
 
 #include "nprfx/gabor.h"
 #include "nprfx/node.h"
 
-enum { IN_ANCHOR, IN_DEPTH, IN_ID, IN_ORIENTATION, IN_FREQUENCY, IN_COUNT };
+enum {
+    IN_ANCHOR = NPRFX_GABOR_SPLAT_IN_ANCHOR,
+    IN_DEPTH = NPRFX_GABOR_SPLAT_IN_DEPTH,
+    IN_ID = NPRFX_GABOR_SPLAT_IN_ID,
+    IN_ORIENTATION = NPRFX_GABOR_SPLAT_IN_ORIENTATION,
+    IN_FREQUENCY = NPRFX_GABOR_SPLAT_IN_FREQUENCY,
+    IN_COUNT = NPRFX_GABOR_SPLAT_IN_COUNT
+};
 enum {
     P_ANCHOR_SPACE,
     P_FREQUENCY,
@@ -29,7 +37,7 @@ enum {
     P_COUNT
 };
 enum { SPACE_COUNT = NPRFX_GABOR_SPACE_COUNT };
-typedef nprfx_gabor_node_params gnp;
+typedef nprfx_gabor_splat_params gnp;
 
 static const char *const space_names[] = {"pref", "uv", "p", NULL};
 static const char *const space_help[] = {
@@ -132,7 +140,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = space_names,
      .choice_help = space_help},
     {.name = "frequency",
-     NPRFX_FIELD(gnp, frequency),
+     NPRFX_FIELD(gnp, gabor.frequency),
      .label = "Frequency",
      .help = "F0: the kernels' frequency in cycles per pixel (1 / wavelength: 0.1 = stripes 10 "
              "px apart). Kept in screen space at every zoom. Above 0.5 it aliases unless "
@@ -144,7 +152,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-4,
      .hard_max = 100},
     {.name = "orientation",
-     NPRFX_FIELD(gnp, orientation),
+     NPRFX_FIELD(gnp, gabor.orientation),
      .label = "Orientation",
      .help = "w0: direction of the wave vector in degrees, counter-clockwise from the image's +x"
              " axis. The stripes run across it: 0 gives vertical stripes, 90 horizontal ones "
@@ -156,7 +164,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -1e6,
      .hard_max = 1e6},
     {.name = "isotropic",
-     NPRFX_FIELD(gnp, isotropic),
+     NPRFX_FIELD(gnp, gabor.isotropic),
      .label = "Isotropic",
      .help = "A random orientation per kernel: no preferred direction (blobs and stipples "
              "when thresholded instead of hatches).",
@@ -167,7 +175,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1},
     {.name = "radius",
-     NPRFX_FIELD(gnp, radius),
+     NPRFX_FIELD(gnp, gabor.radius),
      .label = "Kernel Radius",
      .help = "Truncation radius r of the kernels in pixels; the bandwidth is a = sqrt(-ln 0.05 /"
              " pi) / r (the envelope is 5% at r). Larger kernels hold more stripes: more regular,"
@@ -180,7 +188,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 4096,
      .flags = NPRFX_PARAM_PIXELS},
     {.name = "n0",
-     NPRFX_FIELD(gnp, n0),
+     NPRFX_FIELD(gnp, gabor.n0),
      .label = "Kernel Overlap",
      .help = "N0: expected number of kernels overlapping a pixel (point density lambda = N0 / "
              "(pi r^2)). Cost and quality grow with it; 16 to 128 (the paper), 32 is usually "
@@ -192,7 +200,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0.01,
      .hard_max = 100000},
     {.name = "amplitude",
-     NPRFX_FIELD(gnp, amplitude),
+     NPRFX_FIELD(gnp, gabor.amplitude),
      .label = "Amplitude Law",
      .help = "Distribution of the kernels' random weights (zero mean).",
      .type = NPRFX_PARAM_CHOICE,
@@ -211,7 +219,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 2147483647},
     {.name = "cell",
-     NPRFX_FIELD(gnp, cell),
+     NPRFX_FIELD(gnp, gabor.cell),
      .label = "Cell Size",
      .help = "h0: size of a level-0 cell of the anchor-space hierarchy, in anchor units. It "
              "matters only where fewer than one point per level-0 cell is wanted (objects tiny "
@@ -225,7 +233,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-9,
      .hard_max = 1e9},
     {.name = "lod_levels",
-     NPRFX_FIELD(gnp, lod_levels),
+     NPRFX_FIELD(gnp, gabor.lod_levels),
      .label = "LOD Levels",
      .help = "W: number of whole levels kept between the level fading in and the level fading "
              "out. The coarsest level carries at most 3 / (4^(W+1) - 1) of the variance; "
@@ -237,7 +245,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1,
      .hard_max = 30},
     {.name = "fade",
-     NPRFX_FIELD(gnp, fade),
+     NPRFX_FIELD(gnp, gabor.fade),
      .label = "LOD Fade",
      .help = "How the next finer level of points fades in as an object approaches (and the "
              "coarsest one out).",
@@ -247,7 +255,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = fade_names,
      .choice_help = fade_help},
     {.name = "depth_test",
-     NPRFX_FIELD(gnp, depth_test),
+     NPRFX_FIELD(gnp, gabor.depth_test),
      .label = "Depth Test",
      .help = "How a kernel is trimmed where the depth under it is not its own surface's (the "
              "paper's per-fragment depth test). The depth expected under the kernel is its "
@@ -259,7 +267,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = dtest_names,
      .choice_help = dtest_help},
     {.name = "depth_tolerance",
-     NPRFX_FIELD(gnp, depth_tolerance),
+     NPRFX_FIELD(gnp, gabor.depth_tolerance),
      .label = "Depth Tolerance",
      .help = "Relative depth error |z - z_expected| / z_expected a kernel tolerates. Also the "
              "largest relative depth step between neighbouring pixels of one surface (at least "
@@ -271,7 +279,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 10},
     {.name = "supersample",
-     NPRFX_FIELD(gnp, supersample),
+     NPRFX_FIELD(gnp, gabor.supersample),
      .label = "Supersample",
      .help = "s: evaluate s x s samples per pixel and average them (anti-aliasing of high "
              "frequencies and of the trimmed edges). The normaliser accounts for the box filter, "
@@ -283,7 +291,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1,
      .hard_max = 16},
     {.name = "output",
-     NPRFX_FIELD(gnp, output),
+     NPRFX_FIELD(gnp, gabor.output),
      .label = "Output",
      .help = "Mapping of the noise n (normalised by the theoretical standard deviation of the "
              "sum).",
@@ -293,7 +301,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = output_names,
      .choice_help = output_help},
     {.name = "contrast",
-     NPRFX_FIELD(gnp, contrast),
+     NPRFX_FIELD(gnp, gabor.contrast),
      .label = "Contrast",
      .help = "unit01: the gain on n (0.15 maps +-3.3 sigma to [0, 1]).",
      .type = NPRFX_PARAM_DOUBLE,
@@ -303,7 +311,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = -100,
      .hard_max = 100},
     {.name = "points",
-     NPRFX_FIELD(gnp, points),
+     NPRFX_FIELD(gnp, gabor.points),
      .label = "Point Channel",
      .help = "Debugging: add a second channel 'points' holding, at each pixel, the squared "
              "weights of the kernels it owns (their sum per pixel^2 is lambda; a kernel's centre"
@@ -316,11 +324,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 1},
 };
 
-static nprfx_result gabor_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result gabor_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = pv[P_POINTS].v[0] != 0.0 ? 2 : 1;
+    out->channels = ((const gnp *)params)->gabor.points ? 2 : 1;
     out->names[0] = "Y";
     if (out->channels == 2) out->names[1] = "points";
     return NPRFX_OK;
@@ -328,14 +336,7 @@ static nprfx_result gabor_output(const nprfx_value *pv, const int *ich, nprfx_ou
 
 static nprfx_result gabor_render(const nprfx_render_args *a, const void *params)
 {
-    const nprfx_gabor_inputs in = {sizeof in,
-                                   &a->inputs[IN_ANCHOR],
-                                   &a->inputs[IN_DEPTH],
-                                   nprfx_render_input(a, IN_ID),
-                                   nprfx_render_input(a, IN_ORIENTATION),
-                                   nprfx_render_input(a, IN_FREQUENCY)};
-    return nprfx_gabor_node_render(a->ctx, params, &in, a->render_scale, a->window, a->output,
-                                   a->items);
+    return nprfx_gabor_splat_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_gabor_splat = {

@@ -7,7 +7,17 @@
 #include "nprfx/lines.h"
 #include "nprfx/node.h"
 
-enum { IN_ID, IN_COVERAGE, IN_DEPTH, IN_NORMAL, IN_AOV, IN_WIDTH, IN_WOBBLE, IN_TEXTURE, IN_COUNT };
+enum {
+    IN_ID = NPRFX_LINES_IN_ID,
+    IN_COVERAGE = NPRFX_LINES_IN_COVERAGE,
+    IN_DEPTH = NPRFX_LINES_IN_DEPTH,
+    IN_NORMAL = NPRFX_LINES_IN_NORMAL,
+    IN_AOV = NPRFX_LINES_IN_AOV,
+    IN_WIDTH = NPRFX_LINES_IN_WIDTH,
+    IN_WOBBLE = NPRFX_LINES_IN_WOBBLE,
+    IN_TEXTURE = NPRFX_LINES_IN_TEXTURE,
+    IN_COUNT = NPRFX_LINES_IN_COUNT
+};
 enum {
     P_WIDTH,
     P_THICKEN,
@@ -204,16 +214,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result lines_render(const nprfx_render_args *a, const void *params)
 {
-    nprfx_lines_inputs in = {sizeof in,
-                             nprfx_render_input(a, IN_ID),
-                             nprfx_render_input(a, IN_COVERAGE),
-                             nprfx_render_input(a, IN_DEPTH),
-                             nprfx_render_input(a, IN_NORMAL),
-                             nprfx_render_input(a, IN_AOV),
-                             nprfx_render_input(a, IN_WIDTH),
-                             nprfx_render_input(a, IN_WOBBLE),
-                             nprfx_render_input(a, IN_TEXTURE)};
-    return nprfx_lines_render(a->ctx, params, &in, a->frame, a->window, a->output);
+    return nprfx_lines_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_lines = {

@@ -5,7 +5,12 @@
 #include "nprfx/matte.h"
 #include "nprfx/node.h"
 
-enum { IN_ALPHA, IN_DEPTH, IN_ID, IN_COUNT };
+enum {
+    IN_ALPHA = NPRFX_MATTE_IN_ALPHA,
+    IN_DEPTH = NPRFX_MATTE_IN_DEPTH,
+    IN_ID = NPRFX_MATTE_IN_ID,
+    IN_COUNT = NPRFX_MATTE_IN_COUNT
+};
 enum { P_FAR, P_BACKGROUND_ID, P_SOFTEN, P_INVERT, P_COUNT };
 typedef nprfx_matte_params mp;
 
@@ -76,9 +81,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result matte_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_matte_render(a->ctx, params, nprfx_render_input(a, IN_ALPHA),
-                              nprfx_render_input(a, IN_DEPTH), nprfx_render_input(a, IN_ID),
-                              a->frame, a->window, a->output);
+    return nprfx_matte_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_matte = {

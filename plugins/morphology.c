@@ -7,7 +7,7 @@
 #include "nprfx/filter.h"
 #include "nprfx/node.h"
 
-enum { IN_IMAGE, IN_COUNT };
+enum { IN_IMAGE = NPRFX_MORPHOLOGY_IN_IMAGE, IN_COUNT = NPRFX_MORPHOLOGY_IN_COUNT };
 enum { P_OPERATION, P_RADIUS, P_FOOTPRINT, P_COUNT };
 enum { OP_COUNT = NPRFX_MORPHOLOGY_OP_COUNT, FP_COUNT = NPRFX_MORPHOLOGY_FOOTPRINT_COUNT };
 typedef nprfx_morphology_params mp;
@@ -71,8 +71,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result morph_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_morphology_render(a->ctx, params, &a->inputs[IN_IMAGE], a->frame, a->window,
-                                   a->output);
+    return nprfx_morphology_render(a, params);
 }
 
 /* The taps an output pixel reads: the radius, twice for open and close (two passes). A NaN

@@ -7,7 +7,16 @@
 #include "nprfx/node.h"
 #include "nprfx/pam_splat.h"
 
-enum { IN_ANCHOR, IN_TONE, IN_COLOR, IN_DIRECTION, IN_DEPTH, IN_ID, IN_PAM, IN_COUNT };
+enum {
+    IN_ANCHOR = NPRFX_PAM_SPLAT_IN_ANCHOR,
+    IN_TONE = NPRFX_PAM_SPLAT_IN_TONE,
+    IN_COLOR = NPRFX_PAM_SPLAT_IN_COLOR,
+    IN_DIRECTION = NPRFX_PAM_SPLAT_IN_DIRECTION,
+    IN_DEPTH = NPRFX_PAM_SPLAT_IN_DEPTH,
+    IN_ID = NPRFX_PAM_SPLAT_IN_ID,
+    IN_PAM = NPRFX_PAM_SPLAT_IN_PAM,
+    IN_COUNT = NPRFX_PAM_SPLAT_IN_COUNT
+};
 enum {
     P_ANCHOR_SPACE,
     P_SIZE,
@@ -301,9 +310,9 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 10},
 };
 
-static nprfx_result pam_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result pam_output(const void *params, const int *ich, nprfx_output_info *out)
 {
-    (void)pv;
+    (void)params;
     memset(out, 0, sizeof *out);
     out->channels = ich[IN_COLOR] == 4 ? 4 : 3;
     if (ich[IN_COLOR] && ich[IN_COLOR] != 3 && ich[IN_COLOR] != 4) {
@@ -315,16 +324,7 @@ static nprfx_result pam_output(const nprfx_value *pv, const int *ich, nprfx_outp
 
 static nprfx_result pam_render(const nprfx_render_args *a, const void *params)
 {
-    const nprfx_pam_splat_inputs in = {sizeof in,
-                                       &a->inputs[IN_ANCHOR],
-                                       &a->inputs[IN_TONE],
-                                       &a->inputs[IN_COLOR],
-                                       nprfx_render_input(a, IN_DIRECTION),
-                                       &a->inputs[IN_DEPTH],
-                                       nprfx_render_input(a, IN_ID),
-                                       nprfx_render_input(a, IN_PAM)};
-    return nprfx_pam_splat_render(a->ctx, params, &in, a->time, a->state, a->window, a->output,
-                                  a->items);
+    return nprfx_pam_splat_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_pam_splat = {

@@ -7,7 +7,7 @@
 #include "nprfx/node.h"
 #include "nprfx/paper.h"
 
-enum { IN_IMAGE, IN_COUNT };
+enum { IN_IMAGE = NPRFX_PAPER_IN_IMAGE, IN_COUNT = NPRFX_PAPER_IN_COUNT };
 enum {
     P_KIND,
     P_SCALE,
@@ -192,11 +192,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choice_help = output_help},
 };
 
-static nprfx_result paper_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result paper_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = (int)pv[P_OUTPUT].v[0] == NPRFX_PAPER_HEIGHT ? 1 : 4;
+    out->channels = ((const pp *)params)->output == NPRFX_PAPER_HEIGHT ? 1 : 4;
     return NPRFX_OK;
 }
 
@@ -207,7 +207,7 @@ static double paper_state_bytes(const void *params, const nprfx_state_query *q)
 
 static nprfx_result paper_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_paper_render_cached(a->ctx, params, a->window, a->output, a->state);
+    return nprfx_paper_render(a, params);
 }
 
 const nprfx_node_desc nprfx_node_paper = {

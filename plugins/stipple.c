@@ -72,7 +72,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
 
 static const nprfx_param_desc params[P_COUNT] = {
     {.name = "mode",
-     NPRFX_FIELD(sp, mode),
+     NPRFX_FIELD(sp, stipple.mode),
      .label = "Mode",
      .help = "How the tone is reproduced; see the node help.",
      .type = NPRFX_PARAM_CHOICE,
@@ -81,7 +81,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .choices = mode_names,
      .choice_help = mode_help},
     {.name = "size",
-     NPRFX_FIELD(sp, size),
+     NPRFX_FIELD(sp, stipple.area),
      .label = "Stipple Size",
      .help = "uniform and multitone: the area of every dot in px^2 (the paper's delta; a disc of "
              "radius sqrt(size / pi)). Smaller dots make more of them for the same tone.",
@@ -93,7 +93,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 2000,
      .flags = NPRFX_PARAM_AREA},
     {.name = "a0",
-     NPRFX_FIELD(sp, a0),
+     NPRFX_FIELD(sp, stipple.a0),
      .label = "Area per Dot",
      .help = "radius and multitone: the screen area in px^2 each kept dot stands for (the "
              "paper's a0): dots are spread at one per a0 px^2 whatever the tone. The darkest "
@@ -107,7 +107,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 2000,
      .flags = NPRFX_PARAM_AREA},
     {.name = "delta_min",
-     NPRFX_FIELD(sp, delta_min),
+     NPRFX_FIELD(sp, stipple.delta_min),
      .label = "Minimum Dot Area",
      .help = "radius: dots smaller than this many px^2 are dropped, as an artist would not draw "
              "them (the paper's delta_min).",
@@ -127,7 +127,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .type = NPRFX_PARAM_STRING,
      .def_string = "0.33,0.67,1"},
     {.name = "tile",
-     NPRFX_FIELD(sp, tile),
+     NPRFX_FIELD(sp, stipple.tile),
      .label = "UV Tile",
      .help = "Period of the dot sequence in UV units: one copy covers tile x tile of UV space "
              "(the paper's A0 = tile^2). Without a uv input, in units of 1024 pixels. A copy "
@@ -141,7 +141,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 1e-6,
      .hard_max = 1e6},
     {.name = "aspect",
-     NPRFX_FIELD(sp, aspect),
+     NPRFX_FIELD(sp, stipple.aspect),
      .label = "UV Aspect",
      .help = "How many times longer a unit of u is than a unit of v on the surfaces (1: square "
              "UVs). Where a UV map stretches, e.g. a unit square mapped onto a 2.5:1 plane, the "
@@ -202,7 +202,7 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_min = 0,
      .hard_max = 1},
     {.name = "coverage",
-     NPRFX_FIELD(sp, coverage),
+     NPRFX_FIELD(sp, stipple.coverage_channel),
      .label = "Coverage Channel",
      .help = "Add a fifth output channel, 'coverage': the ink coverage d in [0, 1] each pixel "
              "was drawn with (out = paper + d (ink - paper)). In an OpenFX host, whose images "
@@ -228,11 +228,11 @@ static const nprfx_param_desc params[P_COUNT] = {
      .flags = NPRFX_PARAM_PATH | NPRFX_PARAM_EXPORT},
 };
 
-static nprfx_result st_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result st_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     (void)ich;
     memset(out, 0, sizeof *out);
-    out->channels = pv[P_COVERAGE].v[0] != 0.0 ? 5 : 4;
+    out->channels = ((const sp *)params)->stipple.coverage_channel ? 5 : 4;
     out->names[0] = "R";
     out->names[1] = "G";
     out->names[2] = "B";

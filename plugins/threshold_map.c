@@ -7,7 +7,12 @@
 #include "nprfx/node.h"
 #include "nprfx/threshold.h"
 
-enum { IN_PATTERN, IN_TONE, IN_MAP, IN_COUNT };
+enum {
+    IN_PATTERN = NPRFX_THRESHOLD_MAP_IN_PATTERN,
+    IN_TONE = NPRFX_THRESHOLD_MAP_IN_TONE,
+    IN_MAP = NPRFX_THRESHOLD_MAP_IN_MAP,
+    IN_COUNT = NPRFX_THRESHOLD_MAP_IN_COUNT
+};
 enum { P_MODE, P_SIGMA, P_MU, P_TONE, P_TONE_GAIN, P_STEPS, P_INVERT, P_COUNT };
 enum { MODE_COUNT = NPRFX_THRESHOLD_MODE_COUNT };
 typedef nprfx_threshold_params tp;
@@ -124,10 +129,10 @@ static const nprfx_param_desc params[P_COUNT] = {
      .hard_max = 1},
 };
 
-static nprfx_result tm_output(const nprfx_value *pv, const int *ich, nprfx_output_info *out)
+static nprfx_result tm_output(const void *params, const int *ich, nprfx_output_info *out)
 {
     memset(out, 0, sizeof *out);
-    nprfx_result r = nprfx_threshold_output_channels((int)pv[P_MODE].v[0], ich[IN_PATTERN],
+    nprfx_result r = nprfx_threshold_output_channels(((const tp *)params)->mode, ich[IN_PATTERN],
                                                      ich[IN_MAP], &out->channels);
     if (r == NPRFX_ERR_MISSING_INPUT)
         out->problem = "mode 'map' needs the 'map' input (an X-toon map image, e.g. "
@@ -140,9 +145,7 @@ static nprfx_result tm_output(const nprfx_value *pv, const int *ich, nprfx_outpu
 
 static nprfx_result tm_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_threshold_render_cached(
-        a->ctx, params, &a->inputs[IN_PATTERN], nprfx_render_input(a, IN_TONE),
-        nprfx_render_input(a, IN_MAP), a->window, a->output, a->state);
+    return nprfx_threshold_map_render(a, params);
 }
 
 static double tm_state_bytes(const void *params, const nprfx_state_query *q)

@@ -7,7 +7,7 @@
 #include "nprfx/node.h"
 #include "nprfx/time_offset.h"
 
-enum { IN_IMAGE, IN_COUNT };
+enum { IN_IMAGE = NPRFX_TIME_OFFSET_IN_IMAGE, IN_COUNT = NPRFX_TIME_OFFSET_IN_COUNT };
 enum { P_OFFSET, P_COUNT };
 typedef nprfx_time_offset_params top;
 
@@ -36,9 +36,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result time_offset_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_time_offset_render(a->ctx, params, &a->inputs[IN_IMAGE], a->time, a->first_frame,
-                                    a->last_frame, a->fetch, a->fetch_user, IN_IMAGE, a->window,
-                                    a->output);
+    return nprfx_time_offset_render(a, params);
 }
 
 /* The one other frame it shows (nprfx_node_frames_needed adds the frame itself). */

@@ -6,7 +6,12 @@
 #include "nprfx/node.h"
 #include "nprfx/tone.h"
 
-enum { IN_TONE, IN_ALBEDO, IN_COVERAGE, IN_COUNT };
+enum {
+    IN_TONE = NPRFX_TONE_IN_TONE,
+    IN_ALBEDO = NPRFX_TONE_IN_ALBEDO,
+    IN_COVERAGE = NPRFX_TONE_IN_COVERAGE,
+    IN_COUNT = NPRFX_TONE_IN_COUNT
+};
 enum {
     P_RANGE,
     P_LOW,
@@ -203,11 +208,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result tone_render(const nprfx_render_args *a, const void *params)
 {
-    static const int input[3] = {IN_TONE, IN_ALBEDO, IN_COVERAGE};
-    return nprfx_tone_render(a->ctx, params, &a->inputs[IN_TONE], nprfx_render_input(a, IN_ALBEDO),
-                             nprfx_render_input(a, IN_COVERAGE), a->time, a->first_frame,
-                             a->last_frame, a->fetch, a->fetch_user, input, a->state, a->window,
-                             a->output);
+    return nprfx_tone_render(a, params);
 }
 
 static int tone_frames_needed(const void *params, const nprfx_frames_query *q, int input,

@@ -7,7 +7,11 @@
 #include "nprfx/filter.h"
 #include "nprfx/node.h"
 
-enum { IN_IMAGE, IN_OFFSET, IN_COUNT };
+enum {
+    IN_IMAGE = NPRFX_WARP_IN_IMAGE,
+    IN_OFFSET = NPRFX_WARP_IN_OFFSET,
+    IN_COUNT = NPRFX_WARP_IN_COUNT
+};
 enum { P_AMOUNT, P_FILTER, P_BORDER, P_REACH, P_COUNT };
 enum { FILTER_COUNT = NPRFX_WARP_FILTER_COUNT, BORDER_COUNT = 2 };
 typedef nprfx_warp_params wp;
@@ -88,8 +92,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result warp_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_warp_render(a->ctx, params, &a->inputs[IN_IMAGE], &a->inputs[IN_OFFSET], a->window,
-                             a->output);
+    return nprfx_warp_render(a, params);
 }
 
 /* Without a reach, where the image is read depends on the offset input's values: anywhere.

@@ -7,7 +7,14 @@
 #include "nprfx/node.h"
 #include "nprfx/watercolor.h"
 
-enum { IN_IMAGE, IN_TURBULENCE, IN_DISPERSION, IN_PAPER, IN_COVERAGE, IN_COUNT };
+enum {
+    IN_IMAGE = NPRFX_WATERCOLOR_IN_IMAGE,
+    IN_TURBULENCE = NPRFX_WATERCOLOR_IN_TURBULENCE,
+    IN_DISPERSION = NPRFX_WATERCOLOR_IN_DISPERSION,
+    IN_PAPER = NPRFX_WATERCOLOR_IN_PAPER,
+    IN_COVERAGE = NPRFX_WATERCOLOR_IN_COVERAGE,
+    IN_COUNT = NPRFX_WATERCOLOR_IN_COUNT
+};
 enum {
     P_TURBULENCE,
     P_DISPERSION,
@@ -147,14 +154,7 @@ static const nprfx_param_desc params[P_COUNT] = {
 
 static nprfx_result watercolor_render(const nprfx_render_args *a, const void *params)
 {
-    const nprfx_watercolor_inputs in = {
-        .image = &a->inputs[IN_IMAGE],
-        .turbulence = nprfx_render_input(a, IN_TURBULENCE),
-        .dispersion = nprfx_render_input(a, IN_DISPERSION),
-        .paper = nprfx_render_input(a, IN_PAPER),
-        .coverage = nprfx_render_input(a, IN_COVERAGE),
-    };
-    return nprfx_watercolor_render(a->ctx, params, &in, a->frame, a->window, a->output);
+    return nprfx_watercolor_render(a, params);
 }
 
 /* The stages' reach (core/looks/watercolor.c grows each stage's rectangle by it): the edge blur's

@@ -67,6 +67,17 @@ static inline nprfx_render_args th_args(nprfx_context *ctx, const nprfx_node_des
     return a;
 }
 
+/* Args for calling a node's core entry point directly (nprfx_bump_render(&a, &p), with the typed
+ * params bypassing the descriptor): inputs in the descriptor's order (NPRFX_<NODE>_IN_*, data NULL
+ * where not connected), `frame` the image domain, `window` of out, frame 1 of a one-frame shot. */
+static inline nprfx_render_args th_core_args(nprfx_context *ctx, const nprfx_image *inputs,
+                                             nprfx_image *out, nprfx_rect frame, nprfx_rect window)
+{
+    nprfx_render_args a = th_args(ctx, NULL, inputs, NULL, out, window);
+    a.frame = frame;
+    return a;
+}
+
 /* Render `window` of out at frame 1 of a one-frame shot, without fetch or state. */
 static inline nprfx_result th_render(nprfx_context *ctx, const nprfx_node_desc *node,
                                      const nprfx_image *inputs, const nprfx_value *params,

@@ -221,36 +221,6 @@ char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value *v, char *
     return buf;
 }
 
-static const char *const default_names[4][4] = {
-    {"Y"}, {"R", "G"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
-
-nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *node,
-                                    const nprfx_value *params, const int *input_channels,
-                                    nprfx_output_info *out)
-{
-    memset(out, 0, sizeof *out);
-    if (node->output) {
-        nprfx_result r = node->output(params, input_channels, out);
-        if (r)
-            return nprfx_error(ctx, r, "%s: %s", node->id,
-                               out->problem ? out->problem
-                                            : "cannot determine the output channels");
-    } else if (node->output_channels > 0) {
-        out->channels = node->output_channels;
-    } else {
-        out->channels = node->num_inputs > 0 ? input_channels[0] : 0;
-    }
-    if (out->channels < 1 || out->channels > NPRFX_MAX_CHANNELS)
-        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                           "%s: the output would have %d channels (is input '%s' connected?)",
-                           node->id, out->channels,
-                           node->num_inputs > 0 ? node->inputs[0].name : "");
-    for (int c = 0; c < out->channels; c++)
-        if (!out->names[c])
-            out->names[c] = out->channels <= 4 ? default_names[out->channels - 1][c] : "C";
-    return NPRFX_OK;
-}
-
 void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *values,
                                    double render_scale)
 {
@@ -385,6 +355,41 @@ static void typed_release(typed_buf *b)
 {
     if (b->typed != (void *)&b->inline_buf) free(b->typed);
     b->typed = NULL;
+}
+
+static const char *const default_names[4][4] = {
+    {"Y"}, {"R", "G"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
+
+nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *node,
+                                    const nprfx_value *params, const int *input_channels,
+                                    nprfx_output_info *out)
+{
+    memset(out, 0, sizeof *out);
+    if (node->output) {
+        /* the callback reads the typed params struct, bound (and checked) as for render */
+        typed_buf b;
+        nprfx_result r = typed_bind(ctx, node, params, &b);
+        if (r) return r;
+        r = node->output(b.typed, input_channels, out);
+        typed_release(&b);
+        if (r)
+            return nprfx_error(ctx, r, "%s: %s", node->id,
+                               out->problem ? out->problem
+                                            : "cannot determine the output channels");
+    } else if (node->output_channels > 0) {
+        out->channels = node->output_channels;
+    } else {
+        out->channels = node->num_inputs > 0 ? input_channels[0] : 0;
+    }
+    if (out->channels < 1 || out->channels > NPRFX_MAX_CHANNELS)
+        return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                           "%s: the output would have %d channels (is input '%s' connected?)",
+                           node->id, out->channels,
+                           node->num_inputs > 0 ? node->inputs[0].name : "");
+    for (int c = 0; c < out->channels; c++)
+        if (!out->names[c])
+            out->names[c] = out->channels <= 4 ? default_names[out->channels - 1][c] : "C";
+    return NPRFX_OK;
 }
 
 typedef nprfx_result (*bound_call)(const nprfx_render_args *a, const void *typed, void *user);

@@ -255,11 +255,17 @@ static int channels_fit(int have, int nch, int ncol)
     return have == 1 || have == ncol || have == nch || (ncol == 3 && have == 4);
 }
 
-nprfx_result nprfx_blend_render(nprfx_context *ctx, const nprfx_blend_params *p,
-                                const nprfx_image *base, const nprfx_image *layer,
-                                const nprfx_image *back, const nprfx_image *alpha,
-                                const nprfx_image *coverage, nprfx_rect window, nprfx_image *out)
+nprfx_result nprfx_blend_render(const nprfx_render_args *args, const nprfx_blend_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *base = nprfx_render_input(args, NPRFX_BLEND_IN_BASE);
+    const nprfx_image *layer = nprfx_render_input(args, NPRFX_BLEND_IN_LAYER);
+    const nprfx_image *back = nprfx_render_input(args, NPRFX_BLEND_IN_BACK);
+    const nprfx_image *alpha = nprfx_render_input(args, NPRFX_BLEND_IN_ALPHA);
+    const nprfx_image *coverage = nprfx_render_input(args, NPRFX_BLEND_IN_COVERAGE);
+    nprfx_rect window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "blend: no params or output");
     if (!base || !base->data)

@@ -69,10 +69,14 @@ static void bump_rows(void *user, int begin, int end, int worker)
     }
 }
 
-nprfx_result nprfx_bump_render(nprfx_context *ctx, const nprfx_bump_params *p,
-                               const nprfx_image *image, const nprfx_image *height,
-                               nprfx_rect frame, nprfx_rect window, nprfx_image *out)
+nprfx_result nprfx_bump_render(const nprfx_render_args *args, const nprfx_bump_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *image = nprfx_render_input(args, NPRFX_BUMP_IN_IMAGE);
+    const nprfx_image *height = nprfx_render_input(args, NPRFX_BUMP_IN_HEIGHT);
+    nprfx_rect frame = args->frame, window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "bump: no params or output");
     if (!(p->strength >= 0.0 && p->strength <= 1e4))

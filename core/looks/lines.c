@@ -28,13 +28,25 @@ static const double k_pi = 3.14159265358979323846;
 
 /* One point per pair of neighbouring pixels: t in [0, 1] along the pair, or -1 (no edge), and
  * the stroke width read there. */
+/* The node's inputs (NPRFX_LINES_IN_*); NULL where not connected. */
+typedef struct lines_inputs {
+    const nprfx_image *id;       /* 1 channel: object index */
+    const nprfx_image *coverage; /* 1 channel: anti-aliased object coverage */
+    const nprfx_image *depth;    /* 1 channel; background: not finite, >= 1e9 or <= 0 */
+    const nprfx_image *normal;   /* 3 channels, any length (normalised here) */
+    const nprfx_image *aov;      /* 1 to 4 channels: a custom pass (shadow, light) */
+    const nprfx_image *width;    /* 1 channel in [0, 1]: thickness control (tone, lighting) */
+    const nprfx_image *wobble;   /* 1 or 2 channels in [0, 1] around 0.5: displacement noise */
+    const nprfx_image *texture;  /* 1 channel in [0, 1]: multiplies the ink */
+} lines_inputs;
+
 typedef struct pair_pt {
     float t, w;
 } pair_pt;
 
 typedef struct lines_job {
     const nprfx_lines_params *p;
-    const nprfx_lines_inputs *in;
+    const lines_inputs *in;
     nprfx_rect frame, grid, window;
     double cos_crease, reach;
     nprfx_image *out;
@@ -105,7 +117,7 @@ static void pack_input(const lines_job *j, const nprfx_image *im, int y, float *
 
 static int pair_rows_init(const lines_job *j, pair_rows *r)
 {
-    const nprfx_lines_inputs *in = j->in;
+    const lines_inputs *in = j->in;
     size_t n = (size_t)nprfx_rect_width(j->grid) + 2;
     int ac = connected(in->aov) ? in->aov->channels : 0;
     size_t per = n * (size_t)(1 + 1 + 1 + 3 + ac + 1);
@@ -130,7 +142,7 @@ static const packed_row *packed(const lines_job *j, pair_rows *r, int y)
 {
     packed_row *pr = &r->ring[((y % RING) + RING) % RING];
     if (pr->y == y) return pr;
-    const nprfx_lines_inputs *in = j->in;
+    const lines_inputs *in = j->in;
     pack_input(j, in->id, y, pr->id);
     pack_input(j, in->coverage, y, pr->cov);
     pack_input(j, in->depth, y, pr->z);
@@ -185,7 +197,7 @@ LINES_INLINE pair_pt edge_point(const lines_job *j, const packed_row *ra, int ia
                                 const packed_row *rb, int ib, float z0, float z3)
 {
     const nprfx_lines_params *p = j->p;
-    const nprfx_lines_inputs *in = j->in;
+    const lines_inputs *in = j->in;
     int edge = 0, cov_cross = 0;
     double ca = 0.0, cb = 0.0;
     if (connected(in->coverage)) {
@@ -522,11 +534,22 @@ static nprfx_result check_range(nprfx_context *ctx, const char *name, double v, 
                        hi);
 }
 
-nprfx_result nprfx_lines_render(nprfx_context *ctx, const nprfx_lines_params *p,
-                                const nprfx_lines_inputs *in, nprfx_rect frame, nprfx_rect window,
-                                nprfx_image *out)
+nprfx_result nprfx_lines_render(const nprfx_render_args *args, const nprfx_lines_params *p)
 {
-    if (!p || !in || in->size < sizeof(nprfx_lines_inputs) || !out || !out->data)
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const lines_inputs inputs = {nprfx_render_input(args, NPRFX_LINES_IN_ID),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_COVERAGE),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_DEPTH),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_NORMAL),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_AOV),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_WIDTH),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_WOBBLE),
+                                 nprfx_render_input(args, NPRFX_LINES_IN_TEXTURE)};
+    const lines_inputs *in = &inputs;
+    nprfx_rect frame = args->frame, window = args->window;
+    nprfx_image *out = args->output;
+    if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "lines: no params, inputs or output");
     if (out->channels != 1)
         return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH, "lines: output has %d channels, not 1",

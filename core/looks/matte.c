@@ -72,11 +72,15 @@ static void matte_rows(void *user, int begin, int end, int worker)
         }
 }
 
-nprfx_result nprfx_matte_render(nprfx_context *ctx, const nprfx_matte_params *p,
-                                const nprfx_image *alpha, const nprfx_image *depth,
-                                const nprfx_image *id, nprfx_rect frame, nprfx_rect window,
-                                nprfx_image *out)
+nprfx_result nprfx_matte_render(const nprfx_render_args *args, const nprfx_matte_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *alpha = nprfx_render_input(args, NPRFX_MATTE_IN_ALPHA);
+    const nprfx_image *depth = nprfx_render_input(args, NPRFX_MATTE_IN_DEPTH);
+    const nprfx_image *id = nprfx_render_input(args, NPRFX_MATTE_IN_ID);
+    nprfx_rect frame = args->frame, window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !out || !out->data || out->channels != 1)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "matte: no params, or an output without exactly 1 channel");

@@ -61,10 +61,14 @@ static void morph_pass(nprfx_context *ctx, const nprfx_image *src, nprfx_image *
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(area), 8, morph_rows, &j);
 }
 
-nprfx_result nprfx_morphology_render(nprfx_context *ctx, const nprfx_morphology_params *p,
-                                     const nprfx_image *image, nprfx_rect frame, nprfx_rect window,
-                                     nprfx_image *out)
+nprfx_result nprfx_morphology_render(const nprfx_render_args *args,
+                                     const nprfx_morphology_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *image = nprfx_render_input(args, NPRFX_MORPHOLOGY_IN_IMAGE);
+    nprfx_rect frame = args->frame, window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "morphology: no params or output");
     int op = p->operation, fp = p->footprint;

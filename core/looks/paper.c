@@ -455,8 +455,8 @@ int nprfx_paper_output_channels(const nprfx_paper_params *p)
     return p && p->output == NPRFX_PAPER_HEIGHT ? 1 : 4;
 }
 
-nprfx_result nprfx_paper_render(nprfx_context *ctx, const nprfx_paper_params *p, nprfx_rect window,
-                                nprfx_image *out)
+nprfx_result nprfx_paper_texture(nprfx_context *ctx, const nprfx_paper_params *p, nprfx_rect window,
+                                 nprfx_image *out)
 {
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "paper: no params or output");

@@ -2,7 +2,7 @@
  * (core/looks/paper.c), so the pixels of the last window rendered serve every later frame with the same
  * params, copied instead of made again (750 ms a 1920x1080 frame of the watercolour kind on two
  * threads). It only saves work: a render with another window or other params makes the pixels
- * anew, bit for bit those of nprfx_paper_render. */
+ * anew, bit for bit those of nprfx_paper_texture. */
 #include <pthread.h>
 #include <string.h>
 
@@ -61,13 +61,13 @@ nprfx_result nprfx_paper_render_cached(nprfx_context *ctx, const nprfx_paper_par
 {
     window = out ? nprfx_rect_intersect(window, out->bounds) : window;
     paper_cache *c = state && p && out ? internal_state_get(state, sizeof *c) : NULL;
-    if (!c || nprfx_rect_empty(window)) return nprfx_paper_render(ctx, p, window, out);
+    if (!c || nprfx_rect_empty(window)) return nprfx_paper_texture(ctx, p, window, out);
     pthread_mutex_lock(&c->lock);
     nprfx_result r = NPRFX_OK;
     if (c->valid && same_params(&c->key, p) && c->img.channels == out->channels &&
         nprfx_rect_equal(nprfx_rect_intersect(c->img.bounds, window), window)) {
         copy_window(&c->img, out, window);
-    } else if ((r = nprfx_paper_render(ctx, p, window, out)) == NPRFX_OK) {
+    } else if ((r = nprfx_paper_texture(ctx, p, window, out)) == NPRFX_OK) {
         c->valid = 0;
         if (!c->img.data || !nprfx_rect_equal(c->img.bounds, window) ||
             c->img.channels != out->channels) {
@@ -83,4 +83,10 @@ nprfx_result nprfx_paper_render_cached(nprfx_context *ctx, const nprfx_paper_par
     }
     pthread_mutex_unlock(&c->lock);
     return r;
+}
+
+nprfx_result nprfx_paper_render(const nprfx_render_args *args, const nprfx_paper_params *p)
+{
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    return nprfx_paper_render_cached(args->ctx, p, args->window, args->output, args->state);
 }

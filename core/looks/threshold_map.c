@@ -610,3 +610,14 @@ nprfx_result nprfx_threshold_render_cached(nprfx_context *ctx, const nprfx_thres
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(window), 8, tm_rows, &j);
     return NPRFX_OK;
 }
+
+nprfx_result nprfx_threshold_map_render(const nprfx_render_args *args,
+                                        const nprfx_threshold_params *p)
+{
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    return nprfx_threshold_render_cached(args->ctx, p,
+                                         nprfx_render_input(args, NPRFX_THRESHOLD_MAP_IN_PATTERN),
+                                         nprfx_render_input(args, NPRFX_THRESHOLD_MAP_IN_TONE),
+                                         nprfx_render_input(args, NPRFX_THRESHOLD_MAP_IN_MAP),
+                                         args->window, args->output, args->state);
+}

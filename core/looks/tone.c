@@ -410,13 +410,19 @@ int nprfx_tone_frames(const nprfx_tone_params *p, const nprfx_frames_query *q,
     return 1;
 }
 
-nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
-                               const nprfx_image *tone, const nprfx_image *albedo,
-                               const nprfx_image *coverage, double time, int first_frame,
-                               int last_frame, nprfx_fetch_fn fetch, void *fetch_user,
-                               const int input[3], void **state, nprfx_rect window,
-                               nprfx_image *out)
+nprfx_result nprfx_tone_render(const nprfx_render_args *args, const nprfx_tone_params *p)
 {
+    /* the inputs measured at other frames, in tone_run's order: tone, albedo, coverage */
+    static const int input[3] = {NPRFX_TONE_IN_TONE, NPRFX_TONE_IN_ALBEDO, NPRFX_TONE_IN_COVERAGE};
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *tone = nprfx_render_input(args, NPRFX_TONE_IN_TONE);
+    const nprfx_image *albedo = nprfx_render_input(args, NPRFX_TONE_IN_ALBEDO);
+    const nprfx_image *coverage = nprfx_render_input(args, NPRFX_TONE_IN_COVERAGE);
+    double time = args->time;
+    void **state = args->state;
+    nprfx_rect window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !tone || !tone->data || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "tone: no params, input or output");
     if (out->channels != 1)
@@ -437,12 +443,12 @@ nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
     double lo = p->black, hi = p->white;
     if (p->range != NPRFX_TONE_RANGE_MANUAL) {
         int first, last;
-        tone_shot((int)time, first_frame, last_frame, &first, &last);
+        tone_shot((int)time, args->first_frame, args->last_frame, &first, &last);
         tone_cache local;
         memset(&local, 0, sizeof local);
         tone_cache *c = state ? internal_state_get(state, sizeof *c) : &local;
         if (!c) return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "tone: no memory for its cache");
-        tone_run run = {ctx, p, tone, albedo, coverage, time, fetch, fetch_user, input};
+        tone_run run = {ctx, p, tone, albedo, coverage, time, args->fetch, args->fetch_user, input};
         if (c != &local) pthread_mutex_lock(&c->lock);
         nprfx_result r = p->range == NPRFX_TONE_RANGE_SHOT ? measure_shot(&run, c, first, last)
                                                            : measure_frame(&run, c, first, last);

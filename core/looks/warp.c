@@ -45,10 +45,14 @@ static void warp_rows(void *user, int begin, int end, int worker)
         }
 }
 
-nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
-                               const nprfx_image *image, const nprfx_image *offset,
-                               nprfx_rect window, nprfx_image *out)
+nprfx_result nprfx_warp_render(const nprfx_render_args *args, const nprfx_warp_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const nprfx_image *image = nprfx_render_input(args, NPRFX_WARP_IN_IMAGE);
+    const nprfx_image *offset = nprfx_render_input(args, NPRFX_WARP_IN_OFFSET);
+    nprfx_rect window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "warp: no params or output");
     if (p->filter < 0 || p->filter >= NPRFX_WARP_FILTER_COUNT)

@@ -277,11 +277,14 @@ static nprfx_result check_amount(nprfx_context *ctx, const char *name, double v)
     return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE, "watercolor.%s: %g is not a number", name, v);
 }
 
-nprfx_result nprfx_watercolor_render(nprfx_context *ctx, const nprfx_watercolor_params *p,
-                                     const nprfx_watercolor_inputs *in, nprfx_rect frame,
-                                     nprfx_rect window, nprfx_image *out)
+nprfx_result nprfx_watercolor_render(const nprfx_render_args *args,
+                                     const nprfx_watercolor_params *p)
 {
-    if (!p || !in || !out || !out->data)
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    nprfx_rect frame = args->frame, window = args->window;
+    nprfx_image *out = args->output;
+    if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "watercolor: no params, inputs or output");
     nprfx_result r;
@@ -296,7 +299,7 @@ nprfx_result nprfx_watercolor_render(nprfx_context *ctx, const nprfx_watercolor_
         (r = check_length(ctx, "wobble", p->wobble)) ||
         (r = check_length(ctx, "wobble_scale", p->wobble_scale)))
         return r;
-    const nprfx_image *image = in->image;
+    const nprfx_image *image = nprfx_render_input(args, NPRFX_WATERCOLOR_IN_IMAGE);
     if (!image || !image->data)
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
                            "watercolor: input 'image' is not connected");
@@ -321,10 +324,14 @@ nprfx_result nprfx_watercolor_render(nprfx_context *ctx, const nprfx_watercolor_
         return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "watercolor: input 'image' is empty");
     nprfx_image vi = nprfx_image_crop(image, j.ci), vt, vd, vp, vk;
     j.image = &vi;
-    if ((r = optional_input(ctx, "turbulence", in->turbulence, frame, &vt, &j.ct, &j.turb)) ||
-        (r = optional_input(ctx, "dispersion", in->dispersion, frame, &vd, &j.cd, &j.disp)) ||
-        (r = optional_input(ctx, "paper", in->paper, frame, &vp, &j.cp, &j.paper)) ||
-        (r = optional_input(ctx, "coverage", in->coverage, frame, &vk, &j.ck, &j.cov)))
+    const nprfx_image *turbulence = nprfx_render_input(args, NPRFX_WATERCOLOR_IN_TURBULENCE);
+    const nprfx_image *dispersion = nprfx_render_input(args, NPRFX_WATERCOLOR_IN_DISPERSION);
+    const nprfx_image *paper = nprfx_render_input(args, NPRFX_WATERCOLOR_IN_PAPER);
+    const nprfx_image *coverage = nprfx_render_input(args, NPRFX_WATERCOLOR_IN_COVERAGE);
+    if ((r = optional_input(ctx, "turbulence", turbulence, frame, &vt, &j.ct, &j.turb)) ||
+        (r = optional_input(ctx, "dispersion", dispersion, frame, &vd, &j.cd, &j.disp)) ||
+        (r = optional_input(ctx, "paper", paper, frame, &vp, &j.cp, &j.paper)) ||
+        (r = optional_input(ctx, "coverage", coverage, frame, &vk, &j.ck, &j.cov)))
         return r;
     j.turbulence = p->turbulence;
     j.dispersion = p->dispersion;

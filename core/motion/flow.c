@@ -446,11 +446,19 @@ static void frame_free(flow_frame *f)
     f->lum = NULL, f->ok = NULL;
 }
 
-nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
-                               const nprfx_image *image, double time, int first_frame,
-                               int last_frame, nprfx_fetch_fn fetch, void *fetch_user, int input,
-                               void **state, nprfx_rect window, nprfx_image *out)
+nprfx_result nprfx_flow_render(const nprfx_render_args *args, const nprfx_flow_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const int input = NPRFX_FLOW_IN_IMAGE;
+    const nprfx_image *image = nprfx_render_input(args, input);
+    double time = args->time;
+    int first_frame = args->first_frame, last_frame = args->last_frame;
+    nprfx_fetch_fn fetch = args->fetch;
+    void *fetch_user = args->fetch_user;
+    void **state = args->state;
+    nprfx_rect window = args->window;
+    nprfx_image *out = args->output;
     int which[NPRFX_FLOW_CHANNELS];
     int nch = p ? nprfx_flow_output_channels(p->output, which) : 0;
     if (!p || !out || !out->data || nch < 1 || out->channels != nch)

@@ -13,11 +13,17 @@ double nprfx_time_offset_frame(double time, int offset, int first_frame, int las
     return t;
 }
 
-nprfx_result nprfx_time_offset_render(nprfx_context *ctx, const nprfx_time_offset_params *p,
-                                      const nprfx_image *image, double time, int first_frame,
-                                      int last_frame, nprfx_fetch_fn fetch, void *fetch_user,
-                                      int input, nprfx_rect window, nprfx_image *out)
+nprfx_result nprfx_time_offset_render(const nprfx_render_args *args,
+                                      const nprfx_time_offset_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const int input = NPRFX_TIME_OFFSET_IN_IMAGE;
+    const nprfx_image *image = nprfx_render_input(args, input);
+    double time = args->time;
+    nprfx_fetch_fn fetch = args->fetch;
+    nprfx_rect window = args->window;
+    nprfx_image *out = args->output;
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "time-offset: no params or output");
     if (p->offset == 0) {
@@ -29,9 +35,9 @@ nprfx_result nprfx_time_offset_render(nprfx_context *ctx, const nprfx_time_offse
     if (!fetch)
         return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                            "time-offset: this host cannot fetch other frames");
-    double t = nprfx_time_offset_frame(time, p->offset, first_frame, last_frame);
+    double t = nprfx_time_offset_frame(time, p->offset, args->first_frame, args->last_frame);
     nprfx_image other;
-    nprfx_result r = fetch(fetch_user, input, t, &other);
+    nprfx_result r = fetch(args->fetch_user, input, t, &other);
     if (r) return r;
     if (other.channels != out->channels)
         return nprfx_error(ctx, NPRFX_ERR_SIZE_MISMATCH,

@@ -176,11 +176,16 @@ void nprfx_pam_splat_state_free(void *state)
 
 /* ---- splatting ------------------------------------------------------------------------------ */
 
+/* The node's inputs (NPRFX_PAM_SPLAT_IN_*); NULL where not connected. */
+typedef struct pam_inputs {
+    const nprfx_image *anchor, *tone, *color, *direction, *depth, *id, *pam;
+} pam_inputs;
+
 typedef struct pam_job {
     const gjob *J;
     const pam_prep *pam;
     const nprfx_pam_splat_params *p;
-    const nprfx_pam_splat_inputs *in;
+    const pam_inputs *in;
     double radius, r2, pa2, inv_texel, shift, tol, theta0;
     double pa2s; /* the weights' Gaussian, narrowed by sharpness */
     double pa2x; /* its extra narrowing across the direction */
@@ -324,7 +329,7 @@ static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx
 static void render_tile(pam_job *P, int t, tile_buf *B)
 {
     const gjob *J = P->J;
-    const nprfx_pam_splat_inputs *in = P->in;
+    const pam_inputs *in = P->in;
     int tx0 = J->window.x0 + (t % P->ntx) * PAM_TILE, ty0 = J->window.y0 + (t / P->ntx) * PAM_TILE;
     int tx1 = tx0 + PAM_TILE < J->window.x1 ? tx0 + PAM_TILE : J->window.x1;
     int ty1 = ty0 + PAM_TILE < J->window.y1 ? ty0 + PAM_TILE : J->window.y1;
@@ -430,9 +435,9 @@ static void render_tiles(void *user, int begin, int end, int worker)
 /* ---- the render ----------------------------------------------------------------------------- */
 
 static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p,
-                          const nprfx_pam_splat_inputs *in, const nprfx_image *out)
+                          const pam_inputs *in, const nprfx_image *out)
 {
-    if (!p || !in || in->size < sizeof *in || !out || !out->data)
+    if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "pam-splat: incomplete arguments");
     const struct {
         const nprfx_image *im;
@@ -493,10 +498,25 @@ static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p,
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_pam_splat_render(nprfx_context *ctx, const nprfx_pam_splat_params *p,
-                                    const nprfx_pam_splat_inputs *in, double time, void **state,
-                                    nprfx_rect window, nprfx_image *out, long long *splats)
+nprfx_result nprfx_pam_splat_render(const nprfx_render_args *args,
+                                    const nprfx_pam_splat_params *p)
 {
+    if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
+    nprfx_context *ctx = args->ctx;
+    const pam_inputs inputs = {nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_ANCHOR),
+                               nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_TONE),
+                               nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_COLOR),
+                               nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_DIRECTION),
+                               nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_DEPTH),
+                               nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_ID),
+                               nprfx_render_input(args, NPRFX_PAM_SPLAT_IN_PAM)};
+    const pam_inputs *in = &inputs;
+    double time = args->time;
+    void **state = args->state;
+    nprfx_rect window = args->window;
+    nprfx_image *out = args->output;
+    /* args of the first release end before items */
+    long long *splats = args->size > NPRFX_RENDER_ARGS_SIZE_V1 ? args->items : NULL;
     nprfx_result r = check(ctx, p, in, out);
     if (r) return r;
     window = nprfx_rect_intersect(window, out->bounds);
@@ -534,7 +554,7 @@ nprfx_result nprfx_pam_splat_render(nprfx_context *ctx, const nprfx_pam_splat_pa
 
     pam_job P;
     memset(&P, 0, sizeof P);
-    nprfx_pam_splat_inputs ins = *in;
+    pam_inputs ins = *in;
     if (ins.direction && !ins.direction->data) ins.direction = NULL;
     P.J = &J;
     P.pam = pp;

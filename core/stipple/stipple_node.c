@@ -58,20 +58,22 @@ static nprfx_result get_state(const nprfx_render_args *args,
 
 /* ---- node params to core params ---- */
 
-/* Core params for the node's (the render scale is already applied to the areas), with the
- * instance's sequence and the tone curve when the params ask for it (curve: the caller's
- * storage). */
+/* Core params for the node's (the render scale is already applied to the areas): the bound ones
+ * completed with what the node derives, the instance's sequence and the tone curve when the
+ * params ask for it (curve: the caller's storage). */
 static nprfx_result core_params(const nprfx_render_args *args, const nprfx_stipple_node_params *np,
                                 nprfx_stipple_sequence_fn make_sequence, nprfx_stipple_params *p,
                                 float *curve)
 {
-    nprfx_stipple_params_default(p);
-    p->mode = np->mode;
-    p->area = np->size;
-    p->a0 = np->a0;
-    p->delta_min = np->delta_min;
-    p->tile = np->tile;
-    p->aspect = np->aspect;
+    nprfx_stipple_params def;
+    nprfx_stipple_params_default(&def);
+    *p = np->stipple;
+    p->size = sizeof *p;
+    p->num_tones = def.num_tones; /* the default pens until multitone parses the node's */
+    memcpy(p->tones, def.tones, sizeof p->tones);
+    p->tone_curve = NULL;
+    p->sequence = NULL;
+    p->count = NULL;
     double scale = args->render_scale > 0 ? args->render_scale : 1.0;
     p->plane_scale = NPRFX_STIPPLE_PLANE_PIXELS * scale;
     for (int c = 0; c < 4; c++) {
@@ -79,7 +81,7 @@ static nprfx_result core_params(const nprfx_render_args *args, const nprfx_stipp
         p->paper[c] = (float)np->paper[c];
     }
     p->seed = (uint64_t)np->seed;
-    p->coverage_channel = np->coverage != 0;
+    p->coverage_channel = p->coverage_channel != 0;
     nprfx_result r = NPRFX_OK;
     if (p->mode == NPRFX_STIPPLE_MULTITONE) r = nprfx_stipple_parse_tones(args->ctx, np->tones, p);
     node_state *s = NULL;

@@ -23,6 +23,7 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -80,22 +81,29 @@ typedef struct nprfx_blend_params {
     double background[4];         /* RGBA where coverage is 0 */
 } nprfx_blend_params;
 
-/* Blend `window` of out (which has base's channels, 1 to 4; with 4 the 4th is alpha and passes
- * through). Per colour channel: r = nprfx_blend_apply(mode, back, c0, c1, factor, a), then
- * out = nprfx_blend_alpha(background, r, coverage) on every channel (alpha too), coverage
- * clamped to [0, 1]. A 1-channel base takes the background's Rec. 709 luminance, a 2-channel one
- * its R and G.
+/* The node's inputs, in the descriptor's order (args->inputs). */
+enum {
+    NPRFX_BLEND_IN_BASE = 0,
+    NPRFX_BLEND_IN_LAYER = 1,
+    NPRFX_BLEND_IN_BACK = 2,     /* optional */
+    NPRFX_BLEND_IN_ALPHA = 3,    /* optional */
+    NPRFX_BLEND_IN_COVERAGE = 4, /* optional */
+    NPRFX_BLEND_IN_COUNT
+};
+
+/* Blend args->window of out = args->output (which has base's channels, 1 to 4; with 4 the 4th is
+ * alpha and passes through), the inputs NPRFX_BLEND_IN_*. Per colour channel: r =
+ * nprfx_blend_apply(mode, back, c0, c1, factor, a), then out = nprfx_blend_alpha(background, r,
+ * coverage) on every channel (alpha too), coverage clamped to [0, 1]. A 1-channel base takes the
+ * background's Rec. 709 luminance, a 2-channel one its R and G.
  *
  * layer: 1 channel (used for every colour channel) or base's colour channels (an extra alpha
  * channel is ignored). back (overlayalpha only; NULL: base without gain), alpha (NULL: a =
  * opacity) and coverage (NULL: 1) may be NULL; back needs 1 channel or base's colour channels,
  * alpha and coverage are read from channel 0. Inputs read as 0 outside their data windows. Runs
  * on ctx's executor; bit-identical for any thread count and window split. */
-NPRFX_API nprfx_result nprfx_blend_render(nprfx_context *ctx, const nprfx_blend_params *p,
-                                          const nprfx_image *base, const nprfx_image *layer,
-                                          const nprfx_image *back, const nprfx_image *alpha,
-                                          const nprfx_image *coverage, nprfx_rect window,
-                                          nprfx_image *out);
+NPRFX_API nprfx_result nprfx_blend_render(const nprfx_render_args *args,
+                                          const nprfx_blend_params *p);
 
 #ifdef __cplusplus
 }

@@ -18,11 +18,15 @@
 #define NPRFX_BUMP_H
 
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The node's inputs, in the descriptor's order (args->inputs). */
+enum { NPRFX_BUMP_IN_IMAGE = 0, NPRFX_BUMP_IN_HEIGHT = 1, NPRFX_BUMP_IN_COUNT };
 
 /* The node's params (its descriptor binds each one here by offset). */
 typedef struct nprfx_bump_params {
@@ -34,14 +38,13 @@ typedef struct nprfx_bump_params {
     double shininess; /* the highlight's exponent, [1, 1e4] */
 } nprfx_bump_params;
 
-/* Shade `window` of out (which has image's channels) by the gradient of `height` (channel 0).
+/* Shade args->window of args->output (which has image's channels) by the gradient of input
+ * NPRFX_BUMP_IN_HEIGHT (channel 0), the image NPRFX_BUMP_IN_IMAGE, over args->frame.
  * s multiplies a slope per pixel, so it is a length in pixels: scaled with the render scale, a
  * proxy shades like the full image. Height reads clamp to the frame and the height's data
  * window, the same for every tile; outside its data window the image reads as 0. Runs on ctx's
  * executor; bit-identical for any thread count and window split. */
-NPRFX_API nprfx_result nprfx_bump_render(nprfx_context *ctx, const nprfx_bump_params *p,
-                                         const nprfx_image *image, const nprfx_image *height,
-                                         nprfx_rect frame, nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_bump_render(const nprfx_render_args *args, const nprfx_bump_params *p);
 
 #ifdef __cplusplus
 }

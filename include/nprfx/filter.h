@@ -4,6 +4,7 @@
 #define NPRFX_FILTER_H
 
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -56,15 +57,18 @@ typedef struct nprfx_morphology_params {
     int footprint; /* nprfx_morphology_footprint */
 } nprfx_morphology_params;
 
-/* Filter `window` of out (which has image's channels; every channel on its own). Reads outside
- * the image's data window or the frame repeat the edge: they clamp to image->bounds and frame
- * (the whole image domain), the same for every tile. open and close run their first pass over
+/* The morphology node's inputs, in the descriptor's order (args->inputs). */
+enum { NPRFX_MORPHOLOGY_IN_IMAGE = 0, NPRFX_MORPHOLOGY_IN_COUNT };
+
+/* Filter args->window of args->output (which has the image's channels; every channel on its
+ * own), the image input NPRFX_MORPHOLOGY_IN_IMAGE. Reads outside the image's data window or the
+ * frame repeat the edge: they clamp to image->bounds and args->frame (the whole image domain),
+ * the same for every tile. open and close run their first pass over
  * the window grown by the footprint, so tiles agree with the whole frame. fmaxf/fminf ignore a
  * NaN rather than spreading it. Runs on ctx's executor; bit-identical for any thread count and
  * window split. */
-NPRFX_API nprfx_result nprfx_morphology_render(nprfx_context *ctx, const nprfx_morphology_params *p,
-                                               const nprfx_image *image, nprfx_rect frame,
-                                               nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_morphology_render(const nprfx_render_args *args,
+                                               const nprfx_morphology_params *p);
 
 /* ---- the warp node over an image ---- */
 
@@ -86,15 +90,17 @@ typedef struct nprfx_warp_params {
     double reach;
 } nprfx_warp_params;
 
-/* Warp `window` of out (which has image's channels): out(p) = image(p + amount * offset(p)),
+/* The warp node's inputs, in the descriptor's order (args->inputs). */
+enum { NPRFX_WARP_IN_IMAGE = 0, NPRFX_WARP_IN_OFFSET = 1, NPRFX_WARP_IN_COUNT };
+
+/* Warp args->window of out = args->output (which has image's channels), image and offset the
+ * inputs NPRFX_WARP_IN_*: out(p) = image(p + amount * offset(p)),
  * each displacement component clamped to +-reach when reach > 0, with p a pixel centre, offset's
  * channels 0 and 1 giving (x, y; y down). Outside its data window the offset reads as 0 (no
  * displacement); a NaN displacement leaves the pixel in place. The image must not be empty; offset
  * needs at least 2 channels. Runs on ctx's executor; bit-identical for any thread count and window
  * split. */
-NPRFX_API nprfx_result nprfx_warp_render(nprfx_context *ctx, const nprfx_warp_params *p,
-                                         const nprfx_image *image, const nprfx_image *offset,
-                                         nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_warp_render(const nprfx_render_args *args, const nprfx_warp_params *p);
 
 #ifdef __cplusplus
 }

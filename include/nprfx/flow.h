@@ -112,17 +112,17 @@ NPRFX_API void nprfx_flow_confidence(const float *f_ab, const float *f_ba, const
  * the frame has no match: a cut) to 1 at 0.85 and above (docs/design.md §3.15). */
 NPRFX_API double nprfx_flow_cut_gate(double consistent);
 
-/* Render `window` of out (the channels of p->output, nprfx_flow_output_channels) at frame `time` of
- * the shot [first_frame, last_frame]: the flows to the previous and next frames (fetched through
- * fetch(fetch_user, input, t, &view)) in the motion convention of docs/design.md §2, with their
+/* The node's inputs, in the descriptor's order (args->inputs and args->fetch use them). */
+enum { NPRFX_FLOW_IN_IMAGE = 0, NPRFX_FLOW_IN_COUNT };
+
+/* Render args->window of out = args->output (the channels of p->output,
+ * nprfx_flow_output_channels) at frame args->time of the shot [args->first_frame,
+ * args->last_frame]: the flows to the previous and next frames (the input NPRFX_FLOW_IN_IMAGE
+ * fetched through args->fetch) in the motion convention of docs/design.md §2, with their
  * confidences. At the shot's first frame the prev channels are 0, at its last the next ones.
- * `state`: NULL, or the node's instance slot, where the last pair of flows is cached (the result
- * never depends on it); free it with nprfx_flow_state_free. */
-NPRFX_API nprfx_result nprfx_flow_render(nprfx_context *ctx, const nprfx_flow_params *p,
-                                         const nprfx_image *image, double time, int first_frame,
-                                         int last_frame, nprfx_fetch_fn fetch, void *fetch_user,
-                                         int input, void **state, nprfx_rect window,
-                                         nprfx_image *out);
+ * args->state: NULL, or the node's instance slot, where the last pair of flows is cached (the
+ * result never depends on it); free it with nprfx_flow_state_free. */
+NPRFX_API nprfx_result nprfx_flow_render(const nprfx_render_args *args, const nprfx_flow_params *p);
 NPRFX_API void nprfx_flow_state_free(void *state);
 /* The most bytes that state holds for frames of width x height: its solved pairs (luminances,
  * masks, both flows and both confidences of each). */

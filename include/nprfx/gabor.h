@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -142,31 +143,33 @@ typedef enum nprfx_gabor_anchor_space {
     NPRFX_GABOR_SPACE_COUNT
 } nprfx_gabor_anchor_space;
 
-/* The node's params, as its descriptor binds them by offset (radius already multiplied by the
- * render scale; the frequency is scaled here, by nprfx_gabor_frequency_at_scale). */
-typedef struct nprfx_gabor_node_params {
-    int anchor_space; /* nprfx_gabor_anchor_space */
-    double frequency, orientation;
-    int isotropic;
-    double radius, n0;
-    int amplitude; /* nprfx_gabor_amplitude */
-    int seed;      /* >= 0 */
-    double cell;
-    int lod_levels, fade, depth_test;
-    double depth_tolerance;
-    int supersample, output;
-    double contrast;
-    int points;
-} nprfx_gabor_node_params;
+/* The node's inputs, in the descriptor's order (args->inputs). */
+enum {
+    NPRFX_GABOR_SPLAT_IN_ANCHOR = 0,      /* 3D: x,y,z[,coverage]; 2D: u,v[,coverage] */
+    NPRFX_GABOR_SPLAT_IN_DEPTH = 1,       /* 1 channel */
+    NPRFX_GABOR_SPLAT_IN_ID = 2,          /* optional: object index, 1 channel */
+    NPRFX_GABOR_SPLAT_IN_ORIENTATION = 3, /* optional: 1 channel angle or 2 channels direction */
+    NPRFX_GABOR_SPLAT_IN_FREQUENCY = 4,   /* optional: 1 channel, multiplies F0 */
+    NPRFX_GABOR_SPLAT_IN_COUNT
+};
 
-/* The node's render: checks what only this node knows (the anchor's channels for its space, the
- * orientation input's), then nprfx_gabor_render. inputs.size may be 0. *kernels, when not NULL,
- * grows by the kernels splatted. */
-NPRFX_API nprfx_result nprfx_gabor_node_render(nprfx_context *ctx,
-                                               const nprfx_gabor_node_params *np,
-                                               const nprfx_gabor_inputs *in, double render_scale,
-                                               nprfx_rect window, nprfx_image *out,
-                                               long long *kernels);
+/* The node's params, as its descriptor binds them by offset. gabor's frequency, orientation,
+ * isotropic, radius (already multiplied by the render scale), n0, amplitude, cell, lod_levels,
+ * fade, depth_test, depth_tolerance, supersample, output, contrast and points are the params of
+ * those names; nprfx_gabor_splat_render sets the rest of the algorithm's params: size,
+ * anchor_dims (from anchor_space), seed (from seed) and the frequency at the render scale
+ * (nprfx_gabor_frequency_at_scale of gabor.frequency, which is at render scale 1). */
+typedef struct nprfx_gabor_splat_params {
+    nprfx_gabor_params gabor;
+    int anchor_space; /* nprfx_gabor_anchor_space */
+    int seed;         /* >= 0: gabor.seed */
+} nprfx_gabor_splat_params;
+
+/* The node's render of args->window into args->output, inputs NPRFX_GABOR_SPLAT_IN_*: checks
+ * what only this node knows (the anchor's channels for its space, the orientation input's), then
+ * nprfx_gabor_render. *args->items, when not NULL, grows by the kernels splatted. */
+NPRFX_API nprfx_result nprfx_gabor_splat_render(const nprfx_render_args *args,
+                                                const nprfx_gabor_splat_params *p);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,7 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -32,32 +33,31 @@ typedef struct nprfx_lines_params {
     double opacity;         /* [0, 1]: multiplies the ink */
 } nprfx_lines_params;
 
-/* The node's inputs; NULL (or a view without data) where not connected. At least one of id,
- * coverage, depth, normal and aov must be connected. */
-typedef struct nprfx_lines_inputs {
-    size_t size;                 /* sizeof(nprfx_lines_inputs) */
-    const nprfx_image *id;       /* 1 channel: object index */
-    const nprfx_image *coverage; /* 1 channel: anti-aliased object coverage */
-    const nprfx_image *depth;    /* 1 channel; background: not finite, >= 1e9 or <= 0 */
-    const nprfx_image *normal;   /* 3 channels, any length (normalised here) */
-    const nprfx_image *aov;      /* 1 to 4 channels: a custom pass (shadow, light) */
-    const nprfx_image *width;    /* 1 channel in [0, 1]: thickness control (tone, lighting) */
-    const nprfx_image *wobble;   /* 1 or 2 channels in [0, 1] around 0.5: displacement noise */
-    const nprfx_image *texture;  /* 1 channel in [0, 1]: multiplies the ink */
-} nprfx_lines_inputs;
+/* The node's inputs, in the descriptor's order (args->inputs), each optional; at least one of
+ * id, coverage, depth, normal and aov must be connected. */
+enum {
+    NPRFX_LINES_IN_ID = 0,       /* 1 channel: object index */
+    NPRFX_LINES_IN_COVERAGE = 1, /* 1 channel: anti-aliased object coverage */
+    NPRFX_LINES_IN_DEPTH = 2,    /* 1 channel; background: not finite, >= 1e9 or <= 0 */
+    NPRFX_LINES_IN_NORMAL = 3,   /* 3 channels, any length (normalised here) */
+    NPRFX_LINES_IN_AOV = 4,      /* 1 to 4 channels: a custom pass (shadow, light) */
+    NPRFX_LINES_IN_WIDTH = 5,    /* 1 channel in [0, 1]: thickness control (tone, lighting) */
+    NPRFX_LINES_IN_WOBBLE = 6,   /* 1 or 2 channels in [0, 1] around 0.5: displacement noise */
+    NPRFX_LINES_IN_TEXTURE = 7,  /* 1 channel in [0, 1]: multiplies the ink */
+    NPRFX_LINES_IN_COUNT
+};
 
-/* Render `window` of out (1 channel: ink coverage in [0, 1], 1 = full ink). Edge points sit
- * between the centres of neighbouring pixels, at the coverage's 0.5 crossing where coverage is
- * connected and crosses there, else at the midpoint; inside each 2x2 cell of pixel centres they
- * are joined into segments (marching squares; three or four points join at their mean). A pixel
- * at distance d from the nearest segment, after the wobble displacement, gets
- * ink = clamp(w / 2 - d + 0.5, 0, 1), the box-filtered coverage of a stroke of width w, with w
- * read at the edge. `frame` is the whole image domain: pairs of pixels never reach outside it,
- * so every tile sees the same edges. Runs on ctx's executor; bit-identical for any thread count
- * and window split. */
-NPRFX_API nprfx_result nprfx_lines_render(nprfx_context *ctx, const nprfx_lines_params *p,
-                                          const nprfx_lines_inputs *in, nprfx_rect frame,
-                                          nprfx_rect window, nprfx_image *out);
+/* Render args->window of out = args->output (1 channel: ink coverage in [0, 1], 1 = full ink). Edge
+ * points sit between the centres of neighbouring pixels, at the coverage's 0.5 crossing where
+ * coverage is connected and crosses there, else at the midpoint; inside each 2x2 cell of pixel
+ * centres they are joined into segments (marching squares; three or four points join at their
+ * mean). A pixel at distance d from the nearest segment, after the wobble displacement, gets ink =
+ * clamp(w / 2 - d + 0.5, 0, 1), the box-filtered coverage of a stroke of width w, with w read at
+ * the edge. args->frame is the whole image domain: pairs of pixels never reach outside it, so every
+ * tile sees the same edges. Runs on ctx's executor; bit-identical for any thread count and window
+ * split. */
+NPRFX_API nprfx_result nprfx_lines_render(const nprfx_render_args *args,
+                                          const nprfx_lines_params *p);
 
 #ifdef __cplusplus
 }

@@ -6,11 +6,20 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The node's inputs, in the descriptor's order (args->inputs); each optional. */
+enum {
+    NPRFX_MATTE_IN_ALPHA = 0,
+    NPRFX_MATTE_IN_DEPTH = 1,
+    NPRFX_MATTE_IN_ID = 2,
+    NPRFX_MATTE_IN_COUNT
+};
 
 /* The node's params (its descriptor binds each one here by offset). */
 typedef struct nprfx_matte_params {
@@ -25,13 +34,12 @@ typedef struct nprfx_matte_params {
 NPRFX_API double nprfx_matte_pixel(const nprfx_matte_params *p, const float *alpha,
                                    const float *depth, const float *id);
 
-/* Render `window` of the 1-channel matte; at least one of alpha, depth, id must be given. The
+/* Render args->window of the 1-channel matte args->output; at least one of the inputs alpha,
+ * depth, id (NPRFX_MATTE_IN_*) must be connected. The
  * depth/id part is softened by a Gaussian of sigma p->soften (at most 2 px: the frame around the
  * window is read, so tiles agree with the whole frame); alpha, already antialiased, is not. */
-NPRFX_API nprfx_result nprfx_matte_render(nprfx_context *ctx, const nprfx_matte_params *p,
-                                          const nprfx_image *alpha, const nprfx_image *depth,
-                                          const nprfx_image *id, nprfx_rect frame,
-                                          nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_matte_render(const nprfx_render_args *args,
+                                          const nprfx_matte_params *p);
 
 #ifdef __cplusplus
 }

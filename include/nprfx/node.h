@@ -198,9 +198,10 @@ struct nprfx_node_desc {
     /* Output channel count when `output` is NULL; 0 means "as many as the first input". */
     int output_channels;
     /* Optional: compute output channels and names from params and input channel counts
-     * (input_channels[i] is 0 for an unconnected input). */
-    nprfx_result (*output)(const nprfx_value *params, const int *input_channels,
-                           nprfx_output_info *out);
+     * (input_channels[i] is 0 for an unconnected input). `params` is the node's typed params
+     * struct, bound and checked as for render (NULL when the node declares no params_size).
+     * Called through nprfx_node_output_info. */
+    nprfx_result (*output)(const void *params, const int *input_channels, nprfx_output_info *out);
     unsigned flags;
     nprfx_render_fn render;
     void (*state_free)(void *state);
@@ -247,7 +248,7 @@ struct nprfx_node_desc {
 /* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
 static inline const nprfx_image *nprfx_render_input(const nprfx_render_args *args, int i)
 {
-    return args->inputs[i].data ? &args->inputs[i] : NULL;
+    return args->inputs && args->inputs[i].data ? &args->inputs[i] : NULL;
 }
 
 /* ---- rendering through the descriptor (core/base/node.c) ---- */
@@ -320,7 +321,8 @@ NPRFX_API char *nprfx_param_format(const nprfx_param_desc *p, const nprfx_value 
 NPRFX_API const char *nprfx_param_type_name(nprfx_param_type t);
 
 /* Output description for params/inputs, applying the output_channels rule and default names
- * (1: Y; 2: R,G; 3: R,G,B; 4: R,G,B,A). */
+ * (1: Y; 2: R,G; 3: R,G,B; 4: R,G,B,A). A node's desc->output gets the params bound into its
+ * typed struct, checked as for render (errors name the param). */
 NPRFX_API nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_node_desc *node,
                                               const nprfx_value *params, const int *input_channels,
                                               nprfx_output_info *out);

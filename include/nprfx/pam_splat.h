@@ -25,6 +25,7 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 #include "nprfx/pam.h" /* the format, YUV, NPRFX_PAM_MAX_MAPS */
 
@@ -96,25 +97,25 @@ typedef struct nprfx_pam_splat_params {
     double depth_tolerance; /* relative depth error a splat's fragment tolerates */
 } nprfx_pam_splat_params;
 
-typedef struct nprfx_pam_splat_inputs {
-    size_t size;                  /* sizeof(nprfx_pam_splat_inputs) */
-    const nprfx_image *anchor;    /* Pref (3 channels) or UV (2), optional coverage after them */
-    const nprfx_image *tone;      /* 1 channel, w in [0, 1] (clamped) */
-    const nprfx_image *color;     /* model colour, RGB or RGBA: the output has its channels */
-    const nprfx_image *direction; /* optional: 1 channel degrees, or 2 a direction (x right, y
-                                     down) */
-    const nprfx_image *depth;     /* 1 channel */
-    const nprfx_image *id;        /* optional, 1 channel */
-    const nprfx_image *pam;       /* optional (NULL: the builtin PAM), passed whole */
-} nprfx_pam_splat_inputs;
+/* The node's inputs, in the descriptor's order (args->inputs). */
+enum {
+    NPRFX_PAM_SPLAT_IN_ANCHOR = 0, /* Pref (3 channels) or UV (2), optional coverage after them */
+    NPRFX_PAM_SPLAT_IN_TONE = 1,   /* 1 channel, w in [0, 1] (clamped) */
+    NPRFX_PAM_SPLAT_IN_COLOR = 2,  /* model colour, RGB or RGBA: the output has its channels */
+    NPRFX_PAM_SPLAT_IN_DIRECTION = 3, /* optional: 1 channel degrees, or 2 a direction (x right, y
+                                         down) */
+    NPRFX_PAM_SPLAT_IN_DEPTH = 4,     /* 1 channel */
+    NPRFX_PAM_SPLAT_IN_ID = 5,        /* optional, 1 channel */
+    NPRFX_PAM_SPLAT_IN_PAM = 6,       /* optional (not connected: the builtin PAM), passed whole */
+    NPRFX_PAM_SPLAT_IN_COUNT
+};
 
-/* Render `window` of out at frame `time`. state: the node instance's cache slot (may be NULL):
- * the measured PAM, keyed by a fingerprint of its pixels; it never changes a result. *splats,
- * when not NULL, grows by the splats owned by pixels of the window. */
-NPRFX_API nprfx_result nprfx_pam_splat_render(nprfx_context *ctx, const nprfx_pam_splat_params *p,
-                                              const nprfx_pam_splat_inputs *in, double time,
-                                              void **state, nprfx_rect window, nprfx_image *out,
-                                              long long *splats);
+/* Render args->window of args->output at frame args->time. args->state: the node instance's
+ * cache slot (may be NULL): the measured PAM, keyed by a fingerprint of its pixels; it never
+ * changes a result. *args->items, when not NULL, grows by the splats owned by pixels of the
+ * window. */
+NPRFX_API nprfx_result nprfx_pam_splat_render(const nprfx_render_args *args,
+                                              const nprfx_pam_splat_params *p);
 
 /* Free a state left in the node's slot. */
 NPRFX_API void nprfx_pam_splat_state_free(void *state);

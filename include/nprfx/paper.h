@@ -18,6 +18,7 @@
 #define NPRFX_PAPER_H
 
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -72,15 +73,23 @@ NPRFX_API int nprfx_paper_output_channels(const nprfx_paper_params *p);
  * over-under repeat) are rounded to a whole number per tile, so scale and thread may change
  * slightly when tile is set. Runs on ctx's executor; bit-identical for any thread count and
  * window split. */
-NPRFX_API nprfx_result nprfx_paper_render(nprfx_context *ctx, const nprfx_paper_params *p,
-                                          nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_paper_texture(nprfx_context *ctx, const nprfx_paper_params *p,
+                                           nprfx_rect window, nprfx_image *out);
 
-/* nprfx_paper_render through a per-instance cache in *state (the node's render args' state slot;
+/* nprfx_paper_texture through a per-instance cache in *state (the node's render args' state slot;
  * NULL: no cache): the last window rendered is kept, and a window inside it with the same params
  * is copied from it, the same pixels. Free the state with nprfx_paper_state_free. */
 NPRFX_API nprfx_result nprfx_paper_render_cached(nprfx_context *ctx, const nprfx_paper_params *p,
                                                  nprfx_rect window, nprfx_image *out, void **state);
 NPRFX_API void nprfx_paper_state_free(void *state);
+
+/* The node's inputs, in the descriptor's order (args->inputs): the image only gives the frame's
+ * size, no pixel of it is read. */
+enum { NPRFX_PAPER_IN_IMAGE = 0, NPRFX_PAPER_IN_COUNT };
+
+/* Render args->window of args->output: nprfx_paper_render_cached with args->state. */
+NPRFX_API nprfx_result nprfx_paper_render(const nprfx_render_args *args,
+                                          const nprfx_paper_params *p);
 /* The most bytes that state holds for frames of width x height: one window of the output. */
 NPRFX_API double nprfx_paper_state_bytes(const nprfx_paper_params *p, int width, int height);
 

@@ -197,17 +197,16 @@ enum {
 };
 
 /* The node's params, as its descriptor binds them (by offset; areas already multiplied by the
- * render scale squared). docs/nodes.md describes each. */
+ * render scale squared). docs/nodes.md describes each. The algorithm's params are embedded:
+ * stipple's mode, area (the param size), a0, delta_min, tile, aspect and coverage_channel (the
+ * param coverage) are the params themselves; nprfx_stipple_node_render sets the rest of it (size,
+ * the pens from `tones`, plane_scale, ink, paper, seed, the sequence, tone curve and count). */
 typedef struct nprfx_stipple_node_params {
-    int mode;                /* nprfx_stipple_mode */
-    double size;             /* px^2: nprfx_stipple_params.area */
-    double a0, delta_min;    /* px^2 */
+    nprfx_stipple_params stipple;
     const char *tones;       /* multitone: pen darknesses, "0.33,0.67,1" */
-    double tile, aspect;     /* UV period and aspect */
-    double ink[4], paper[4]; /* RGBA, premultiplied */
-    int seed;
+    double ink[4], paper[4]; /* RGBA, premultiplied: stipple.ink, stipple.paper as floats */
+    int seed;                /* stipple.seed */
     int tone_correction;     /* measure and invert the darkness overlapping dots give */
-    int coverage;            /* a 5th output channel, the ink coverage */
     const char *export_path; /* the front end writes the node's text export there ("": none) */
 } nprfx_stipple_node_params;
 

@@ -25,6 +25,7 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -96,6 +97,19 @@ NPRFX_API nprfx_result nprfx_threshold_render_cached(nprfx_context *ctx,
                                                      const nprfx_image *map, nprfx_rect window,
                                                      nprfx_image *out, void **state);
 NPRFX_API void nprfx_threshold_state_free(void *state);
+
+/* The threshold-map node's inputs, in the descriptor's order (args->inputs). */
+enum {
+    NPRFX_THRESHOLD_MAP_IN_PATTERN = 0,
+    NPRFX_THRESHOLD_MAP_IN_TONE = 1, /* optional */
+    NPRFX_THRESHOLD_MAP_IN_MAP = 2,  /* optional; mode map needs it */
+    NPRFX_THRESHOLD_MAP_IN_COUNT
+};
+
+/* The threshold-map node: nprfx_threshold_render_cached of args->window into args->output, with
+ * args->state as the cache. */
+NPRFX_API nprfx_result nprfx_threshold_map_render(const nprfx_render_args *args,
+                                                  const nprfx_threshold_params *p);
 /* The bytes that state holds (one table). */
 NPRFX_API double nprfx_threshold_state_bytes(void);
 

@@ -12,6 +12,9 @@
 extern "C" {
 #endif
 
+/* The node's inputs, in the descriptor's order (args->inputs and args->fetch use them). */
+enum { NPRFX_TIME_OFFSET_IN_IMAGE = 0, NPRFX_TIME_OFFSET_IN_COUNT };
+
 /* The node's params (its descriptor binds each one here by offset). */
 typedef struct nprfx_time_offset_params {
     int offset; /* frames to shift by: -1 is the previous frame */
@@ -22,17 +25,14 @@ typedef struct nprfx_time_offset_params {
  * that was never rendered). */
 NPRFX_API double nprfx_time_offset_frame(double time, int offset, int first_frame, int last_frame);
 
-/* Render `window` of out at frame `time` of the shot [first_frame, last_frame]. Offset 0 copies
- * `image` (the input at `time`; the overlap of its data window and out's bounds). Otherwise the
- * input at nprfx_time_offset_frame(...) comes from fetch(fetch_user, input, frame, &view) (the
- * front end's nprfx_fetch_fn; NULL: NPRFX_ERR_UNSUPPORTED) and must have out's channels; the
- * window reads 0 outside its data window, as EXR readers do. */
-NPRFX_API nprfx_result nprfx_time_offset_render(nprfx_context *ctx,
-                                                const nprfx_time_offset_params *p,
-                                                const nprfx_image *image, double time,
-                                                int first_frame, int last_frame,
-                                                nprfx_fetch_fn fetch, void *fetch_user, int input,
-                                                nprfx_rect window, nprfx_image *out);
+/* Render args->window of out = args->output at frame args->time of the shot
+ * [args->first_frame, args->last_frame]. Offset 0 copies the input NPRFX_TIME_OFFSET_IN_IMAGE (at
+ * args->time; the overlap of its data window and out's bounds). Otherwise the input at
+ * nprfx_time_offset_frame(...) comes from args->fetch(args->fetch_user,
+ * NPRFX_TIME_OFFSET_IN_IMAGE, frame, &view) (NULL: NPRFX_ERR_UNSUPPORTED) and must have out's
+ * channels; the window reads 0 outside its data window, as EXR readers do. */
+NPRFX_API nprfx_result nprfx_time_offset_render(const nprfx_render_args *args,
+                                                const nprfx_time_offset_params *p);
 
 #ifdef __cplusplus
 }

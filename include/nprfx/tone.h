@@ -78,18 +78,21 @@ NPRFX_API nprfx_result nprfx_tone_samples(nprfx_context *ctx, const nprfx_image 
 NPRFX_API int nprfx_tone_frames(const nprfx_tone_params *p, const nprfx_frames_query *q,
                                 nprfx_frame_range *ranges);
 
-/* Render `window` of the tone node at frame `time` of the shot [first_frame, last_frame]:
- * measures [lo, hi] as p->range says (fetching the inputs numbered input[0] (tone), input[1]
- * (albedo) and input[2] (coverage) at other frames through fetch; without fetch only the
- * current frame can be measured), keeping what it measured in *state (freed by
- * nprfx_tone_state_free; state NULL: nothing kept) so that a shot is measured once, then maps
- * every pixel. albedo and coverage may be NULL. Output: one channel. */
-NPRFX_API nprfx_result nprfx_tone_render(nprfx_context *ctx, const nprfx_tone_params *p,
-                                         const nprfx_image *tone, const nprfx_image *albedo,
-                                         const nprfx_image *coverage, double time, int first_frame,
-                                         int last_frame, nprfx_fetch_fn fetch, void *fetch_user,
-                                         const int input[3], void **state, nprfx_rect window,
-                                         nprfx_image *out);
+/* The node's inputs, in the descriptor's order (args->inputs and args->fetch use them). */
+enum {
+    NPRFX_TONE_IN_TONE = 0,
+    NPRFX_TONE_IN_ALBEDO = 1,   /* optional */
+    NPRFX_TONE_IN_COVERAGE = 2, /* optional */
+    NPRFX_TONE_IN_COUNT
+};
+
+/* Render args->window of the tone node at frame args->time of the shot [args->first_frame,
+ * args->last_frame]: measures [lo, hi] as p->range says (fetching the inputs NPRFX_TONE_IN_* at
+ * other frames through args->fetch; without fetch only the current frame can be measured),
+ * keeping what it measured in *args->state (freed by nprfx_tone_state_free; state NULL: nothing
+ * kept) so that a shot is measured once, then maps every pixel. albedo and coverage need not be
+ * connected. Output: one channel. */
+NPRFX_API nprfx_result nprfx_tone_render(const nprfx_render_args *args, const nprfx_tone_params *p);
 
 /* The range the last render used (for tests and logs); 0 when none was measured yet. */
 NPRFX_API int nprfx_tone_state_range(const void *state, double *lo, double *hi);

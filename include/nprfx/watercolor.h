@@ -34,6 +34,7 @@
 
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -52,25 +53,26 @@ typedef struct nprfx_watercolor_params {
     double wobble_scale;   /* sigma of the paper's low-pass for the wobble, px, >= 0 */
 } nprfx_watercolor_params;
 
-/* The inputs of one render; NULL (or data == NULL) where not connected. image is required (1 to
- * 4 channels; with 4 the 4th is alpha and passes through untouched); the others are read from
- * channel 0 and must have 1 channel. */
-typedef struct nprfx_watercolor_inputs {
-    const nprfx_image *image;
-    const nprfx_image *turbulence; /* T in [0, 1] */
-    const nprfx_image *dispersion; /* D in [0, 1] */
-    const nprfx_image *paper;      /* P in [0, 1], screen space */
-    const nprfx_image *coverage;   /* K in [0, 1], clamped */
-} nprfx_watercolor_inputs;
+/* The node's inputs, in the descriptor's order (args->inputs); data NULL where not connected.
+ * image is required (1 to 4 channels; with 4 the 4th is alpha and passes through untouched); the
+ * others are read from channel 0 and must have 1 channel. */
+enum {
+    NPRFX_WATERCOLOR_IN_IMAGE = 0,
+    NPRFX_WATERCOLOR_IN_TURBULENCE = 1, /* T in [0, 1] */
+    NPRFX_WATERCOLOR_IN_DISPERSION = 2, /* D in [0, 1] */
+    NPRFX_WATERCOLOR_IN_PAPER = 3,      /* P in [0, 1], screen space */
+    NPRFX_WATERCOLOR_IN_COVERAGE = 4,   /* K in [0, 1], clamped */
+    NPRFX_WATERCOLOR_IN_COUNT
+};
 
-/* Paint `window` of out (image's channel count). frame is the whole image domain: every input is
+/* Paint args->window of args->output (image's channel count). args->frame is the whole image
+ * domain: every input is
  * read clamped to it and to its own data window (edges repeat), so every tile sees the same
  * neighbourhoods; an optional input with an empty data window counts as not connected. Runs on
  * ctx's executor; bit-identical for any thread count and window split. Errors name the input or
  * param. */
-NPRFX_API nprfx_result nprfx_watercolor_render(nprfx_context *ctx, const nprfx_watercolor_params *p,
-                                               const nprfx_watercolor_inputs *in, nprfx_rect frame,
-                                               nprfx_rect window, nprfx_image *out);
+NPRFX_API nprfx_result nprfx_watercolor_render(const nprfx_render_args *args,
+                                               const nprfx_watercolor_params *p);
 
 #ifdef __cplusplus
 }

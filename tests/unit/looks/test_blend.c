@@ -379,8 +379,8 @@ static void test_core_api(nprfx_context *ctx)
                             .gain_layer = 1,
                             .background = {1, 1, 1, 1}};
     nprfx_image direct = th_image(2, 1, 4, NULL);
-    CHECK_OK(nprfx_blend_render(ctx, &p, &in[II("base")], &in[II("layer")], &in[II("back")], NULL,
-                                &in[II("coverage")], direct.bounds, &direct));
+    nprfx_render_args a = th_core_args(ctx, in, &direct, direct.bounds, direct.bounds);
+    CHECK_OK(nprfx_blend_render(&a, &p));
     CHECK(memcmp(via_node.data, direct.data, sizeof(float) * 8) == 0);
     /* pixel 0, channel 0: back 0.1, c0 0.5, c1 0.25, f 1.2, a 0.5 => 0.18125 (coverage 1) */
     CHECK_NEAR(direct.data[0], 0.18125, TOL);
@@ -388,16 +388,16 @@ static void test_core_api(nprfx_context *ctx)
     CHECK_NEAR(direct.data[7], 0.825, TOL);
     /* the checks only the core function can make for a direct caller */
     p.mode = NPRFX_BLEND_MODE_COUNT;
-    CHECK(nprfx_blend_render(ctx, &p, &in[II("base")], &in[II("layer")], NULL, NULL, NULL,
-                             direct.bounds, &direct) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(nprfx_blend_render(&a, &p) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "blend.mode") != NULL);
     p.mode = NPRFX_BLEND_MULTIPLY;
-    CHECK(nprfx_blend_render(ctx, &p, &in[II("base")], NULL, NULL, NULL, NULL, direct.bounds,
-                             &direct) == NPRFX_ERR_MISSING_INPUT);
+    nprfx_image base_only[NPRFX_BLEND_IN_COUNT] = {in[II("base")]};
+    a.inputs = base_only;
+    CHECK(nprfx_blend_render(&a, &p) == NPRFX_ERR_MISSING_INPUT);
     CHECK(strstr(th_error(ctx), "input 'layer'") != NULL);
     nprfx_image three = th_image(2, 1, 3, NULL);
-    CHECK(nprfx_blend_render(ctx, &p, &in[II("base")], &in[II("layer")], NULL, NULL, NULL,
-                             three.bounds, &three) == NPRFX_ERR_INVALID_ARGUMENT);
+    a = th_core_args(ctx, in, &three, three.bounds, three.bounds);
+    CHECK(nprfx_blend_render(&a, &p) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(th_error(ctx), "output has 3 channels") != NULL);
     nprfx_image_free(&three);
     nprfx_image_free(&via_node);

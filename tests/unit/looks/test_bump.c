@@ -224,12 +224,13 @@ static void test_errors(nprfx_context *ctx)
     /* the core function checks its own params */
     nprfx_bump_params p = {
         .strength = 1, .azimuth = 0, .elevation = 95, .amount = 1, .shininess = 10};
-    CHECK(nprfx_bump_render(ctx, &p, &in[0], &in[1], out.bounds, out.bounds, &out) ==
-          NPRFX_ERR_OUT_OF_RANGE);
+    nprfx_render_args a = th_core_args(ctx, in, &out, out.bounds, out.bounds);
+    CHECK(nprfx_bump_render(&a, &p) == NPRFX_ERR_OUT_OF_RANGE);
     p.elevation = 45;
-    CHECK_OK(nprfx_bump_render(ctx, &p, &in[0], &in[1], out.bounds, out.bounds, &out));
-    CHECK(nprfx_bump_render(ctx, &p, &in[0], NULL, out.bounds, out.bounds, &out) ==
-          NPRFX_ERR_MISSING_INPUT);
+    CHECK_OK(nprfx_bump_render(&a, &p));
+    nprfx_image no_height[2] = {in[0]};
+    a.inputs = no_height;
+    CHECK(nprfx_bump_render(&a, &p) == NPRFX_ERR_MISSING_INPUT);
     nprfx_image_free(&in[0]);
     nprfx_image_free(&in[1]);
     nprfx_image_free(&out);

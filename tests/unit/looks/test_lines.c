@@ -361,10 +361,9 @@ static void test_invariance(nprfx_context *serial)
                                  .wobble = 1.5,
                                  .texture_amount = 0.5,
                                  .opacity = 1};
-        nprfx_lines_inputs li = {sizeof li, &ch[0], &ch[1], &ch[2], &ch[3],
-                                 &ch[4],    &ch[5], &ch[6], &ch[7]};
+        nprfx_render_args la = th_core_args(serial, ch, &a, a.bounds, a.bounds);
         memset(a.data, 0, bytes);
-        CHECK_OK(nprfx_lines_render(serial, &lp, &li, a.bounds, a.bounds, &a));
+        CHECK_OK(nprfx_lines_render(&la, &lp));
         CHECK(memcmp(ref.data, a.data, bytes) == 0);
         nprfx_image_free(&ref);
         nprfx_image_free(&a);
@@ -400,9 +399,9 @@ static void test_errors(nprfx_context *ctx)
     CHECK(th_render(ctx, node, in, pv, &out, out.bounds) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(th_error(ctx), "lines: input 'wobble' has 3 channels, expected 1 to 2") != NULL);
     nprfx_lines_params lp = {.width = -1};
-    nprfx_lines_inputs li = {sizeof li, &in[II("id")]};
-    CHECK(nprfx_lines_render(ctx, &lp, &li, out.bounds, out.bounds, &out) ==
-          NPRFX_ERR_OUT_OF_RANGE);
+    nprfx_image id_only[NPRFX_LINES_IN_COUNT] = {in[II("id")]};
+    nprfx_render_args la = th_core_args(ctx, id_only, &out, out.bounds, out.bounds);
+    CHECK(nprfx_lines_render(&la, &lp) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "lines.width") != NULL);
     nprfx_image_free(&out);
     reset();

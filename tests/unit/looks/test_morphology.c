@@ -137,7 +137,8 @@ static void test_morphology(nprfx_context *ctx)
     /* the core function with the typed params the descriptor binds: the same pixels */
     nprfx_morphology_params mp = {
         .operation = NPRFX_MORPHOLOGY_CLOSE, .radius = 1.5, .footprint = NPRFX_MORPHOLOGY_DISC};
-    CHECK_OK(nprfx_morphology_render(ctx, &mp, &in, r, r, &lo));
+    nprfx_render_args ma = th_core_args(ctx, &in, &lo, r, r);
+    CHECK_OK(nprfx_morphology_render(&ma, &mp));
     CHECK(memcmp(lo.data, hi.data, sizeof(float) * 120) == 0);
     /* the frame clamps reads as the image's edges do: dilating a frame cut one column short
      * repeats column 10 into column 11's neighbourhood, never reading column 11 */
@@ -145,13 +146,15 @@ static void test_morphology(nprfx_context *ctx)
     mp.operation = NPRFX_MORPHOLOGY_DILATE;
     mp.footprint = NPRFX_MORPHOLOGY_SQUARE;
     mp.radius = 1;
-    CHECK_OK(nprfx_morphology_render(ctx, &mp, &in, nprfx_rect_make(0, 0, 11, 10),
-                                     nprfx_rect_make(10, 5, 11, 6), &lo));
+    ma = th_core_args(ctx, &in, &lo, nprfx_rect_make(0, 0, 11, 10), nprfx_rect_make(10, 5, 11, 6));
+    CHECK_OK(nprfx_morphology_render(&ma, &mp));
     CHECK(px(&lo, 10, 5) < 100.0f);
-    CHECK_OK(nprfx_morphology_render(ctx, &mp, &in, r, nprfx_rect_make(10, 5, 11, 6), &lo));
+    ma = th_core_args(ctx, &in, &lo, r, nprfx_rect_make(10, 5, 11, 6));
+    CHECK_OK(nprfx_morphology_render(&ma, &mp));
     CHECK(px(&lo, 10, 5) == 100.0f);
     mp.radius = 5000;
-    CHECK(nprfx_morphology_render(ctx, &mp, &in, r, r, &lo) == NPRFX_ERR_OUT_OF_RANGE);
+    ma = th_core_args(ctx, &in, &lo, r, r);
+    CHECK(nprfx_morphology_render(&ma, &mp) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "morphology.radius") != NULL);
     nprfx_image_free(&lo);
     nprfx_image_free(&hi);

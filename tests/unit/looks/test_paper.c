@@ -373,14 +373,15 @@ static void test_errors(nprfx_context *ctx)
     /* the core function checks its params itself */
     nprfx_paper_params p = {.kind = 7, .scale = 1, .thread = 4, .color = {1, 1, 1, 1}};
     nprfx_image out = th_image(4, 4, 4, NULL);
-    CHECK(nprfx_paper_render(ctx, &p, out.bounds, &out) == NPRFX_ERR_OUT_OF_RANGE);
+    nprfx_render_args a = th_core_args(ctx, NULL, &out, out.bounds, out.bounds);
+    CHECK(nprfx_paper_render(&a, &p) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "paper.kind") != NULL);
     p.kind = NPRFX_PAPER_CANVAS;
     p.thread = 0.5;
-    CHECK(nprfx_paper_render(ctx, &p, out.bounds, &out) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(nprfx_paper_render(&a, &p) == NPRFX_ERR_OUT_OF_RANGE);
     p.thread = 4;
-    CHECK_OK(nprfx_paper_render(ctx, &p, out.bounds, &out));
-    CHECK(nprfx_paper_render(ctx, NULL, out.bounds, &out) == NPRFX_ERR_INVALID_ARGUMENT);
+    CHECK_OK(nprfx_paper_render(&a, &p));
+    CHECK(nprfx_paper_render(&a, NULL) == NPRFX_ERR_INVALID_ARGUMENT);
     nprfx_image_free(&out);
 }
 

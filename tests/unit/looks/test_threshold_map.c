@@ -49,7 +49,7 @@ static int out_channels(void)
     for (int i = 0; i < node->num_inputs; i++)
         ich[i] = in[i].data ? in[i].channels : 0;
     nprfx_output_info info;
-    if (node->output(pv, ich, &info) != NPRFX_OK) return -1;
+    if (nprfx_node_output_info(NULL, node, pv, ich, &info) != NPRFX_OK) return -1;
     return info.channels;
 }
 

@@ -256,9 +256,11 @@ static void test_albedo(nprfx_context *ctx)
         }
     nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 4, 1), 1, &out);
     nprfx_tone_params p = plain();
-    const int input[3] = {0, 1, 2};
-    CHECK_OK(nprfx_tone_render(ctx, &p, &tone, &alb, NULL, 1, 1, 1, NULL, NULL, input, NULL,
-                               out.bounds, &out));
+    nprfx_image ins[NPRFX_TONE_IN_COUNT] = {0};
+    ins[NPRFX_TONE_IN_TONE] = tone;
+    ins[NPRFX_TONE_IN_ALBEDO] = alb;
+    nprfx_render_args ta = th_core_args(ctx, ins, &out, out.bounds, out.bounds);
+    CHECK_OK(nprfx_tone_render(&ta, &p));
     CHECK_NEAR(px(&out, 0, 0), 0.5, 1e-6);
     CHECK_NEAR(px(&out, 1, 0), 0.5, 1e-6);
     CHECK_NEAR(px(&out, 2, 0), 1.0, 1e-6);

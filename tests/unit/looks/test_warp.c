@@ -86,7 +86,8 @@ static void test_warp(nprfx_context *ctx)
     CHECK(strstr(th_error(ctx), "warp: input 'offset' has 1 channels, expected 2") != NULL);
     nprfx_warp_params wp = {
         .amount = 2.0, .filter = NPRFX_WARP_BICUBIC, .border = NPRFX_BORDER_CLAMP};
-    CHECK(nprfx_warp_render(ctx, &wp, &ins[0], &one, r, &out) == NPRFX_ERR_INVALID_ARGUMENT);
+    nprfx_render_args wa = th_core_args(ctx, bad_ins, &out, r, r);
+    CHECK(nprfx_warp_render(&wa, &wp) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(th_error(ctx), "offset") != NULL);
     /* the core function with the typed params the descriptor binds: the same pixels */
     nprfx_image direct;
@@ -94,10 +95,11 @@ static void test_warp(nprfx_context *ctx)
     set(n, pv, "amount", 2.0);
     set(n, pv, "filter", 1);
     CHECK_OK(run(ctx, n, ins, pv, &out, r));
-    CHECK_OK(nprfx_warp_render(ctx, &wp, &ins[0], &ins[1], r, &direct));
+    wa = th_core_args(ctx, ins, &direct, r, r);
+    CHECK_OK(nprfx_warp_render(&wa, &wp));
     CHECK(memcmp(out.data, direct.data, sizeof(float) * 16 * 12 * 2) == 0);
     wp.border = 2;
-    CHECK(nprfx_warp_render(ctx, &wp, &ins[0], &ins[1], r, &direct) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(nprfx_warp_render(&wa, &wp) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "warp.border") != NULL);
     /* reach clamps each component: displacement (0.5, -1) with reach 0.75 reads (0.5, -0.75);
      * with reach 2 nothing changes; the footprint is the reach plus two rows of taps, and -1
@@ -117,7 +119,7 @@ static void test_warp(nprfx_context *ctx)
     CHECK(fp == -1);
     wp.border = NPRFX_BORDER_CLAMP;
     wp.reach = -1;
-    CHECK(nprfx_warp_render(ctx, &wp, &ins[0], &ins[1], r, &direct) == NPRFX_ERR_OUT_OF_RANGE);
+    CHECK(nprfx_warp_render(&wa, &wp) == NPRFX_ERR_OUT_OF_RANGE);
     CHECK(strstr(th_error(ctx), "warp.reach") != NULL);
     nprfx_image_free(&direct);
     nprfx_image_free(&ins[0]);

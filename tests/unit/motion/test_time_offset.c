@@ -118,7 +118,13 @@ static void test_time_offset(nprfx_context *ctx)
     CHECK(strstr(th_error(ctx), "input 'image' has 1 channels at frame 1") != NULL);
     /* the core function directly, with the typed params */
     nprfx_time_offset_params tp = {.offset = 2};
-    CHECK_OK(nprfx_time_offset_render(ctx, &tp, &cur, 3, 1, 7, fetch_frame, &f, 0, r, &out));
+    nprfx_render_args ta = th_core_args(ctx, &cur, &out, r, r);
+    ta.time = 3;
+    ta.first_frame = 1;
+    ta.last_frame = 7;
+    ta.fetch = fetch_frame;
+    ta.fetch_user = &f;
+    CHECK_OK(nprfx_time_offset_render(&ta, &tp));
     CHECK(f.last_time == 5.0 && px(&out, 0, 0) == 5.0f && px(&out, 4, 0) == 0.0f);
     for (int i = 0; i < 8; i++)
         nprfx_image_free(&f.frames[i]);

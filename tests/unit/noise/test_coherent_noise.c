@@ -1072,9 +1072,9 @@ static void test_errors(nprfx_context *ctx)
     nprfx_output_info oi;
     defaults(pv);
     set_param(pv, "channels", 3);
-    CHECK(node->output(pv, ich, &oi) == NPRFX_OK && oi.channels == 3);
+    CHECK(nprfx_node_output_info(NULL, node, pv, ich, &oi) == NPRFX_OK && oi.channels == 3);
     set_param(pv, "noise", 2);
-    CHECK(node->output(pv, ich, &oi) == NPRFX_OK && oi.channels == 3);
+    CHECK(nprfx_node_output_info(NULL, node, pv, ich, &oi) == NPRFX_OK && oi.channels == 3);
     state_release(&state);
     nprfx_image_free(&o);
 }
