@@ -245,14 +245,14 @@ static nprfx_result st_output(const void *params, const int *ich, nprfx_output_i
  * there is one (plugins/support/data_files.c). */
 static nprfx_result st_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_stipple_node_render(a, params, nprfx_stipple_shipped_sequence);
+    return nprfx_stipple_node_render(a, params, internal_stipple_shipped_sequence);
 }
 
 /* The dots as CSV or SVG, by the path's extension (plugins/support/stipple_export.c). */
 static nprfx_result st_export_text(const nprfx_render_args *a, const void *params, const char *path,
                                    char **text, size_t *len)
 {
-    return nprfx_stipple_export_text(a, params, nprfx_stipple_shipped_sequence, path, text, len);
+    return internal_stipple_export_text(a, params, internal_stipple_shipped_sequence, path, text, len);
 }
 
 const nprfx_node_desc nprfx_node_stipple = {

@@ -12,7 +12,7 @@
 
 #include "support/data_files.h"
 
-nprfx_result nprfx_data_file_read(nprfx_context *ctx, const char *name, size_t max_size,
+nprfx_result internal_data_file_read(nprfx_context *ctx, const char *name, size_t max_size,
                                   nprfx_data_file *out)
 {
     if (!out || !name || !*name)
@@ -73,7 +73,7 @@ nprfx_result nprfx_data_file_read(nprfx_context *ctx, const char *name, size_t m
     return NPRFX_OK;
 }
 
-void nprfx_data_file_free(nprfx_data_file *f)
+void internal_data_file_free(nprfx_data_file *f)
 {
     if (!f) return;
     free(f->data);
@@ -106,7 +106,7 @@ static nprfx_result preload_shipped(nprfx_context *ctx, nprfx_stipple_sequence *
     int n = 0;
     float *xy = NULL;
     char why[512];
-    r = nprfx_data_file_read(quiet, IVS_FILE_NAME, nprfx_ivs_encoded_size(IVS_FILE_MAX_POINTS),
+    r = internal_data_file_read(quiet, IVS_FILE_NAME, nprfx_ivs_encoded_size(IVS_FILE_MAX_POINTS),
                              &file);
     if (r != NPRFX_OK) { /* the reader's message starts with the path */
         nprfx_context_last_error(quiet, why, sizeof why);
@@ -126,7 +126,7 @@ static nprfx_result preload_shipped(nprfx_context *ctx, nprfx_stipple_sequence *
         }
     }
     free(xy);
-    nprfx_data_file_free(&file);
+    internal_data_file_free(&file);
     nprfx_context_destroy(quiet);
     return r;
 }
@@ -191,7 +191,7 @@ static nprfx_result make_shipped(nprfx_context *ctx, nprfx_stipple_sequence **ou
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out)
+nprfx_result internal_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out)
 {
     if (!out) return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple: NULL output");
     *out = NULL;
@@ -233,7 +233,7 @@ nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_se
     return r;
 }
 
-void nprfx_stipple_shipped_release(void)
+void internal_stipple_shipped_release(void)
 {
     pthread_mutex_lock(&shared_lock);
     while (shared_list) {

@@ -24,10 +24,10 @@ typedef struct nprfx_data_file {
  * with out->data NULL when there is no data directory or the file does not exist there: the
  * caller does without it. A file that is there but cannot be opened or read, or is larger than
  * max_size, is an NPRFX_ERR_IO error whose message starts with its path. Free with
- * nprfx_data_file_free. */
-nprfx_result nprfx_data_file_read(nprfx_context *ctx, const char *name, size_t max_size,
+ * internal_data_file_free. */
+nprfx_result internal_data_file_read(nprfx_context *ctx, const char *name, size_t max_size,
                                   nprfx_data_file *out);
-void nprfx_data_file_free(nprfx_data_file *f);
+void internal_data_file_free(nprfx_data_file *f);
 
 /* The stipple node's dot sequence: an nprfx_stipple_sequence preloaded from the shipped
  * DATA_DIR/ivs.bin (written by `nprfx ivs`), which saves generating it (seconds per million
@@ -35,12 +35,12 @@ void nprfx_data_file_free(nprfx_data_file *f);
  * file: an empty sequence, generated when used, with the same pixels. A file that is there but
  * unreadable, corrupt or of another seed is an error that names it and says to rebuild it with
  * `nprfx ivs` or remove it: a broken install should not pass silently. */
-nprfx_result nprfx_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out);
+nprfx_result internal_stipple_shipped_sequence(nprfx_context *ctx, nprfx_stipple_sequence **out);
 /* The sequence above is made once per data file (its path and what stat says of it) and shared
  * by every caller in the process, each getting a reference of its own: the file is read, indexed
  * and each tone curve measured once, whatever the number of instances. This drops the process's
  * own references (an OpenFX host unloading the plug-in); users keep theirs. */
-void nprfx_stipple_shipped_release(void);
+void internal_stipple_shipped_release(void);
 
 #ifdef __cplusplus
 }

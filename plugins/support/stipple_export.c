@@ -52,7 +52,7 @@ static int srgb8(float v)
     return (int)floor(c * 255 + 0.5);
 }
 
-nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
+nprfx_result internal_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
                                   nprfx_rect frame, nprfx_stipple_format_kind kind,
                                   const float *ink, const float *paper, char **text, size_t *len)
 {
@@ -137,7 +137,7 @@ static nprfx_result format_for_path(nprfx_context *ctx, const char *path,
                        ext, p);
 }
 
-nprfx_result nprfx_stipple_export_text(const nprfx_render_args *args,
+nprfx_result internal_stipple_export_text(const nprfx_render_args *args,
                                        const nprfx_stipple_node_params *np,
                                        nprfx_stipple_sequence_fn make_sequence, const char *path,
                                        char **text, size_t *len)
@@ -154,13 +154,13 @@ nprfx_result nprfx_stipple_export_text(const nprfx_render_args *args,
             ink[c] = (float)np->ink[c];
             paper[c] = (float)np->paper[c];
         }
-        r = nprfx_stipple_format(args->ctx, list, count, args->frame, kind, ink, paper, text, len);
+        r = internal_stipple_format(args->ctx, list, count, args->frame, kind, ink, paper, text, len);
     }
     free(list);
     return r;
 }
 
-nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
+nprfx_result internal_stipple_node_export(const nprfx_render_args *args,
                                        nprfx_stipple_format_kind kind, char **text, size_t *len)
 {
     nprfx_context *ctx = args ? args->ctx : NULL;

@@ -13,7 +13,7 @@
 extern "C" {
 #endif
 
-/* Vector export formats for nprfx_stipple_format. Coordinates in both are image-plane pixels
+/* Vector export formats for internal_stipple_format. Coordinates in both are image-plane pixels
  * with the frame's top-left corner at (0, 0) and y down (a core position x becomes
  * x - frame.x0 + 0.5), so pixel (i, j) covers [i, i+1) x [j, j+1).
  *   CSV: the header line "x,y,radius,tone,sample,object", then one stipple per line.
@@ -26,7 +26,7 @@ typedef enum nprfx_stipple_format_kind {
 
 /* Format a stipple list as text (malloc'd, NUL-terminated; *len excludes the NUL). ink/paper are
  * RGBA (display-referred values in [0, 1] are expected for SVG; they are clamped). */
-nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
+nprfx_result internal_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
                                   nprfx_rect frame, nprfx_stipple_format_kind kind,
                                   const float *ink, const float *paper, char **text, size_t *len);
 
@@ -34,7 +34,7 @@ nprfx_result nprfx_stipple_format(nprfx_context *ctx, const nprfx_stipple *list,
  * whole frame (nprfx_stipple_node_collect, the sequence from make_sequence) in the format of
  * path's extension, .csv or .svg in any case; another extension, or none, is an error that says
  * which to use. */
-nprfx_result nprfx_stipple_export_text(const nprfx_render_args *args,
+nprfx_result internal_stipple_export_text(const nprfx_render_args *args,
                                        const nprfx_stipple_node_params *np,
                                        nprfx_stipple_sequence_fn make_sequence, const char *path,
                                        char **text, size_t *len);
@@ -43,7 +43,7 @@ nprfx_result nprfx_stipple_export_text(const nprfx_render_args *args,
  * params at the frame's time; window is ignored), formatted as `kind`: nprfx_node_export with
  * a path of kind's extension, so the arguments get the checks of any node call (an output image
  * of the node's channels included). */
-nprfx_result nprfx_stipple_node_export(const nprfx_render_args *args,
+nprfx_result internal_stipple_node_export(const nprfx_render_args *args,
                                        nprfx_stipple_format_kind kind, char **text, size_t *len);
 
 #ifdef __cplusplus

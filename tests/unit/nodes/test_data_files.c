@@ -41,11 +41,11 @@ static void test_read(void)
     nprfx_data_file f;
     /* no data directory, or no such file: found missing, no error */
     nprfx_context *none = context_for(NULL);
-    CHECK_OK(nprfx_data_file_read(none, "x.bin", 100, &f));
+    CHECK_OK(internal_data_file_read(none, "x.bin", 100, &f));
     CHECK(f.data == NULL && f.size == 0);
     nprfx_context_destroy(none);
     nprfx_context *ctx = context_for(dir);
-    CHECK_OK(nprfx_data_file_read(ctx, "absent.bin", 100, &f));
+    CHECK_OK(internal_data_file_read(ctx, "absent.bin", 100, &f));
     CHECK(f.data == NULL && strstr(f.path, "absent.bin") != NULL);
 
     /* a file: its bytes, up to and including the limit; one byte more is an error naming it */
@@ -53,23 +53,23 @@ static void test_read(void)
     for (int i = 0; i < 300; i++)
         bytes[i] = (unsigned char)(i * 7);
     write_file("some.bin", bytes, sizeof bytes);
-    CHECK_OK(nprfx_data_file_read(ctx, "some.bin", 300, &f));
+    CHECK_OK(internal_data_file_read(ctx, "some.bin", 300, &f));
     CHECK(f.data && f.size == 300 && memcmp(f.data, bytes, 300) == 0);
-    nprfx_data_file_free(&f);
+    internal_data_file_free(&f);
     CHECK(f.data == NULL);
-    CHECK(nprfx_data_file_read(ctx, "some.bin", 299, &f) == NPRFX_ERR_IO);
+    CHECK(internal_data_file_read(ctx, "some.bin", 299, &f) == NPRFX_ERR_IO);
     CHECK(f.data == NULL);
     CHECK(strstr(th_error(ctx), "/some.bin: larger than 299 bytes") != NULL);
     write_file("empty.bin", "", 0);
-    CHECK_OK(nprfx_data_file_read(ctx, "empty.bin", 10, &f));
+    CHECK_OK(internal_data_file_read(ctx, "empty.bin", 10, &f));
     CHECK(f.data != NULL && f.size == 0); /* there, though empty */
-    nprfx_data_file_free(&f);
+    internal_data_file_free(&f);
 
     /* something there that cannot be read */
     char sub[512];
     snprintf(sub, sizeof sub, "%s/folder.bin", dir);
     CHECK(mkdir(sub, 0700) == 0);
-    CHECK(nprfx_data_file_read(ctx, "folder.bin", 100, &f) == NPRFX_ERR_IO);
+    CHECK(internal_data_file_read(ctx, "folder.bin", 100, &f) == NPRFX_ERR_IO);
     CHECK(strstr(th_error(ctx), "/folder.bin: cannot read it") != NULL);
     rmdir(sub);
     printf("read: missing, whole, limit, empty, unreadable\n");
@@ -101,7 +101,7 @@ static void test_shipped_sequence(void)
     float xy[2];
 
     /* no file: an empty sequence, generated when used */
-    CHECK_OK(nprfx_stipple_shipped_sequence(ctx, &seq));
+    CHECK_OK(internal_stipple_shipped_sequence(ctx, &seq));
     CHECK(seq != NULL);
     CHECK_OK(nprfx_stipple_sequence_index(ctx, seq, 16, &index));
     if (index) nprfx_ivs_index_point(index, 0, xy);
@@ -112,14 +112,14 @@ static void test_shipped_sequence(void)
      * no generated sequence is) */
     const int n = 1 << 16; /* the shortest prefix a sequence builds */
     write_ivs(NPRFX_IVS_DEFAULT_SEED, n);
-    CHECK_OK(nprfx_stipple_shipped_sequence(ctx, &seq));
+    CHECK_OK(internal_stipple_shipped_sequence(ctx, &seq));
     CHECK_OK(nprfx_stipple_sequence_index(ctx, seq, 16, &index));
     if (index) nprfx_ivs_index_point(index, 12345, xy);
     CHECK(index && xy[0] == 0.25f && xy[1] == 0.75f);
     /* the process shares one sequence per file: a second instance gets the same one, already
      * indexed, and keeps it after the first lets go */
     nprfx_stipple_sequence *seq2 = NULL;
-    CHECK_OK(nprfx_stipple_shipped_sequence(ctx, &seq2));
+    CHECK_OK(internal_stipple_shipped_sequence(ctx, &seq2));
     CHECK(seq2 == seq);
     nprfx_stipple_sequence_destroy(seq);
     const nprfx_ivs_index *index2 = NULL;
@@ -127,23 +127,23 @@ static void test_shipped_sequence(void)
     CHECK(index2 == index);
     /* a file rebuilt (another size) is read again; the old sequence lives on in its users */
     write_ivs(NPRFX_IVS_DEFAULT_SEED, n + 1);
-    CHECK_OK(nprfx_stipple_shipped_sequence(ctx, &seq));
+    CHECK_OK(internal_stipple_shipped_sequence(ctx, &seq));
     CHECK(seq != seq2);
     CHECK_OK(nprfx_stipple_sequence_index(ctx, seq2, 16, &index2));
     if (index2) nprfx_ivs_index_point(index2, 12345, xy);
     CHECK(index2 && xy[0] == 0.25f && xy[1] == 0.75f);
     nprfx_stipple_sequence_destroy(seq2);
     nprfx_stipple_sequence_destroy(seq);
-    nprfx_stipple_shipped_release();
+    internal_stipple_shipped_release();
 
     /* another seed, or a corrupt file: an error naming the file, with what to do */
     write_ivs(5, 100);
     seq = NULL;
-    CHECK(nprfx_stipple_shipped_sequence(ctx, &seq) == NPRFX_ERR_INVALID_ARGUMENT && !seq);
+    CHECK(internal_stipple_shipped_sequence(ctx, &seq) == NPRFX_ERR_INVALID_ARGUMENT && !seq);
     CHECK(strstr(th_error(ctx), "/ivs.bin holds the sequence of seed 5") != NULL);
     CHECK(strstr(th_error(ctx), "rebuild it with `nprfx ivs`, or remove it") != NULL);
     write_file("ivs.bin", "NPRFXIVS but not much else", 26);
-    CHECK(nprfx_stipple_shipped_sequence(ctx, &seq) == NPRFX_ERR_PARSE && !seq);
+    CHECK(internal_stipple_shipped_sequence(ctx, &seq) == NPRFX_ERR_PARSE && !seq);
     CHECK(strncmp(th_error(ctx), "stipple: ", 9) == 0 && strstr(th_error(ctx), "/ivs.bin: ivs: "));
     CHECK(strstr(th_error(ctx), "rebuild it with `nprfx ivs`, or remove it") != NULL);
     printf("shipped sequence: %s\n", th_error(ctx));

@@ -788,7 +788,7 @@ static void test_export(void)
     pv[th_param(node, "tone_correction")].v[0] = 0; /* compared with the plain core call below */
     char *csv = NULL, *svg = NULL;
     size_t len = 0;
-    CHECK_OK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len));
+    CHECK_OK(internal_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len));
     nprfx_stipple_params p;
     nprfx_stipple_params_default(&p); /* no sequence: the call builds its own */
     nprfx_stipple_inputs in = plain_inputs(&tone);
@@ -806,7 +806,7 @@ static void test_export(void)
             CHECK(smp == list[0].sample && obj == 0 && t == 1.0);
         }
     }
-    CHECK_OK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_SVG, &svg, &len));
+    CHECK_OK(internal_stipple_node_export(&a, NPRFX_STIPPLE_SVG, &svg, &len));
     if (svg) {
         CHECK(strstr(svg, "viewBox=\"0 0 64 48\"") != NULL);
         CHECK(count_str(svg, "<circle") == (int)count);
@@ -820,7 +820,7 @@ static void test_export(void)
     /* errors name what is wrong */
     nprfx_image none[3] = {{0}, {0}, {0}};
     a.inputs = none;
-    CHECK(nprfx_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(internal_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len) == NPRFX_ERR_MISSING_INPUT);
     CHECK(node_render(ctx1, none, pv, &out, out.bounds) == NPRFX_ERR_MISSING_INPUT);
     pv[th_param(node, "mode")].v[0] = NPRFX_STIPPLE_MULTITONE;
     pv[th_param(node, "tones")].s = "0.5, banana";
