@@ -5,7 +5,7 @@
 #include <malloc.h>
 #endif
 
-#include "commands.h"
+#include "commands/commands.h"
 #include "flow_opencv.h"
 #include "nprfx/nprfx.h"
 
