@@ -4,9 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bench_options.h"
 #include "util/cli_util.h"
 
-int nprfx_cli_bench_option(int argc, char **argv, int *i, nprfx_cli_bench_options *o)
+int cli_bench_option(int argc, char **argv, int *i, cli_bench_options *o)
 {
     const char *a = argv[*i];
     const int has = *i + 1 < argc;
@@ -18,7 +19,7 @@ int nprfx_cli_bench_option(int argc, char **argv, int *i, nprfx_cli_bench_option
         o->threads = atoi(argv[++*i]);
     else if (!strcmp(a, "--scene") && has)
         o->scene = argv[++*i];
-    else if (!strcmp(a, "--set") && has && o->nsets < NPRFX_CLI_BENCH_MAX_SETS)
+    else if (!strcmp(a, "--set") && has && o->nsets < CLI_BENCH_MAX_SETS)
         o->sets[o->nsets++] = argv[++*i];
     else if (!strcmp(a, "--mem-limit") && has)
         o->mem_limit = argv[++*i];
@@ -29,7 +30,7 @@ int nprfx_cli_bench_option(int argc, char **argv, int *i, nprfx_cli_bench_option
     return 1;
 }
 
-int nprfx_cli_bench_size(const char *cmd, const nprfx_cli_bench_options *o, int *w, int *h)
+int cli_bench_size(const char *cmd, const cli_bench_options *o, int *w, int *h)
 {
     if (sscanf(o->size, "%dx%d", w, h) != 2 || *w < 1 || *h < 1 || *w > 65536 || *h > 65536) {
         fprintf(stderr, "nprfx %s: --size must be WxH, e.g. 1920x1080\n", cmd);

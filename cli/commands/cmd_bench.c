@@ -7,6 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bench_floor.h"
+#include "bench_options.h"
+#include "cmd_shared.h"
 #include "util/cli_util.h"
 #include "commands.h"
 #include "graph/graph.h"
@@ -40,13 +43,13 @@ int nprfx_cmd_bench(int argc, char **argv)
 {
     const char *node_id = NULL, *connects[32];
     int nconn = 0;
-    nprfx_cli_bench_options o = {.size = "1920x1080", .scene = "orbit", .frames = 10};
+    cli_bench_options o = {.size = "1920x1080", .scene = "orbit", .frames = 10};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             return 0;
-        } else if (nprfx_cli_bench_option(argc, argv, &i, &o))
+        } else if (cli_bench_option(argc, argv, &i, &o))
             continue;
         else if (!strcmp(a, "--connect") && i + 1 < argc && nconn < 32)
             connects[nconn++] = argv[++i];
@@ -71,7 +74,7 @@ int nprfx_cmd_bench(int argc, char **argv)
         return 2;
     }
     int w, h;
-    if (nprfx_cli_bench_size("bench", &o, &w, &h)) return 2;
+    if (cli_bench_size("bench", &o, &w, &h)) return 2;
     /* Build the graph as JSON text, so bench exercises exactly the runner's wiring. */
     char json[8192];
     int len = snprintf(json, sizeof json,
@@ -108,9 +111,9 @@ int nprfx_cmd_bench(int argc, char **argv)
              "}}, \"out\": {\"node\": \"write\", \"inputs\": {\"image\": \"bench\"}, "
              "\"path\": \"bench.####.exr\"}}}");
 
-    if (mem_limit && nprfx_cli_set_mem_limit("nprfx", "bench", mem_limit)) return 2;
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, threads)) return 1;
+    if (mem_limit && cli_set_mem_limit("nprfx", "bench", mem_limit)) return 2;
+    cli_env env;
+    if (cli_env_init(&env, threads)) return 1;
     int status = 0;
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL, NULL}; /* plates are big */
@@ -164,10 +167,10 @@ int nprfx_cmd_bench(int argc, char **argv)
            node_id, w, h, frames, frames == 1 ? "" : "s",
            nprfx_executor_workers(nprfx_context_executor(env.ctx)),
            nprfx_executor_workers(nprfx_context_executor(env.ctx)) == 1 ? "" : "s", mean * 1e3,
-           best * 1e3, cpu / frames * 1e3, (double)w * h / mean * 1e-6, nprfx_cli_peak_mib());
+           best * 1e3, cpu / frames * 1e3, (double)w * h / mean * 1e-6, cli_peak_mib());
     /* the floor: the frames' bytes the node must read and write, at this machine's copy speed */
     double per_frame = traffic / frames;
-    double bw = nprfx_cli_copy_bandwidth(nprfx_context_executor(env.ctx), (size_t)per_frame);
+    double bw = cli_copy_bandwidth(nprfx_context_executor(env.ctx), (size_t)per_frame);
     if (bw > 0 && per_frame > 0)
         printf("memory floor: %.2f ms/frame (%.0f MB of frames read and written at %.1f GB/s "
                "memcpy); the node takes %.1fx that\n",
@@ -177,6 +180,6 @@ int nprfx_cmd_bench(int argc, char **argv)
                (double)items / total * 1e-6, d->item_name);
 done:
     nprfx_graph_free(g);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bench_options.h"
+#include "cmd_shared.h"
 #include "util/cli_util.h"
 #include "commands.h"
 #include "graph/graph.h"
@@ -52,13 +54,13 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
 {
     const char *path = NULL, *write_dir = NULL;
     int stats = 0;
-    nprfx_cli_bench_options o = {.size = "1920x1080", .scene = "orbit", .frames = 8};
+    cli_bench_options o = {.size = "1920x1080", .scene = "orbit", .frames = 8};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             return 0;
-        } else if (nprfx_cli_bench_option(argc, argv, &i, &o))
+        } else if (cli_bench_option(argc, argv, &i, &o))
             continue;
         else if (!strcmp(a, "--write") && i + 1 < argc)
             write_dir = argv[++i];
@@ -80,7 +82,7 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
         return 2;
     }
     int w, h;
-    if (nprfx_cli_bench_size("bench-graph", &o, &w, &h)) return 2;
+    if (cli_bench_size("bench-graph", &o, &w, &h)) return 2;
     uint64_t limit_bytes = 0;
     if (mem_limit && nprfx_parse_size(mem_limit, &limit_bytes)) {
         fprintf(stderr,
@@ -89,8 +91,8 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
                 mem_limit);
         return 2;
     }
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, threads)) return 1;
+    cli_env env;
+    if (cli_env_init(&env, threads)) return 1;
     int status = 0;
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt, 0, 0, write_dir, NULL};
@@ -124,7 +126,7 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
         goto done;
     }
     /* seconds by kind: compute, read, synth, write; at1: as they stood after frame 1 */
-    double t0 = nprfx_cli_now(), first = 0, at1[4] = {0, 0, 0, 0};
+    double t0 = cli_now(), first = 0, at1[4] = {0, 0, 0, 0};
     for (int f = 1; f <= frames; f++) {
         int written = 0;
         nprfx_result r =
@@ -135,18 +137,18 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
             goto done;
         }
         if (f == 1) {
-            first = nprfx_cli_now() - t0;
+            first = cli_now() - t0;
             seconds_by_kind(g, at1);
         }
     }
-    double total = nprfx_cli_now() - t0, sec[4];
+    double total = cli_now() - t0, sec[4];
     seconds_by_kind(g, sec);
     int workers = nprfx_executor_workers(nprfx_context_executor(env.ctx));
     printf("%s %dx%d, %d frame%s, %d thread%s: %.1f ms/frame, %.2f frames/s (first frame %.1f "
            "ms); compute %.1f ms, input %.1f ms, output %.1f ms per frame; peak memory %.0f MiB\n",
            path, w, h, frames, frames == 1 ? "" : "s", workers, workers == 1 ? "" : "s",
            total * 1e3 / frames, frames / total, first * 1e3, sec[0] * 1e3 / frames,
-           (sec[1] + sec[2]) * 1e3 / frames, sec[3] * 1e3 / frames, nprfx_cli_peak_mib());
+           (sec[1] + sec[2]) * 1e3 / frames, sec[3] * 1e3 / frames, cli_peak_mib());
     if (frames > 1) {
         /* a shot's steady state: the first frame holds the temporal warm-up and the first
          * allocation of every buffer, which a long shot spreads over more frames */
@@ -157,9 +159,9 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
                rest * 1e3 / m, m / rest, (sec[0] - at1[0]) * 1e3 / m,
                (sec[1] + sec[2] - at1[1] - at1[2]) * 1e3 / m, (sec[3] - at1[3]) * 1e3 / m);
     }
-    if (stats) nprfx_cli_print_stats(stdout, g, frames, &plan);
+    if (stats) cli_print_stats(stdout, g, frames, &plan);
 done:
     nprfx_graph_free(g);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

@@ -168,11 +168,11 @@ int nprfx_cmd_farm(int argc, char **argv)
                         "submit them where Slurm is\n");
         return 2;
     }
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, 1)) return 1;
+    cli_env env;
+    if (cli_env_init(&env, 1)) return 1;
     nprfx_farm_job job;
     int status = nprfx_farm_prepare(&env, "farm", &ga, chunk, 1, &job, NULL);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     if (status) return status;
     if (job.nchunks > 1000)
         fprintf(stderr,

@@ -41,7 +41,7 @@ typedef enum { OUT_NATRON, OUT_NATRON_PY, OUT_NUKE } out_kind;
 
 /* Write one host file through a temporary name and a rename: never a half-written file. */
 static int write_one(nprfx_graph *g, const char *graph, out_kind kind, const char *path,
-                     nprfx_cli_env *env)
+                     cli_env *env)
 {
     char dir[4096], tmp[4200];
     snprintf(dir, sizeof dir, "%s", path);
@@ -111,8 +111,8 @@ int nprfx_cmd_host_project(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, 1)) return 1;
+    cli_env env;
+    if (cli_env_init(&env, 1)) return 1;
     nprfx_graph_options opt = {sizeof opt, 0, 0, NULL, NULL};
     nprfx_graph *g = NULL;
     int status = 0;
@@ -128,6 +128,6 @@ int nprfx_cmd_host_project(int argc, char **argv)
     for (int k = 0; !status && k < 3; k++)
         if (outs[k]) status = write_one(g, graph, (out_kind)k, outs[k], &env);
     nprfx_graph_free(g);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

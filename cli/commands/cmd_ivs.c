@@ -52,13 +52,6 @@ static void usage(FILE *f)
             IVS_MAX_COUNT, (unsigned long long)NPRFX_IVS_DEFAULT_SEED, IVS_WARMUP);
 }
 
-static double now_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 static int generate(nprfx_context *ctx, long long n, unsigned long long seed, const char *out)
 {
     float *xy = malloc(sizeof(float) * 2 * (size_t)n);
@@ -70,7 +63,7 @@ static int generate(nprfx_context *ctx, long long n, unsigned long long seed, co
         status = IVS_FAILED;
         goto done;
     }
-    double t0 = now_seconds();
+    double t0 = cli_now();
     if (nprfx_ivs_generate(ctx, seed, (int)n, xy, NULL) != NPRFX_OK ||
         nprfx_ivs_encode(ctx, seed, (int)n, xy, buf, size) != NPRFX_OK ||
         nprfx_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
@@ -79,7 +72,7 @@ static int generate(nprfx_context *ctx, long long n, unsigned long long seed, co
         goto done;
     }
     printf("wrote %s: %lld points, seed %llu, %zu bytes (%.2f s)\n", out, n, seed, size,
-           now_seconds() - t0);
+           cli_now() - t0);
 done:
     free(xy);
     free(buf);

@@ -421,9 +421,9 @@ int nprfx_cmd_measure(int argc, char **argv)
         fprintf(stderr, "nprfx measure: --paper needs --matte (where the background is)\n");
         return MEASURE_USAGE;
     }
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, o.threads)) return MEASURE_FAILED;
+    cli_env env;
+    if (cli_env_init(&env, o.threads)) return MEASURE_FAILED;
     int status = measure(env.ctx, &o);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

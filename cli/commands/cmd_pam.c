@@ -68,13 +68,6 @@ static void usage(FILE *f)
         MAX_SAMPLES);
 }
 
-static double now_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 static int parse_int(const char *opt, const char *text, int lo, int hi, int *out)
 {
     char *end = NULL;
@@ -287,8 +280,8 @@ static int cmd_build(int argc, char **argv)
                 out);
         return PAM_USAGE;
     }
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, threads)) return PAM_FAILED;
+    cli_env env;
+    if (cli_env_init(&env, threads)) return PAM_FAILED;
     nprfx_image samples[MAX_SAMPLES];
     memset(samples, 0, sizeof samples);
     int status = PAM_FAILED, n = 0;
@@ -314,7 +307,7 @@ static int cmd_build(int argc, char **argv)
             goto done;
         }
     }
-    double t0 = now_seconds();
+    double t0 = cli_now();
     nprfx_image strip;
     nprfx_pam_info info;
     memset(&info, 0, sizeof info);
@@ -328,7 +321,7 @@ static int cmd_build(int argc, char **argv)
             fprintf(stderr, "nprfx pam build: (sample %d is '%s')\n", idx, files[idx]);
         goto done;
     }
-    double t1 = now_seconds();
+    double t1 = cli_now();
     if (write_pam(env.ctx, out, &strip, &info, half)) {
         int nk = 0;
         for (int m = 0; m < info.count; m++)
@@ -341,7 +334,7 @@ static int cmd_build(int argc, char **argv)
 done:
     for (int s = 0; s < n; s++)
         nprfx_image_free(&samples[s]);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }
 

@@ -5,6 +5,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "cmd_shared.h"
 #include "util/cli_util.h"
 #include "commands.h"
 #include "graph/graph.h"
@@ -89,13 +90,6 @@ static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
         prog, rows, ext && ext->options_usage ? ext->options_usage : "");
 }
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* What `run` applies to every graph it renders. */
 typedef struct run_opts {
     const char *prog, *frames, *shot;
@@ -143,10 +137,10 @@ static nprfx_result lock_outputs(nprfx_context *ctx, nprfx_graph *g, const char 
 }
 
 /* Load and render one graph; the exit status: 0 ok, 1 frames failed, 2 not rendered. */
-static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const char *graph_path,
+static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char *graph_path,
                      const run_opts *ro)
 {
-    nprfx_cli_env env = *envp;
+    cli_env env = *envp;
     nprfx_graph_options opt = *optp;
     const char *prog = ro->prog, *frames = ro->frames, *shot = ro->shot;
     const char *const *sets = ro->sets;
@@ -211,11 +205,11 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
             fprintf(stderr, "%s run: warning: %s: this may take hours:\n%s", prog, graph_path, why);
     }
     int tty = isatty(STDERR_FILENO) && !quiet;
-    double t0 = now_seconds();
+    double t0 = cli_now();
     int warned_eta = 0;
     int failed = 0, files = 0;
     for (int k = 0; k < fl.count; k++) {
-        double tf = now_seconds();
+        double tf = cli_now();
         int written = 0;
         if (nprfx_graph_render_frame(g, fl.frames[k], &written)) {
             if (tty) fputc('\n', stderr);
@@ -226,7 +220,7 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
             continue;
         }
         files += written;
-        double el = now_seconds() - t0, fps = (k + 1) / (el > 0 ? el : 1e-9);
+        double el = cli_now() - t0, fps = (k + 1) / (el > 0 ? el : 1e-9);
         double eta = (fl.count - k - 1) / fps;
         /* Measured, after the first frames (the first alone includes a temporal warm-up). */
         if (!warned_eta && k == (fl.count > 2 ? 1 : 0) && eta > 3600.0) {
@@ -242,7 +236,7 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
                     fl.frames[k], fps, eta);
         else if (!quiet)
             fprintf(stderr, "frame %d (%d/%d) %.3f s\n", fl.frames[k], k + 1, fl.count,
-                    now_seconds() - tf);
+                    cli_now() - tf);
     }
     if (tty) fputc('\n', stderr);
     if (failed) {
@@ -253,9 +247,9 @@ static int run_graph(nprfx_cli_env *envp, const nprfx_graph_options *optp, const
         char buf[4096];
         nprfx_graph_describe_outputs(g, buf, sizeof buf);
         printf("wrote %d frame%s in %.1f s:\n%s", fl.count - failed,
-               fl.count - failed == 1 ? "" : "s", now_seconds() - t0, buf);
+               fl.count - failed == 1 ? "" : "s", cli_now() - t0, buf);
     }
-    if (ro->stats) nprfx_cli_print_stats(stdout, g, fl.count, &plan);
+    if (ro->stats) cli_print_stats(stdout, g, fl.count, &plan);
 done:
     nprfx_output_locks_release(locks);
     nprfx_seq_frames_free(&fl);
@@ -332,9 +326,9 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
         return 2;
     }
     if (cache_mb < 16) cache_mb = 16;
-    if (mem_limit && nprfx_cli_set_mem_limit(prog, "run", mem_limit)) return 2;
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, threads)) return 1;
+    if (mem_limit && cli_set_mem_limit(prog, "run", mem_limit)) return 2;
+    cli_env env;
+    if (cli_env_init(&env, threads)) return 1;
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
     opt.progress = !quiet;
     opt.no_pool = no_pool;
@@ -356,6 +350,6 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     }
 done:
     if (ext && ext->close) ext->close(ext->user); /* after the graph, which releases the hook */
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

@@ -187,14 +187,14 @@ int nprfx_cmd_synth(int argc, char **argv)
         return SYNTH_USAGE;
     }
 
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, threads)) return SYNTH_FAILED;
+    cli_env env;
+    if (cli_env_init(&env, threads)) return SYNTH_FAILED;
     /* Refused before anything is allocated, with the size and the limit (NPRFX_READ_LIMIT). */
     if (nprfx_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
                                 nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0),
                                 0)) {
         fprintf(stderr, "%s\n", nprfx_cli_message(env.ctx));
-        nprfx_cli_env_free(&env);
+        cli_env_free(&env);
         return SYNTH_USAGE;
     }
     nprfx_frame_list frames = {NULL, 0};
@@ -250,6 +250,6 @@ done:
     nprfx_image_free(&im);
     nprfx_image_free(&packed);
     nprfx_seq_frames_free(&frames);
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

@@ -61,7 +61,7 @@ int nprfx_io_check_damaged(const char *list)
         path[strcspn(path, "\n")] = 0;
         if (!*path) continue;
         char msg_info[1024] = "", msg_read[1024] = "";
-        double t0 = nprfx_limits_now();
+        double t0 = cli_now();
         nprfx_file_info fi;
         nprfx_result ri = nprfx_io_info(ctx, path, &fi);
         const char *fault = NULL;
@@ -82,7 +82,7 @@ int nprfx_io_check_damaged(const char *list)
                      nprfx_rect_height(pl.bounds), pl.nchannels);
             nprfx_plate_free(&pl);
         }
-        double dt = nprfx_limits_now() - t0;
+        double dt = cli_now() - t0;
         const char *verdict;
         if (fault) {
             verdict = "garbage";
@@ -101,7 +101,7 @@ int nprfx_io_check_damaged(const char *list)
             snprintf(detail, sizeof detail, "%s", ri ? msg_info : msg_read);
         }
         flat(detail);
-        printf("%s\t%.4f\t%.0f\t%s\t%s\n", verdict, dt, nprfx_cli_peak_mib(), path, detail);
+        printf("%s\t%.4f\t%.0f\t%s\t%s\n", verdict, dt, cli_peak_mib(), path, detail);
         fflush(stdout);
     }
     if (f != stdin) fclose(f);

@@ -54,7 +54,7 @@ int nprfx_farm_take_graph_arg(nprfx_farm_graph_args *a, const char *arg, const c
  * frame: the graph, the frames against its shot, and with check_inputs the memory plan and every
  * read node's file for every frame. Errors are printed naming the file ("nprfx farm: ..."); returns
  * 0 or 2. On success *g holds the graph (free with nprfx_graph_free) when g is not NULL. */
-int nprfx_farm_prepare(nprfx_cli_env *env, const char *cmd, const nprfx_farm_graph_args *a,
+int nprfx_farm_prepare(cli_env *env, const char *cmd, const nprfx_farm_graph_args *a,
                        int chunk, int check_inputs, nprfx_farm_job *job, nprfx_graph **g);
 
 /* A frame list as one spec: ascending runs as "A-B", joined by ','; malloc'd. */

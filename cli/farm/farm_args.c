@@ -154,7 +154,7 @@ static int make_chunks(nprfx_farm_job *job, const nprfx_frame_list *fl, int chun
     return 0;
 }
 
-int nprfx_farm_prepare(nprfx_cli_env *env, const char *cmd, const nprfx_farm_graph_args *a,
+int nprfx_farm_prepare(cli_env *env, const char *cmd, const nprfx_farm_graph_args *a,
                        int chunk, int check_inputs, nprfx_farm_job *job, nprfx_graph **gout)
 {
     nprfx_context *ctx = env->ctx;

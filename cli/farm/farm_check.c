@@ -100,8 +100,8 @@ int nprfx_farm_check(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    nprfx_cli_env env;
-    if (nprfx_cli_env_init(&env, 0)) return 1;
+    cli_env env;
+    if (cli_env_init(&env, 0)) return 1;
     nprfx_farm_job job;
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
@@ -163,6 +163,6 @@ done:
     nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
     nprfx_farm_job_free(&job); /* after nprfx_farm_prepare, even a failed one: idempotent */
-    nprfx_cli_env_free(&env);
+    cli_env_free(&env);
     return status;
 }

@@ -41,7 +41,7 @@ void nprfx_frame_pool_destroy(nprfx_frame_pool *p)
 static void zero_floats(nprfx_context *ctx, float *data, size_t floats)
 {
     size_t bytes = floats * sizeof(float), parts = (bytes + ((size_t)1 << 20) - 1) >> 20;
-    nprfx_cli_parallel_bytes(ctx ? nprfx_context_executor(ctx) : NULL, data, NULL, bytes,
+    cli_parallel_bytes(ctx ? nprfx_context_executor(ctx) : NULL, data, NULL, bytes,
                              parts < 3 ? 1 : (int)parts);
 }
 

@@ -20,6 +20,7 @@
 #include "seq.h"
 #include "internal_graph.h"
 #include "nprfx/exec.h"
+#include "util/cli_util.h"
 
 /* ---------------------------------------------------------------- evaluation ---- */
 
@@ -27,7 +28,7 @@ char **internal_graph_names_dup(const char *const *names, int n)
 {
     char **d = calloc((size_t)n, sizeof *d);
     for (int i = 0; d && i < n; i++)
-        d[i] = internal_graph_strdup(names[i] ? names[i] : "C");
+        d[i] = cli_strdup(names[i] ? names[i] : "C");
     return d;
 }
 
@@ -104,7 +105,7 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
     }
     plate->names = names;
     for (int k = 0; k < 4; k++)
-        names[nc + k] = internal_graph_strdup(internal_graph_motion_names[k]);
+        names[nc + k] = cli_strdup(internal_graph_motion_names[k]);
     for (size_t p = 0; p < npix; p++) {
         const float *s = plate->pixels + p * (size_t)nc;
         float *d = px + p * (size_t)nn;
@@ -248,7 +249,7 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
     out->nchannels = nc;
     /* The read's note on parts and views goes out with its first strip, as with a whole plate. */
     if (!n->noted && shape->note) {
-        out->note = internal_graph_strdup(shape->note);
+        out->note = cli_strdup(shape->note);
         out->note_is_warning = shape->note_is_warning;
     }
     nprfx_result r = nprfx_io_rows_read(n->ctx, rr, y0, y1, out->pixels);
@@ -504,7 +505,7 @@ static void warmup_progress(render_frame *rf, int fetched)
 {
     nprfx_graph *g = rf->g;
     if (!g->progress || fetched == rf->frame || rf->warm_last <= rf->warm_first) return;
-    double now = internal_graph_now();
+    double now = cli_now();
     if (now - rf->t0 < WARMUP_REPORT_AFTER_S || now - rf->last_report < 1.0) return;
     rf->last_report = now;
     const gnode *n = &g->nodes[rf->node];
@@ -762,7 +763,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     a.fetch = fetch_cb;
     a.fetch_user = &rf;
     int tile = g->tile > 0 ? g->tile : 1 << 30;
-    double t0 = internal_graph_now(), c0 = internal_graph_cpu_now();
+    double t0 = cli_now(), c0 = cli_cpu_now();
     warmup_range(g, n, a.params, frame, in_ch, &rf);
     rf.t0 = t0;
     for (int ty = frame_rect.y0; ty < frame_rect.y1 && !r; ty += tile)
@@ -773,8 +774,8 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
             r = g->has_hook ? g->hook.render(g->hook.user, &a, &n->instance)
                             : nprfx_node_render(&a);
         }
-    g->render_seconds += internal_graph_now() - t0;
-    g->render_cpu_seconds += internal_graph_cpu_now() - c0;
+    g->render_seconds += cli_now() - t0;
+    g->render_cpu_seconds += cli_cpu_now() - c0;
     /* what the render must at least move through memory: its inputs read once, its output
      * written once (bench's floor) */
     for (int k = 0; k < d->num_inputs; k++)
@@ -808,7 +809,7 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     nprfx_result r;
     /* The node's own time for --stats: evaluations nested in it (a temporal node's fetches of
      * other frames) are counted in their own nodes. */
-    double saved_child = g->child_seconds, t0 = internal_graph_now();
+    double saved_child = g->child_seconds, t0 = cli_now();
     g->child_seconds = 0;
     switch (g->nodes[node].kind) {
     case GK_READ:
@@ -830,7 +831,7 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     if (!r && (g->nodes[node].kind == GK_READ || g->nodes[node].kind == GK_SYNTH))
         from_reader = !internal_graph_trim_plate(g, node, &im, &names, &meta) &&
                       g->nodes[node].kind == GK_READ;
-    double el = internal_graph_now() - t0;
+    double el = cli_now() - t0;
     g->stats[node].seconds += el - g->child_seconds;
     g->stats[node].calls++;
     g->child_seconds = saved_child + el;

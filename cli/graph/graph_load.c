@@ -29,29 +29,7 @@
 #include "seq.h"
 #include "internal_graph.h"
 #include "io/io_limits.h"
-
-char *internal_graph_strdup(const char *s)
-{
-    if (!s) return NULL;
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d) memcpy(d, s, n);
-    return d;
-}
-
-double internal_graph_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-double internal_graph_cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "util/cli_util.h"
 
 /* ---------------------------------------------------------------- parsing ---- */
 
@@ -62,10 +40,10 @@ static nprfx_result parse_ref(nprfx_graph *g, const char *node, const char *inpu
         return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
                            "node '%s': input '%s' must be a string \"node\" or \"node:channels\"",
                            node, input);
-    ref->text = internal_graph_strdup(j->valuestring);
+    ref->text = cli_strdup(j->valuestring);
     const char *colon = strchr(j->valuestring, ':');
     if (colon) {
-        ref->sel = internal_graph_strdup(colon + 1);
+        ref->sel = cli_strdup(colon + 1);
         ref->text[colon - j->valuestring] = 0; /* text holds the node name */
     }
     ref->src = -1;
@@ -78,7 +56,7 @@ static nprfx_result set_value_json(nprfx_graph *g, gnode *n, int pi, const cJSON
     nprfx_value v = n->params[pi];
     if (cJSON_IsString(j)) {
         free(n->param_text[pi]);
-        n->param_text[pi] = internal_graph_strdup(j->valuestring);
+        n->param_text[pi] = cli_strdup(j->valuestring);
         nprfx_result r = nprfx_param_parse(n->ctx, n->desc, p, n->param_text[pi], &v);
         if (r) return r;
     } else if (cJSON_IsBool(j)) {
@@ -174,7 +152,7 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
                                key);
         char **dst = (char **)((char *)n + f->offset);
         free(*dst);
-        *dst = internal_graph_strdup(s);
+        *dst = cli_strdup(s);
         return NPRFX_OK;
     }
     static const char *const kind_names[] = {"node", "read", "synth", "write"};
@@ -372,7 +350,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
     g->ctx = ctx;
-    g->base_dir = internal_graph_strdup(base_dir ? base_dir : ".");
+    g->base_dir = cli_strdup(base_dir ? base_dir : ".");
     g->cache_limit = (opt && opt->cache_bytes) ? opt->cache_bytes : (size_t)2 << 30;
     g->cache_entry_limit = NPRFX_GRAPH_CACHE_ENTRIES;
     g->tile = opt ? opt->tile : 0;
@@ -402,7 +380,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         free(g);
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
-    g->out_dir = opt && opt->output_dir ? internal_graph_strdup(opt->output_dir) : NULL;
+    g->out_dir = opt && opt->output_dir ? cli_strdup(opt->output_dir) : NULL;
     g->first_frame = 1;
     g->last_frame = 1;
     nprfx_result r = NPRFX_OK;
@@ -426,15 +404,15 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
             goto done;
         }
         if (!strcmp(e->string, "frames") && cJSON_IsString(e))
-            g->frames_text = internal_graph_strdup(e->valuestring);
+            g->frames_text = cli_strdup(e->valuestring);
         else if (!strcmp(e->string, "frames") && cJSON_IsNumber(e)) {
             char buf[32];
             snprintf(buf, sizeof buf, "%d", e->valueint);
-            g->frames_text = internal_graph_strdup(buf);
+            g->frames_text = cli_strdup(buf);
         } else if (!strcmp(e->string, "ocio") && cJSON_IsString(e))
-            g->ocio = internal_graph_strdup(e->valuestring);
+            g->ocio = cli_strdup(e->valuestring);
         else if (!strcmp(e->string, "format") && cJSON_IsString(e))
-            g->fmt_text = internal_graph_strdup(e->valuestring);
+            g->fmt_text = cli_strdup(e->valuestring);
         else {
             r = nprfx_error(ctx, NPRFX_ERR_PARSE,
                             "unexpected top-level entry '%s' (expected frames, nodes, ocio)",
@@ -463,7 +441,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     int i = 0;
     for (const cJSON *e = nodes->child; e; e = e->next, i++) {
         g->count = i + 1; /* what nprfx_graph_free releases */
-        g->nodes[i].name = internal_graph_strdup(e->string);
+        g->nodes[i].name = cli_strdup(e->string);
         if (!g->nodes[i].name) {
             r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
             goto done;
@@ -515,7 +493,7 @@ nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_
     }
     fclose(f);
     text[len] = 0;
-    char *dir = internal_graph_strdup(path);
+    char *dir = cli_strdup(path);
     char *slash = strrchr(dir, '/');
     if (slash)
         *slash = 0;
@@ -620,7 +598,7 @@ nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames)
 {
     char *old = g->frames_text;
     int first = g->first_frame, last = g->last_frame;
-    g->frames_text = internal_graph_strdup(frames);
+    g->frames_text = cli_strdup(frames);
     if (!g->frames_text) {
         g->frames_text = old;
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");

@@ -24,6 +24,7 @@
 #include "io/io.h"
 #include "io/io_limits.h"
 #include "nprfx/synth.h"
+#include "util/cli_util.h"
 
 /* Whether temporal node n reads input k at frames other than the one it renders, asked at the
  * shot's first, middle and last frames; when the node cannot say, it is taken to. */
@@ -456,7 +457,7 @@ nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const ch
         gnode *n = &g->nodes[i];
         if (n->kind != GK_READ && n->kind != GK_SYNTH) continue;
         if (n->kind == GK_READ) {
-            char *s = internal_graph_strdup(scene);
+            char *s = cli_strdup(scene);
             if (!s) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
             free(n->scene);
             n->scene = s;
@@ -468,7 +469,7 @@ nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const ch
     if (g->fmt_text) {
         char buf[64];
         snprintf(buf, sizeof buf, "%dx%d", w, h);
-        char *s = internal_graph_strdup(buf);
+        char *s = cli_strdup(buf);
         if (!s) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         free(g->fmt_text);
         g->fmt_text = s;
@@ -573,9 +574,9 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
                 pick[c] = c;
         sh->names = calloc((size_t)(nread + extra), sizeof *sh->names);
         for (int c = 0; sh->names && c < nread; c++)
-            sh->names[c] = internal_graph_strdup(info.names[pick[c]]);
+            sh->names[c] = cli_strdup(info.names[pick[c]]);
         for (int c = 0; sh->names && c < extra; c++)
-            sh->names[nread + c] = internal_graph_strdup(internal_graph_motion_names[c]);
+            sh->names[nread + c] = cli_strdup(internal_graph_motion_names[c]);
         sh->w = nprfx_rect_width(info.bounds);
         sh->h = nprfx_rect_height(info.bounds);
         sh->channels = nread + extra;

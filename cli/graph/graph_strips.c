@@ -18,6 +18,7 @@
 #include "internal_graph.h"
 #include "io/io.h"
 #include "io/io_limits.h"
+#include "util/cli_util.h"
 
 /* One node of the chain, as a strip render needs it. */
 typedef struct snode {
@@ -216,7 +217,7 @@ static nprfx_result strips_prepare(nprfx_graph *g, const int *writes, int nw, in
                 const char *name = c < s->shape.nchannels
                                        ? s->shape.names[c]
                                        : internal_graph_motion_names[c - s->shape.nchannels];
-                s->names[c] = internal_graph_strdup(name);
+                s->names[c] = cli_strdup(name);
                 s->types[c] = c < s->shape.nchannels ? s->shape.types[c] : NPRFX_PIXEL_FLOAT;
                 if (!s->names[c]) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
             }
@@ -349,7 +350,7 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
     nprfx_graph *g = st->g;
     gnode *nd = &g->nodes[s->node];
     nprfx_rect rows = node_rows(st, s, y0, y1);
-    double t0 = internal_graph_now();
+    double t0 = cli_now();
     nprfx_result r = NPRFX_OK;
     if (nd->kind == GK_READ) {
         nprfx_plate p;
@@ -384,9 +385,9 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
             a.window = rows;
             a.inputs = inputs;
             a.output = &s->buf;
-            double tr = internal_graph_now();
+            double tr = cli_now();
             r = nprfx_node_render(&a);
-            g->render_seconds += internal_graph_now() - tr;
+            g->render_seconds += cli_now() - tr;
             if (!r) {
                 int in_ch[32] = {0};
                 for (int k = 0; k < d->num_inputs; k++)
@@ -404,7 +405,7 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
             if (--in->left == 0) release_buf(st, in);
         }
     }
-    g->stats[s->node].seconds += internal_graph_now() - t0;
+    g->stats[s->node].seconds += cli_now() - t0;
     return r;
 }
 
@@ -454,7 +455,7 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
     strips st;
     nprfx_result r = strips_prepare(g, writes, nw, frame, &st);
     if (r) return r;
-    double t0 = internal_graph_now();
+    double t0 = cli_now();
     swrite *sw = calloc((size_t)nw, sizeof *sw);
     if (!sw) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     for (int i = 0; !r && i < nw; i++) {
@@ -483,7 +484,7 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
                                      &sw[i].out);
         }
     }
-    double tw = internal_graph_now() - t0;
+    double tw = cli_now() - t0;
     const int step = g->strip_rows > 0 ? g->strip_rows : 64;
     for (int y0 = st.frame.y0; y0 < st.frame.y1 && !r; y0 += step) {
         int y1 = y0 + step < st.frame.y1 ? y0 + step : st.frame.y1;
@@ -491,7 +492,7 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
             st.s[i].left = st.s[i].uses;
         for (int i = 0; i < st.n && !r; i++)
             r = render_rows(&st, &st.s[i], frame, y0, y1);
-        double t1 = internal_graph_now();
+        double t1 = cli_now();
         for (int i = 0; i < nw && !r; i++) {
             const gnode *w = &g->nodes[writes[i]];
             nprfx_image view, scratch;
@@ -505,16 +506,16 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
             internal_graph_frame_release(g, &scratch);
             if (--sw[i].src->left == 0) release_buf(&st, sw[i].src);
         }
-        tw += internal_graph_now() - t1;
+        tw += cli_now() - t1;
     }
     /* Every file is finished (renamed into place, or its temporary removed) whatever failed. */
-    double t1 = internal_graph_now();
+    double t1 = cli_now();
     for (int i = 0; sw && i < nw; i++) {
         if (!sw[i].out) continue;
         nprfx_result fr = nprfx_io_rows_finish(g->nodes[writes[i]].ctx, sw[i].out, !r);
         if (!r) r = fr;
     }
-    tw += internal_graph_now() - t1;
+    tw += cli_now() - t1;
     for (int i = 0; i < st.n; i++)
         g->stats[st.s[i].node].calls++;
     for (int i = 0; i < nw; i++) { /* the writes share the time of the files */

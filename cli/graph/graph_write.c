@@ -17,6 +17,7 @@
 #include "nprfx/nprfx.h"
 #include "seq.h"
 #include "internal_graph.h"
+#include "util/cli_util.h"
 
 /* Index list of the channels a preview shows: R,G,B,A when present, else the first <= 4. */
 static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **names,
@@ -73,7 +74,7 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         internal_graph_consumed(g, e);
         return NPRFX_OK;
     }
-    double t0 = internal_graph_now(); /* --stats: the write's own time, not its input's */
+    double t0 = cli_now(); /* --stats: the write's own time, not its input's */
     e->pins++;
     nprfx_image view, scratch;
     memset(&scratch, 0, sizeof scratch);
@@ -132,7 +133,7 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
     internal_graph_frame_release(g, &scratch);
     e->pins--;
     if (!r) internal_graph_consumed(g, e);
-    double el = internal_graph_now() - t0;
+    double el = cli_now() - t0;
     g->stats[node].seconds += el;
     g->stats[node].calls++;
     g->child_seconds += el;

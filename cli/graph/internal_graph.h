@@ -135,10 +135,6 @@ struct nprfx_graph {
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
 };
 
-char *internal_graph_strdup(const char *s);
-double internal_graph_now(void);
-/* The process's CPU time in seconds, all threads (CLOCK_PROCESS_CPUTIME_ID). */
-double internal_graph_cpu_now(void);
 /* The index of the node called name, or -1 (graph_names.c). */
 int internal_graph_find_node(const nprfx_graph *g, const char *name);
 /* An empty name index with room for count nodes. */

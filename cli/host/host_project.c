@@ -11,6 +11,7 @@
 #include "host_project.h"
 #include "io/io.h"
 #include "ofx_names.h"
+#include "util/cli_util.h"
 
 char *nprfx_host_double(double v, char *buf, size_t n)
 {
@@ -111,7 +112,7 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
         return oom(b);
     }
     for (int c = 0; c < fi.nchannels; c++)
-        s->names[c] = internal_graph_strdup(fi.names[c]);
+        s->names[c] = cli_strdup(fi.names[c]);
     s->plate_nc = s->nc = fi.nchannels;
     plate_ranks(s->names, s->nc, s->rank);
     if (!b->hp->width) {
@@ -124,7 +125,7 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
                                           s->motion_idx, s->motion_sign);
         if (r) return r;
         for (int k = 0; k < 4; k++)
-            s->names[s->nc++] = internal_graph_strdup(internal_graph_motion_names[k]);
+            s->names[s->nc++] = cli_strdup(internal_graph_motion_names[k]);
     }
     return NPRFX_OK;
 }

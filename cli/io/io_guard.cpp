@@ -3,6 +3,7 @@
  * and the per-thread read deadline. C++ only because OpenImageIO is; like io_oiio.cpp, every
  * entry point is extern "C" and catches every exception. */
 #include "io_validate.h"
+#include "util/cli_util.h"
 
 #include <cstdint>
 #include <cstdio>
@@ -17,7 +18,7 @@
 namespace
 {
 
-thread_local double read_deadline = 0; /* nprfx_limits_now() time; 0: none */
+thread_local double read_deadline = 0; /* cli_now() time; 0: none */
 
 /* OpenImageIO's own bounds, so that anything reaching it past the guard still meets a limit:
  * limits:imagesize_MB from NPRFX_READ_LIMIT (it counts native bytes, at most the float bytes the
@@ -78,7 +79,7 @@ extern "C" nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int
         if (!r) r = nprfx_read_timeout(ctx, &timeout);
         if (r) return r;
         set_oiio_limits(limit);
-        double now = nprfx_limits_now();
+        double now = cli_now();
         read_deadline = timeout > 0 ? now + timeout : 0;
         if (nprfx_io_is_exr(path)) return nprfx_io_validate_exr(ctx, path, mode, read_deadline);
         /* Other formats decode every channel whatever a read keeps: all of them count. */
@@ -91,7 +92,7 @@ extern "C" nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int
 
 extern "C" int nprfx_io_deadline_passed(void)
 {
-    return read_deadline > 0 && nprfx_limits_now() > read_deadline;
+    return read_deadline > 0 && cli_now() > read_deadline;
 }
 
 extern "C" bool nprfx_io_read_progress(void *user, float done)

@@ -102,13 +102,6 @@ nprfx_result nprfx_read_timeout(nprfx_context *ctx, double *seconds)
     return NPRFX_OK;
 }
 
-double nprfx_limits_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 void nprfx_format_bytes(char *buf, size_t n, uint64_t bytes)
 {
     static const char *const units[] = {"KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};

@@ -40,9 +40,6 @@ nprfx_result nprfx_parse_size(const char *text, uint64_t *bytes);
 /* The read time bound in seconds (0: none). A malformed NPRFX_READ_TIMEOUT is an error. */
 nprfx_result nprfx_read_timeout(nprfx_context *ctx, double *seconds);
 
-/* Monotonic clock in seconds. */
-double nprfx_limits_now(void);
-
 /* "44.7 GiB", "512 MiB", "900 bytes": sizes in messages. */
 void nprfx_format_bytes(char *buf, size_t n, uint64_t bytes);
 

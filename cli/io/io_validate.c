@@ -15,6 +15,7 @@
 #include <OpenEXR/openexr.h>
 
 #include "io_limits.h"
+#include "util/cli_util.h"
 
 /* Channels in one part. OpenImageIO refuses more than 1024 (its limits:channels); a damaged
  * channel list claims millions. */
@@ -276,7 +277,7 @@ static nprfx_result chunk_ok(walk *w, exr_result_t rv, const exr_chunk_info_t *c
                            "the %llu bytes its pixels need with this compression",
                            w->path, w->part, at, (unsigned long long)ci->packed_size,
                            (unsigned long long)ci->unpacked_size);
-    if ((++w->visited & 63) == 0 && w->deadline > 0 && nprfx_limits_now() > w->deadline)
+    if ((++w->visited & 63) == 0 && w->deadline > 0 && cli_now() > w->deadline)
         return nprfx_error(w->ctx, NPRFX_ERR_IO,
                            "'%s': reading took longer than %g s while checking its %llu-th chunk "
                            "(NPRFX_READ_TIMEOUT)",
@@ -533,7 +534,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         r = st == EXR_STORAGE_TILED ? walk_tiles(&wk) : walk_scanlines(&wk, &dw);
         if (r) return r;
     }
-    if (deadline > 0 && nprfx_limits_now() > deadline)
+    if (deadline > 0 && cli_now() > deadline)
         return nprfx_error(ctx, NPRFX_ERR_IO,
                            "'%s': reading took longer than %g s while checking its %llu chunks "
                            "(NPRFX_READ_TIMEOUT)",

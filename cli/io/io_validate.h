@@ -35,7 +35,7 @@ nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int mode);
 
 /* The EXR checks: header parse, parts, windows, channel names and count, tile sizes, chunk
  * counts and every chunk's place against the file's size and a plausible compression ratio, and
- * in NPRFX_GUARD_READ mode the decoded size. deadline: nprfx_limits_now() time after which the
+ * in NPRFX_GUARD_READ mode the decoded size. deadline: cli_now() time after which the
  * walk over the chunks gives up (0: none). */
 nprfx_result nprfx_io_validate_exr(nprfx_context *ctx, const char *path, int mode, double deadline);
 

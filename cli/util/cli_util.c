@@ -1,4 +1,5 @@
-/* nprfx CLI — shared helpers. */
+/* nprfx CLI — the runner's lowest layer: the context commands run with, the clocks, strdup,
+ * peak memory and a parallel byte copy. Includes nothing of the runner's other folders. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,10 +10,9 @@
 
 #include "cli_util.h"
 #include "flow_opencv.h"
-#include "graph/graph.h"
-#include "io/io_limits.h"
 
-int nprfx_cli_threads(int requested)
+/* Threads from --threads (when > 0), else $NPRFX_THREADS, else all cores. */
+static int cli_threads(int requested)
 {
     if (requested > 0) return requested;
     const char *env = getenv("NPRFX_THREADS");
@@ -24,7 +24,10 @@ int nprfx_cli_threads(int requested)
     return 0; /* all cores */
 }
 
-const char *nprfx_cli_data_dir(char *buf, size_t size)
+/* The data directory (the stipple node's ivs.bin): $NPRFX_DATA_DIR when set (empty: none), else
+ * share/nprfx beside the executable (the build tree) or ../share/nprfx (an install), the first
+ * holding ivs.bin; NULL when there is none (the data is then generated when needed). */
+static const char *cli_data_dir(char *buf, size_t size)
 {
     const char *env = getenv("NPRFX_DATA_DIR");
     if (env) {
@@ -49,17 +52,17 @@ const char *nprfx_cli_data_dir(char *buf, size_t size)
     return NULL;
 }
 
-int nprfx_cli_env_init(nprfx_cli_env *env, int threads)
+int cli_env_init(cli_env *env, int threads)
 {
     memset(env, 0, sizeof *env);
-    if (nprfx_pool_create(nprfx_cli_threads(threads), &env->pool)) {
+    if (nprfx_pool_create(cli_threads(threads), &env->pool)) {
         fprintf(stderr, "nprfx: cannot start worker threads\n");
         return 1;
     }
     nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
     init.executor = nprfx_pool_executor(env->pool);
     char dir[4096];
-    init.data_dir = nprfx_cli_data_dir(dir, sizeof dir);
+    init.data_dir = cli_data_dir(dir, sizeof dir);
     init.flow = nprfx_flow_opencv(); /* NULL without OpenCV: the flow node says so */
     if (nprfx_context_create(&init, &env->ctx)) {
         nprfx_pool_destroy(env->pool);
@@ -69,7 +72,7 @@ int nprfx_cli_env_init(nprfx_cli_env *env, int threads)
     return 0;
 }
 
-void nprfx_cli_env_free(nprfx_cli_env *env)
+void cli_env_free(cli_env *env)
 {
     nprfx_context_destroy(env->ctx);
     nprfx_pool_destroy(env->pool);
@@ -83,69 +86,64 @@ const char *nprfx_cli_message(const nprfx_context *ctx)
     return buf;
 }
 
-double nprfx_cli_now(void)
+double cli_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-double nprfx_cli_peak_mib(void)
+double cli_cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+char *cli_strdup(const char *s)
+{
+    if (!s) return NULL;
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d) memcpy(d, s, n);
+    return d;
+}
+
+double cli_peak_mib(void)
 {
     struct rusage ru;
     if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
     return (double)ru.ru_maxrss / 1024.0; /* Linux reports KiB */
 }
 
-int nprfx_cli_set_mem_limit(const char *prog, const char *cmd, const char *size)
+typedef struct bytes_job {
+    const unsigned char *src; /* NULL: zero */
+    unsigned char *dst;
+    size_t bytes;
+    int parts;
+} bytes_job;
+
+static void bytes_parts(void *user, int begin, int end, int worker)
 {
-    uint64_t bytes;
-    if (nprfx_parse_size(size, &bytes)) {
-        fprintf(stderr, "%s %s: --mem-limit '%s' is not a size (e.g. 8G, 512M, or 0 for none)\n",
-                prog, cmd, size);
-        return 1;
+    (void)worker;
+    const bytes_job *j = user;
+    for (int p = begin; p < end; p++) {
+        size_t a = j->bytes * (size_t)p / (size_t)j->parts;
+        size_t b = j->bytes * (size_t)(p + 1) / (size_t)j->parts;
+        if (j->src)
+            memcpy(j->dst + a, j->src + a, b - a);
+        else
+            memset(j->dst + a, 0, b - a);
     }
-    nprfx_mem_limit_set(bytes);
-    return 0;
 }
 
-void nprfx_cli_print_stats(FILE *f, struct nprfx_graph *g, int frames,
-                           const struct nprfx_graph_plan_info *plan)
+void cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
+                              int parts)
 {
-    const nprfx_graph_node_stats *st;
-    int n = nprfx_graph_stats(g, &st);
-    int per = frames > 0 ? frames : 1;
-    fprintf(f, "stats: %d frame%s\n", frames, frames == 1 ? "" : "s");
-    fprintf(f, "  %-20s %-15s %7s %10s %12s %12s\n", "node", "type", "renders", "ms/frame",
-            "MiB/frame", "new MiB");
-    for (int i = 0; i < n; i++) {
-        if (!st[i].calls) continue; /* not on the way to a write */
-        fprintf(f, "  %-20s %-15s %7lld %10.2f %12.1f %12.1f\n", st[i].name, st[i].type,
-                st[i].calls, st[i].seconds * 1e3 / per, (double)st[i].bytes / per / 1048576.0,
-                (double)st[i].fresh_bytes / 1048576.0);
+    bytes_job j = {src, dst, bytes, parts > 0 ? parts : 1};
+    if (j.parts == 1 || !ex) {
+        bytes_parts(&j, 0, j.parts, 0);
+        return;
     }
-    char peak[32], est[32], need[32], lim[32];
-    nprfx_format_bytes(peak, sizeof peak, nprfx_graph_mem_peak(g));
-    nprfx_format_bytes(est, sizeof est, plan ? plan->peak : 0);
-    nprfx_format_bytes(need, sizeof need, plan ? plan->need : 0);
-    if (!plan || plan->limit == UINT64_MAX)
-        snprintf(lim, sizeof lim, "none");
-    else
-        nprfx_format_bytes(lim, sizeof lim, plan->limit);
-    fprintf(
-        f,
-        "frames and caches held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
-        "resident %.0f MiB\n",
-        peak, est, need, lim, nprfx_cli_peak_mib());
-    if (plan && plan->state) {
-        char kept[32];
-        nprfx_format_bytes(kept, sizeof kept, plan->state);
-        fprintf(f, "of the estimate, up to %s are caches nodes keep between frames\n", kept);
-    }
-    if (plan && plan->strip_rows > 0) {
-        char whole[32];
-        nprfx_format_bytes(whole, sizeof whole, plan->whole_need);
-        fprintf(f, "rendered by strips of %d rows (whole frames: %s in use at once)\n",
-                plan->strip_rows, whole);
-    }
+    nprfx_parallel_for(ex, j.parts, 1, bytes_parts, &j);
 }
