@@ -10,11 +10,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/channels.h"
-#include "util/cli_util.h"
 #include "commands.h"
-#include "graph/internal_graph.h"
+#include "graph/graph.h"
+#include "graph/graph_eval.h"
+#include "graph/graph_model.h"
+#include "graph/graph_names.h"
+#include "io/channels.h"
 #include "nprfx/metrics.h"
+#include "util/cli_util.h"
 
 enum { MEASURE_OK = 0, MEASURE_FAILED = 1, MEASURE_USAGE = 2, MEASURE_BINS = 10 };
 

@@ -7,7 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_graph.h"
+#include "frame_pool.h"
+#include "graph.h"
+#include "graph_cache.h"
+#include "graph_frames.h"
+#include "graph_model.h"
 
 static size_t slot_of(const nprfx_graph *g, int node, int frame)
 {
@@ -153,4 +157,21 @@ void internal_graph_cache_clear(nprfx_graph *g)
     g->head = g->tail = NULL;
     g->cache_bytes = 0;
     g->cache_entries = 0;
+}
+
+void internal_graph_centry_free(nprfx_graph *g, centry *e)
+{
+    if (!e) return;
+    for (int c = 0; e->names && c < e->im.channels; c++)
+        free(e->names[c]);
+    free(e->names);
+    free(e->meta.types);
+    if (e->from_reader) { /* the reader never takes a buffer from the pool */
+        size_t bytes = e->bytes < g->held_bytes ? e->bytes : g->held_bytes;
+        g->held_bytes -= bytes;
+        nprfx_image_free(&e->im);
+    } else {
+        internal_graph_frame_release(g, &e->im);
+    }
+    free(e);
 }

@@ -6,7 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_graph.h"
+#include "graph.h"
+#include "graph_cycles.h"
+#include "graph_model.h"
 
 enum { WHITE = 0, GREY = 1 /* on the current path */, BLACK = 2 /* done, no cycle below */ };
 

@@ -5,7 +5,9 @@
  * node's output frame once more before it is allocated (graph_eval.c). */
 #include <stdio.h>
 
-#include "internal_graph.h"
+#include "graph.h"
+#include "graph_limits.h"
+#include "graph_model.h"
 #include "io/io_limits.h"
 
 nprfx_result internal_graph_check_limits(nprfx_graph *g)
@@ -15,7 +17,7 @@ nprfx_result internal_graph_check_limits(nprfx_graph *g)
         if (n->kind != GK_SYNTH) continue;
         char what[600];
         snprintf(what, sizeof what, "node '%s': synth size", n->name);
-        /* One channel: a graph's synth makes only the channels its readers take (eval_synth),
+        /* One channel: a graph's synth makes only the channels its readers take (internal_graph_synth_plate),
          * which are known once the graph is planned; the frame is checked again with them
          * before it is allocated. This refuses the sizes no plate could have. */
         nprfx_result r = nprfx_image_limit_check(g->ctx, what, n->width, n->height, 1, 0);

@@ -22,13 +22,16 @@
 #include <string.h>
 #include <time.h>
 
-#include "io/channels.h"
+#include "frame_pool.h"
 #include "graph.h"
-#include "io/io.h"
+#include "graph_cache.h"
+#include "graph_cycles.h"
+#include "graph_limits.h"
+#include "graph_model.h"
+#include "graph_names.h"
+#include "io/io_limits.h"
 #include "nprfx/nprfx.h"
 #include "seq.h"
-#include "internal_graph.h"
-#include "io/io_limits.h"
 #include "util/cli_util.h"
 
 /* ---------------------------------------------------------------- parsing ---- */
@@ -645,19 +648,31 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
     return NPRFX_OK;
 }
 
-void internal_graph_centry_free(nprfx_graph *g, centry *e)
+nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const char *scene)
 {
-    if (!e) return;
-    for (int c = 0; e->names && c < e->im.channels; c++)
-        free(e->names[c]);
-    free(e->names);
-    free(e->meta.types);
-    if (e->from_reader) { /* the reader never takes a buffer from the pool */
-        size_t bytes = e->bytes < g->held_bytes ? e->bytes : g->held_bytes;
-        g->held_bytes -= bytes;
-        nprfx_image_free(&e->im);
-    } else {
-        internal_graph_frame_release(g, &e->im);
+    for (int i = 0; i < g->count; i++) {
+        gnode *n = &g->nodes[i];
+        if (n->kind != GK_READ && n->kind != GK_SYNTH) continue;
+        if (n->kind == GK_READ) {
+            char *s = cli_strdup(scene);
+            if (!s) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+            free(n->scene);
+            n->scene = s;
+            n->kind = GK_SYNTH;
+        }
+        n->width = w;
+        n->height = h;
     }
-    free(e);
+    if (g->fmt_text) {
+        char buf[64];
+        snprintf(buf, sizeof buf, "%dx%d", w, h);
+        char *s = cli_strdup(buf);
+        if (!s) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        free(g->fmt_text);
+        g->fmt_text = s;
+    }
+    internal_graph_cache_clear(g);
+    g->plan_ready = 0;
+    nprfx_result r = nprfx_image_limit(g->ctx, &g->mem_limit);
+    return r ? r : internal_graph_check_limits(g);
 }

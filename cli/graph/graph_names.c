@@ -6,7 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_graph.h"
+#include "graph.h"
+#include "graph_names.h"
 
 static uint64_t name_hash(const char *s)
 {

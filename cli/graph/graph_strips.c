@@ -14,10 +14,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/channels.h"
-#include "internal_graph.h"
+#include "graph.h"
+#include "graph_eval.h"
+#include "graph_files.h"
+#include "graph_frames.h"
+#include "graph_memory.h"
+#include "graph_model.h"
+#include "graph_read.h"
+#include "graph_resolve.h"
+#include "graph_strips.h"
 #include "io/io.h"
-#include "io/io_limits.h"
 #include "util/cli_util.h"
 
 /* One node of the chain, as a strip render needs it. */

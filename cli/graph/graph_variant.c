@@ -2,9 +2,13 @@
  * graph with its patterns stuck to the screen (shower door), or drawn anew every frame (white).
  * Only the plates and the seeds change, so any graph gets its baselines without editing it. */
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
-#include "internal_graph.h"
+#include "graph.h"
+#include "graph_model.h"
+#include "graph_variant.h"
 
 /* The layer of a channel name ("ViewLayer.Pref.R" -> "Pref") and its last component ("R"). */
 static void split_name(const char *name, char *layer, size_t n, const char **comp)

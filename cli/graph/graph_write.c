@@ -11,12 +11,21 @@
 #include <string.h>
 #include <time.h>
 
-#include "io/channels.h"
 #include "graph.h"
+#include "graph_cache.h"
+#include "graph_eval.h"
+#include "graph_files.h"
+#include "graph_frames.h"
+#include "graph_memory.h"
+#include "graph_model.h"
+#include "graph_names.h"
+#include "graph_plan.h"
+#include "graph_resolve.h"
+#include "graph_strips.h"
+#include "io/channels.h"
 #include "io/io.h"
 #include "nprfx/nprfx.h"
 #include "seq.h"
-#include "internal_graph.h"
 #include "util/cli_util.h"
 
 /* Index list of the channels a preview shows: R,G,B,A when present, else the first <= 4. */
@@ -41,24 +50,6 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
                 d[c] = s[idx[c]];
         }
     *scratch = view->data;
-    return NPRFX_OK;
-}
-
-/* Refuse to write over a file some read node of the graph takes as input at this frame: inputs
- * are never overwritten, even by a graph that names the same sequence twice. */
-nprfx_result internal_graph_check_not_input(nprfx_graph *g, const gnode *w, const char *out,
-                                            int frame)
-{
-    char in[4096], rin[PATH_MAX], rout[PATH_MAX];
-    if (!realpath(out, rout)) return NPRFX_OK; /* does not exist yet: cannot be an input */
-    for (int i = 0; i < g->count; i++) {
-        if (g->nodes[i].kind != GK_READ) continue;
-        internal_graph_resolve_path(g, g->base_dir, g->nodes[i].path, frame, in, sizeof in);
-        if (realpath(in, rin) && !strcmp(rin, rout))
-            return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                               "node '%s': refusing to overwrite '%s', the input of read node '%s'",
-                               w->name, out, g->nodes[i].name);
-    }
     return NPRFX_OK;
 }
 
@@ -194,59 +185,6 @@ void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n)
         else
             snprintf(buf + len, n - len, "  %s%s%s\n", dir, sep, w->path);
     }
-}
-
-/* pattern relative to the output directory, as internal_graph_resolve_path places a frame's
- * file, with its frame tokens left in; appended to *list (NULL on no memory). */
-static int push_output(const nprfx_graph *g, const char *pattern, char ***list, int *count)
-{
-    if (!pattern || !pattern[0]) return 1;
-    const char *dir = g->out_dir;
-    int plain = pattern[0] == '/' || !dir || !dir[0] || !strcmp(dir, ".");
-    size_t n = strlen(pattern) + (plain ? 0 : strlen(dir) + 1) + 1;
-    char *path = malloc(n), **grown = realloc(*list, (size_t)(*count + 1) * sizeof *grown);
-    if (grown) *list = grown;
-    if (!path || !grown) {
-        free(path);
-        return 0;
-    }
-    if (plain)
-        snprintf(path, n, "%s", pattern);
-    else
-        snprintf(path, n, "%s/%s", dir, pattern);
-    grown[(*count)++] = path;
-    return 1;
-}
-
-nprfx_result nprfx_graph_output_patterns(const nprfx_graph *g, char ***paths, int *count)
-{
-    *paths = NULL;
-    *count = 0;
-    int ok = 1;
-    for (int i = 0; ok && i < g->count; i++) {
-        const gnode *n = &g->nodes[i];
-        if (n->kind == GK_WRITE) {
-            ok = push_output(g, n->path, paths, count) && push_output(g, n->preview, paths, count);
-            continue;
-        }
-        if (n->kind != GK_NODE || !n->desc->export_text) continue;
-        for (int k = 0; ok && k < n->desc->num_params; k++)
-            if (n->desc->params[k].flags & NPRFX_PARAM_EXPORT)
-                ok = push_output(g, n->params[k].s, paths, count);
-    }
-    if (ok) return NPRFX_OK;
-    nprfx_graph_output_patterns_free(*paths, *count);
-    *paths = NULL;
-    *count = 0;
-    return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
-                       "out of memory listing the graph's outputs");
-}
-
-void nprfx_graph_output_patterns_free(char **paths, int count)
-{
-    for (int i = 0; i < count; i++)
-        free(paths[i]);
-    free(paths);
 }
 
 long long nprfx_graph_take_render_items(nprfx_graph *g)

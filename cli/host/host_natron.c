@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "graph/graph_model.h"
 #include "host_project.h"
 #include "ofx_names.h"
 

@@ -5,6 +5,7 @@
  * script name with the graph's values; inputs are connected by clip label. */
 #include <string.h>
 
+#include "graph/graph_model.h"
 #include "host_project.h"
 #include "ofx_names.h"
 

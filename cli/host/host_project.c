@@ -7,8 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/channels.h"
+#include "graph/graph.h"
+#include "graph/graph_model.h"
+#include "graph/graph_resolve.h"
 #include "host_project.h"
+#include "io/channels.h"
 #include "io/io.h"
 #include "ofx_names.h"
 #include "util/cli_util.h"

@@ -8,7 +8,8 @@
 
 #include <stdio.h>
 
-#include "graph/internal_graph.h"
+#include "graph/graph.h"
+#include "graph/graph_model.h"
 
 #define NPRFX_HOST_NAME_MAX 96
 
