@@ -5,7 +5,6 @@
 #include <string.h>
 
 #include "bench_options.h"
-#include "util/cli_util.h"
 
 int cli_bench_option(int argc, char **argv, int *i, cli_bench_options *o)
 {

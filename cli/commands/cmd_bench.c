@@ -10,9 +10,9 @@
 #include "bench_floor.h"
 #include "bench_options.h"
 #include "cmd_shared.h"
-#include "util/cli_util.h"
 #include "commands.h"
 #include "graph/graph.h"
+#include "util/cli_util.h"
 
 static void usage(FILE *f)
 {

@@ -11,10 +11,10 @@
 
 #include "bench_options.h"
 #include "cmd_shared.h"
-#include "util/cli_util.h"
 #include "commands.h"
 #include "graph/graph.h"
 #include "io/io_limits.h"
+#include "util/cli_util.h"
 
 static void usage(FILE *f)
 {

@@ -15,6 +15,9 @@
 
 #include "commands.h"
 #include "io/io.h"
+#include "io/io_read.h"
+#include "io/io_write.h"
+#include "io/plate.h"
 #include "seq.h"
 
 enum { DIFF_PASS = 0, DIFF_WARN = 1, DIFF_FAIL = 2, DIFF_MISMATCH = 3, DIFF_FILE_ERROR = 4 };

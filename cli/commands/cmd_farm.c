@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "farm/farm.h"
+#include "util/cli_util.h"
 
 static const char *const engines[] = {"slurm"};
 

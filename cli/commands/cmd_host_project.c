@@ -4,9 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "util/cli_util.h"
 #include "commands.h"
+#include "graph/graph.h"
 #include "host/host_project.h"
+#include "util/cli_util.h"
 
 static void usage(FILE *f)
 {

@@ -8,6 +8,11 @@
 
 #include "commands.h"
 #include "io/io.h"
+#include "io/io_colour.h"
+#include "io/io_preview.h"
+#include "io/io_read.h"
+#include "io/io_write.h"
+#include "io/plate.h"
 
 /* Exit codes follow idiff: a file that cannot be read is 4. */
 enum { INFO_OK = 0, INFO_USAGE = 2, INFO_FILE_ERROR = 4 };

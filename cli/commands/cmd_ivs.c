@@ -10,11 +10,11 @@
 #include <string.h>
 #include <time.h>
 
-#include "util/cli_util.h"
 #include "commands.h"
-#include "io/io.h"
+#include "io/io_write.h"
 #include "nprfx/ivs.h"
 #include "nprfx/nprfx.h"
+#include "util/cli_util.h"
 
 /* Exit status: 0 done (and, with --check, every spacing bound held), 1 a file or data error, or
  * a spacing bound failed, 2 usage error. */

@@ -7,9 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "util/cli_util.h"
 #include "commands.h"
 #include "io/io.h"
+#include "io/io_read.h"
+#include "io/plate.h"
 #include "nprfx/metrics.h"
 #include "seq.h"
 

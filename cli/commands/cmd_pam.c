@@ -10,10 +10,15 @@
 #include <string.h>
 #include <time.h>
 
-#include "util/cli_util.h"
 #include "commands.h"
 #include "io/io.h"
+#include "io/io_colour.h"
+#include "io/io_preview.h"
+#include "io/io_read.h"
+#include "io/io_write.h"
+#include "io/plate.h"
 #include "nprfx/pam.h"
+#include "util/cli_util.h"
 
 /* Exit status: 0 done, 1 a file or data error (a file that is not a valid PAM), 2 usage. */
 enum { PAM_OK = 0, PAM_FAILED = 1, PAM_USAGE = 2 };

@@ -6,10 +6,10 @@
 #include <unistd.h>
 
 #include "cmd_shared.h"
-#include "util/cli_util.h"
 #include "commands.h"
 #include "graph/graph.h"
 #include "io/output_lock.h"
+#include "util/cli_util.h"
 
 static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
 {

@@ -3,6 +3,7 @@
 #include <stdio.h>
 
 #include "cmd_shared.h"
+#include "graph/graph.h"
 #include "io/io_limits.h"
 #include "util/cli_util.h"
 

@@ -6,11 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "util/cli_util.h"
 #include "commands.h"
 #include "io/io.h"
 #include "io/io_limits.h"
+#include "io/io_write.h"
 #include "seq.h"
+#include "util/cli_util.h"
 
 /* Exit status: 0 written, 1 render or write error, 2 usage error. */
 enum { SYNTH_OK = 0, SYNTH_FAILED = 1, SYNTH_USAGE = 2 };

@@ -9,8 +9,8 @@
 
 #include <stdio.h>
 
-#include "util/cli_util.h"
 #include "graph/graph.h"
+#include "util/cli_util.h"
 
 /* What every chunk's `nprfx run` gets besides its frames, and the shot as a whole. */
 typedef struct nprfx_farm_job {

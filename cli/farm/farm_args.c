@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include "farm.h"
+#include "graph/graph.h"
+#include "util/cli_util.h"
 
 void nprfx_farm_job_free(nprfx_farm_job *job)
 {

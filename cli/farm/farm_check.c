@@ -8,8 +8,12 @@
 #include <sys/stat.h>
 
 #include "farm.h"
+#include "graph/graph.h"
 #include "io/io.h"
+#include "io/io_read.h"
 #include "io/output_lock.h"
+#include "io/plate.h"
+#include "util/cli_util.h"
 
 static void usage(FILE *f)
 {

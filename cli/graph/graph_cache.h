@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_CACHE_H
 #define NPRFX_CLI_GRAPH_CACHE_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* Remove entry e (unpinned) from the cache and release its frame. */

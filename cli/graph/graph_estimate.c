@@ -13,6 +13,8 @@
 #include "graph_strips.h"
 #include "io/io.h"
 #include "io/io_limits.h"
+#include "io/io_read.h"
+#include "io/plate.h"
 #include "util/cli_util.h"
 
 

@@ -18,7 +18,7 @@
 #include "graph_read.h"
 #include "graph_resolve.h"
 #include "graph_variant.h"
-#include "io/io.h"
+#include "io/io_write.h"
 #include "util/cli_util.h"
 
 

@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_EVAL_H
 #define NPRFX_CLI_GRAPH_EVAL_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* The view of the channels of entry e that input k of node n uses: e's pixels when they are

@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_FILES_H
 #define NPRFX_CLI_GRAPH_FILES_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* Write node w would overwrite one of the graph's inputs at frame with out: the error. */

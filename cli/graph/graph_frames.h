@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_FRAMES_H
 #define NPRFX_CLI_GRAPH_FRAMES_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* The bytes of im's pixels. */

@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_MEMORY_H
 #define NPRFX_CLI_GRAPH_MEMORY_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* A zeroed frame of bounds x channels for node (its output or a scratch), from the pool, after

@@ -6,8 +6,8 @@
 
 #include <stdint.h>
 
+#include "frame_pool.h"
 #include "graph.h"
-#include "io/io.h"
 #include "nprfx/nprfx.h"
 
 typedef enum gkind { GK_NODE, GK_READ, GK_SYNTH, GK_WRITE } gkind;

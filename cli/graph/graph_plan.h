@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_PLAN_H
 #define NPRFX_CLI_GRAPH_PLAN_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* The consumer counts and temporal sources, made once. */

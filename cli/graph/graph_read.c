@@ -15,6 +15,9 @@
 #include "graph_variant.h"
 #include "io/channels.h"
 #include "io/io.h"
+#include "io/io_colour.h"
+#include "io/io_read.h"
+#include "io/plate.h"
 #include "util/cli_util.h"
 
 

@@ -2,7 +2,10 @@
 #ifndef NPRFX_CLI_GRAPH_READ_H
 #define NPRFX_CLI_GRAPH_READ_H
 
+#include "graph.h"
 #include "graph_model.h"
+#include "io/io.h"
+#include "io/io_read.h"
 
 /* Read node `node` at frame into a plate of its own (im, names, meta): the channels the graph
  * uses, the motion channels its convention appends, converted to scene-linear. */

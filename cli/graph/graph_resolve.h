@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_RESOLVE_H
 #define NPRFX_CLI_GRAPH_RESOLVE_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* Copies of n channel names (NULL names become "C"). */

@@ -24,6 +24,9 @@
 #include "graph_resolve.h"
 #include "graph_strips.h"
 #include "io/io.h"
+#include "io/io_read.h"
+#include "io/io_write.h"
+#include "io/plate.h"
 #include "util/cli_util.h"
 
 /* One node of the chain, as a strip render needs it. */

@@ -2,6 +2,7 @@
 #ifndef NPRFX_CLI_GRAPH_VARIANT_H
 #define NPRFX_CLI_GRAPH_VARIANT_H
 
+#include "graph.h"
 #include "graph_model.h"
 
 /* NPRFX_VARIANT_SHOWER_DOOR: alter a plate just read. */

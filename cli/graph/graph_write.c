@@ -24,6 +24,8 @@
 #include "graph_strips.h"
 #include "io/channels.h"
 #include "io/io.h"
+#include "io/io_preview.h"
+#include "io/io_write.h"
 #include "nprfx/nprfx.h"
 #include "seq.h"
 #include "util/cli_util.h"

@@ -13,6 +13,8 @@
 #include "host_project.h"
 #include "io/channels.h"
 #include "io/io.h"
+#include "io/io_read.h"
+#include "io/plate.h"
 #include "ofx_names.h"
 #include "util/cli_util.h"
 

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "io.h"
+#include "plate.h"
 
 static void free_names(char **names, int n)
 {
