@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include "commands.h"
-#include "farm/farm.h"
+#include "farm/farm_args.h"
+#include "farm/farm_check.h"
+#include "farm/farm_slurm.h"
 #include "util/cli_util.h"
 
 static const char *const engines[] = {"slurm"};

@@ -6,6 +6,9 @@
 
 #include "commands.h"
 #include "graph/graph.h"
+#include "host/host_natron.h"
+#include "host/host_natron_py.h"
+#include "host/host_nuke.h"
 #include "host/host_project.h"
 #include "util/cli_util.h"
 

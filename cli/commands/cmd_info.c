@@ -13,6 +13,7 @@
 #include "io/io_read.h"
 #include "io/io_write.h"
 #include "io/plate.h"
+#include "io_check.h"
 
 /* Exit codes follow idiff: a file that cannot be read is 4. */
 enum { INFO_OK = 0, INFO_USAGE = 2, INFO_FILE_ERROR = 4 };

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cmd_measure_flow.h"
 #include "commands.h"
 #include "graph/graph.h"
 #include "graph/graph_eval.h"

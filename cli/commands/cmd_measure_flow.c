@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "commands.h"
+#include "cmd_measure_flow.h"
 #include "io/io.h"
 #include "io/io_read.h"
 #include "io/plate.h"

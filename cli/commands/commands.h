@@ -13,8 +13,6 @@ int nprfx_cmd_list(int argc, char **argv);
 int nprfx_cmd_help(int argc, char **argv);
 int nprfx_cmd_run(int argc, char **argv);
 int nprfx_cmd_info(int argc, char **argv);
-/* nprfx info --io-test damaged LIST: one verdict a file (cli/io_check.c). */
-int nprfx_io_check_damaged(const char *list);
 int nprfx_cmd_diff(int argc, char **argv);
 int nprfx_cmd_synth(int argc, char **argv);
 int nprfx_cmd_bench(int argc, char **argv);
@@ -22,7 +20,6 @@ int nprfx_cmd_bench_graph(int argc, char **argv);
 int nprfx_cmd_docs(int argc, char **argv);
 int nprfx_cmd_ivs(int argc, char **argv);
 int nprfx_cmd_measure(int argc, char **argv);
-int nprfx_cmd_measure_flow(int argc, char **argv); /* nprfx measure flow */
 int nprfx_cmd_host_project(int argc, char **argv);
 int nprfx_cmd_pam(int argc, char **argv);
 int nprfx_cmd_farm(int argc, char **argv);

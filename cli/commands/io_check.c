@@ -15,10 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "commands.h"
 #include "io/io.h"
 #include "io/io_read.h"
 #include "io/plate.h"
+#include "io_check.h"
 #include "util/cli_util.h"
 
 /* Printable ASCII or UTF-8 bytes at or above 0x80; no control characters. */

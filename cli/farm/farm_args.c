@@ -8,7 +8,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "farm.h"
+#include "farm_args.h"
 #include "graph/graph.h"
 #include "util/cli_util.h"
 

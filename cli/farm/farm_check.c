@@ -7,7 +7,8 @@
 #include <strings.h>
 #include <sys/stat.h>
 
-#include "farm.h"
+#include "farm_args.h"
+#include "farm_check.h"
 #include "graph/graph.h"
 #include "io/io.h"
 #include "io/io_read.h"

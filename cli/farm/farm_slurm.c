@@ -8,7 +8,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "farm.h"
+#include "farm_args.h"
+#include "farm_slurm.h"
 
 /* Create dir and its missing parents. */
 static int make_dirs(const char *dir)

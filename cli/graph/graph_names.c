@@ -7,7 +7,6 @@
 #include <string.h>
 
 #include "graph.h"
-#include "graph_model.h"
 #include "graph_names.h"
 
 static uint64_t name_hash(const char *s)

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "graph/graph_model.h"
+#include "host_natron_py.h"
 #include "host_project.h"
 #include "ofx_names.h"
 

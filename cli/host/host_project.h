@@ -85,11 +85,4 @@ int nprfx_host_param_changed(const gnode *n, int i);
 /* A double in the fewest digits that read back as the same value (0.05, not 0.0500...03). */
 char *nprfx_host_double(double v, char *buf, size_t n);
 
-/* The writers: 0 on success, else an error raised on hp->g's context. */
-nprfx_result nprfx_host_write_natron(const nprfx_host_project *hp, FILE *f);
-/* out_file: the script's path, whose folder names it looks for when Natron gives no __file__. */
-nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f,
-                                        const char *out_file);
-nprfx_result nprfx_host_write_nuke(const nprfx_host_project *hp, FILE *f);
-
 #endif

@@ -2,6 +2,7 @@
  * OpenEXRCore checks of io_validate.c, other formats by their header's size through OpenImageIO,
  * and the per-thread read deadline. C++ only because OpenImageIO is; like io_oiio.cpp, every
  * entry point is extern "C" and catches every exception. */
+#include "io_guard.h"
 #include "io_validate.h"
 #include "util/cli_util.h"
 

@@ -2,8 +2,6 @@
  * windows, the channels a group of parts delivers under plate-unique names, and the choice of
  * parts and view (docs/design.md §2.3). */
 #include "io_parts.h"
-#include "io_limits.h"
-#include "io_validate.h"
 
 extern "C" {
 #include "channels.h"

@@ -2,7 +2,9 @@
 #ifndef NPRFX_CLI_IO_PREVIEW_H
 #define NPRFX_CLI_IO_PREVIEW_H
 
-#include "io.h"
+#include <stddef.h>
+
+#include "nprfx/image.h"
 
 #ifdef __cplusplus
 extern "C" {

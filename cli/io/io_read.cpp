@@ -3,14 +3,10 @@
  * extern "C", catches every exception (a C caller cannot unwind through it) and reports through
  * nprfx_error, naming the file and, where one is at fault, the channel. */
 #include "io_read.h"
+#include "io_guard.h"
 #include "io_limits.h"
 #include "io_parts.h"
-#include "io_validate.h"
 #include "plate.h"
-
-extern "C" {
-#include "channels.h"
-}
 
 #include <algorithm>
 #include <atomic>

@@ -9,14 +9,13 @@
 #ifndef NPRFX_CLI_IO_VALIDATE_H
 #define NPRFX_CLI_IO_VALIDATE_H
 
-#include <stdbool.h>
-
 #include "nprfx/nprfx.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/* How far the checks go (io_guard.h's nprfx_io_guard takes the same modes). */
 typedef enum nprfx_io_guard_mode {
     /* Header facts only (nprfx info, attributes): structure and names, no memory bound. */
     NPRFX_GUARD_HEADER = 0,
@@ -27,12 +26,6 @@ typedef enum nprfx_io_guard_mode {
     NPRFX_GUARD_READ_CHOSEN = 2
 } nprfx_io_guard_mode;
 
-/* The guard every io.h reader calls first. EXR files (by their magic number) go through
- * nprfx_io_validate_exr; other formats have their header's size checked through OpenImageIO in
- * NPRFX_GUARD_READ mode. A file that cannot be opened passes: the reader reports that itself.
- * Also arms this thread's read deadline (nprfx_io_deadline_passed). */
-nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int mode);
-
 /* The EXR checks: header parse, parts, windows, channel names and count, tile sizes, chunk
  * counts and every chunk's place against the file's size and a plausible compression ratio, and
  * in NPRFX_GUARD_READ mode the decoded size. deadline: cli_now() time after which the
@@ -41,14 +34,6 @@ nprfx_result nprfx_io_validate_exr(nprfx_context *ctx, const char *path, int mod
 
 /* 1 when the file begins with the EXR magic number. */
 int nprfx_io_is_exr(const char *path);
-
-/* The read deadline of this thread, armed by nprfx_io_guard from NPRFX_READ_TIMEOUT: non-zero
- * once it has passed. nprfx_io_read_progress has OpenImageIO's ProgressCallback signature
- * (returns true to stop a read_image). */
-int nprfx_io_deadline_passed(void);
-bool nprfx_io_read_progress(void *user, float done);
-/* The message for a read stopped by the deadline, naming the file. */
-nprfx_result nprfx_io_deadline_error(nprfx_context *ctx, const char *path);
 
 #ifdef __cplusplus
 }

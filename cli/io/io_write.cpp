@@ -3,7 +3,6 @@
  * and a rename. Every entry point is extern "C", catches every exception and reports through
  * nprfx_error. */
 #include "io_write.h"
-#include "io_limits.h"
 #include "io_parts.h"
 
 #include <algorithm>

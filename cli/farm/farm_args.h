@@ -3,9 +3,10 @@
  * cmd_farm.c checks the request and the graph and splits the frames into chunks; an engine
  * (farm_slurm.c) writes the job files that run `nprfx run GRAPH --frames CHUNK` once per chunk and
  * then `nprfx farm check` (farm_check.c) once all chunks have ended. farm_args.c holds what they
- * share: the graph loaded as every chunk loads it, and the chunk command, quoted for a shell. */
-#ifndef NPRFX_CLI_FARM_H
-#define NPRFX_CLI_FARM_H
+ * share: the graph loaded as every chunk loads it, and the chunk command, quoted for a shell; this
+ * header declares them. */
+#ifndef NPRFX_CLI_FARM_ARGS_H
+#define NPRFX_CLI_FARM_ARGS_H
 
 #include <stdio.h>
 
@@ -59,19 +60,5 @@ int nprfx_farm_prepare(cli_env *env, const char *cmd, const nprfx_farm_graph_arg
 
 /* A frame list as one spec: ascending runs as "A-B", joined by ','; malloc'd. */
 char *nprfx_farm_frames_spec(const int *frames, int count);
-
-/* The Slurm engine (farm_slurm.c). */
-typedef struct nprfx_farm_slurm {
-    const char *name, *partition, *time, *mem;
-    int cpus, retries;
-} nprfx_farm_slurm;
-/* Write DIR/render.sbatch (the array job, one task a chunk), DIR/check.sbatch (nprfx farm check)
- * and DIR/submit.sh (both, the check after the array); DIR/logs/ receives the logs. 0 or 1. */
-int nprfx_farm_slurm_emit(const nprfx_farm_job *job, const nprfx_farm_slurm *opt, const char *dir);
-/* Submit what nprfx_farm_slurm_emit wrote to dir through sbatch and print the job ids. 0 or 1. */
-int nprfx_farm_slurm_submit(const nprfx_farm_job *job, const char *dir);
-
-/* nprfx farm check (argv[0] is "check"). */
-int nprfx_farm_check(int argc, char **argv);
 
 #endif
