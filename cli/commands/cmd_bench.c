@@ -39,7 +39,7 @@ static void usage(FILE *f)
         "      --set mode=radius\n");
 }
 
-int nprfx_cmd_bench(int argc, char **argv)
+int cli_cmd_bench(int argc, char **argv)
 {
     const char *node_id = NULL, *connects[32];
     int nconn = 0;

@@ -50,7 +50,7 @@ static void seconds_by_kind(nprfx_graph *g, double sec[4])
         sec[st[i].kind & 3] += st[i].seconds;
 }
 
-int nprfx_cmd_bench_graph(int argc, char **argv)
+int cli_cmd_bench_graph(int argc, char **argv)
 {
     const char *path = NULL, *write_dir = NULL;
     int stats = 0;
@@ -84,7 +84,7 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
     int w, h;
     if (cli_bench_size("bench-graph", &o, &w, &h)) return 2;
     uint64_t limit_bytes = 0;
-    if (mem_limit && nprfx_parse_size(mem_limit, &limit_bytes)) {
+    if (mem_limit && cli_parse_size(mem_limit, &limit_bytes)) {
         fprintf(stderr,
                 "nprfx bench-graph: --mem-limit '%s' is not a size (e.g. 8G, 512M, or 0 "
                 "for none)\n",
@@ -103,7 +103,7 @@ int nprfx_cmd_bench_graph(int argc, char **argv)
     memset(&plan, 0, sizeof plan);
     /* The limit applies to the graph at --size, not at the size its file names. */
     if (nprfx_graph_load(env.ctx, path, &opt, &g) || nprfx_graph_set_shot(g, shot) ||
-        (mem_limit && (nprfx_mem_limit_set(limit_bytes), 0)) ||
+        (mem_limit && (cli_mem_limit_set(limit_bytes), 0)) ||
         nprfx_graph_synthesize_reads(g, w, h, scene)) {
         fprintf(stderr, "nprfx bench-graph: %s\n", nprfx_cli_message(env.ctx));
         status = 2;

@@ -147,16 +147,16 @@ static void free_list(char **v, int n)
 
 /* Pick the channels to compare: idx_a[i] in A pairs with idx_b[i] in B. Returns the count, or -1
  * after printing why (a mismatch). */
-static int match_channels(const nprfx_plate *a, const nprfx_plate *b, const char *pa,
-                          const char *pb, const char *list, int *idx_a, int *idx_b, FILE *rep)
+static int match_channels(const cli_plate *a, const cli_plate *b, const char *pa, const char *pb,
+                          const char *list, int *idx_a, int *idx_b, FILE *rep)
 {
     if (list) {
         char **names;
         int n = parse_list(list, &names);
         if (n < 0) return -1;
         for (int i = 0; i < n; i++) {
-            idx_a[i] = nprfx_plate_channel(a, names[i]);
-            idx_b[i] = nprfx_plate_channel(b, names[i]);
+            idx_a[i] = cli_plate_channel(a, names[i]);
+            idx_b[i] = cli_plate_channel(b, names[i]);
             if (idx_a[i] < 0 || idx_b[i] < 0) {
                 fprintf(stderr, "nprfx diff: channel '%s' is not in '%s'\n", names[i],
                         idx_a[i] < 0 ? pa : pb);
@@ -175,7 +175,7 @@ static int match_channels(const nprfx_plate *a, const nprfx_plate *b, const char
     int by_name = 1;
     for (int i = 0; i < a->nchannels; i++) {
         idx_a[i] = i;
-        idx_b[i] = nprfx_plate_channel(b, a->names[i]);
+        idx_b[i] = cli_plate_channel(b, a->names[i]);
         if (idx_b[i] < 0) by_name = 0;
     }
     if (!by_name) {
@@ -188,7 +188,7 @@ static int match_channels(const nprfx_plate *a, const nprfx_plate *b, const char
 }
 
 /* Read pixel (x, y) channel c, 0 outside the data window (the EXR meaning of "no data"). */
-static float sample(const nprfx_plate *p, int x, int y, int c)
+static float sample(const cli_plate *p, int x, int y, int c)
 {
     if (!nprfx_rect_contains(p->bounds, x, y)) return 0.0f;
     size_t w = (size_t)nprfx_rect_width(p->bounds);
@@ -210,11 +210,11 @@ static int compare_files(nprfx_context *ctx, const char *pa, const char *pb, con
 {
     memset(sum, 0, sizeof *sum);
     sum->status = DIFF_FILE_ERROR;
-    nprfx_plate a, b;
+    cli_plate a, b;
     memset(&b, 0, sizeof b);
-    if (nprfx_io_read(ctx, pa, &a)) return sum->status;
-    if (nprfx_io_read(ctx, pb, &b)) {
-        nprfx_plate_free(&a);
+    if (cli_io_read(ctx, pa, &a)) return sum->status;
+    if (cli_io_read(ctx, pb, &b)) {
+        cli_plate_free(&a);
         return sum->status;
     }
     int *idx_a = NULL, *idx_b = NULL, n = -1;
@@ -329,8 +329,8 @@ static int compare_files(nprfx_context *ctx, const char *pa, const char *pb, con
         if (!names) goto oom;
         for (int i = 0; i < n; i++)
             names[i] = a.names[idx_a[i]];
-        nprfx_write_options wo = {sizeof wo, "zip", 0};
-        nprfx_result wr = nprfx_io_write(ctx, out_path, &diff, names, &a.display, &wo);
+        cli_write_options wo = {sizeof wo, "zip", 0};
+        nprfx_result wr = cli_io_write(ctx, out_path, &diff, names, &a.display, &wo);
         free(names);
         if (wr) {
             sum->status = DIFF_FILE_ERROR;
@@ -347,8 +347,8 @@ done:
     free(cs);
     free(idx_a);
     free(idx_b);
-    nprfx_plate_free(&a);
-    nprfx_plate_free(&b);
+    cli_plate_free(&a);
+    cli_plate_free(&b);
     return sum->status;
 }
 
@@ -468,7 +468,7 @@ static int parse_number(const char *opt, const char *s, double *v)
     return 1;
 }
 
-int nprfx_cmd_diff(int argc, char **argv)
+int cli_cmd_diff(int argc, char **argv)
 {
     diff_options o = {1e-6, 0.0, INFINITY, 1e-6, 0.0, INFINITY, 1.0, NULL, 0, NULL, NULL, 0};
     const char *files[2];

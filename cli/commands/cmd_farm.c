@@ -85,12 +85,12 @@ static int positive(const char *s)
     return *s && !*end && v >= 1 && v < 1000000000 ? (int)v : -1;
 }
 
-int nprfx_cmd_farm(int argc, char **argv)
+int cli_cmd_farm(int argc, char **argv)
 {
-    if (argc > 1 && !strcmp(argv[1], "check")) return nprfx_farm_check(argc - 1, argv + 1);
-    nprfx_farm_graph_args ga;
+    if (argc > 1 && !strcmp(argv[1], "check")) return farm_check(argc - 1, argv + 1);
+    farm_graph_args ga;
     memset(&ga, 0, sizeof ga);
-    nprfx_farm_slurm so = {NULL, NULL, NULL, NULL, 1, 0};
+    farm_slurm so = {NULL, NULL, NULL, NULL, 1, 0};
     const char *engine = "slurm", *emit = NULL, *chunk_text = "10";
     int submit = 0;
     for (int i = 1; i < argc; i++) {
@@ -101,7 +101,7 @@ int nprfx_cmd_farm(int argc, char **argv)
             return 0;
         } else if (!strcmp(a, "--submit"))
             submit = 1;
-        else if ((took = nprfx_farm_take_graph_arg(&ga, a, next)) > 0)
+        else if ((took = farm_take_graph_arg(&ga, a, next)) > 0)
             i += took - 1;
         else if (!next) {
             fprintf(stderr, "nprfx farm: unexpected argument '%s'\n\n", a);
@@ -173,8 +173,8 @@ int nprfx_cmd_farm(int argc, char **argv)
     }
     cli_env env;
     if (cli_env_init(&env, 1)) return 1;
-    nprfx_farm_job job;
-    int status = nprfx_farm_prepare(&env, "farm", &ga, chunk, 1, &job, NULL);
+    farm_job job;
+    int status = farm_prepare(&env, "farm", &ga, chunk, 1, &job, NULL);
     cli_env_free(&env);
     if (status) return status;
     if (job.nchunks > 1000)
@@ -190,8 +190,8 @@ int nprfx_cmd_farm(int argc, char **argv)
         base = base ? base + 1 : job.graph;
         snprintf(dir, sizeof dir, "nprfx-farm.%.*s", (int)strcspn(base, "."), base);
     }
-    status = nprfx_farm_slurm_emit(&job, &so, dir);
-    if (!status && submit) status = nprfx_farm_slurm_submit(&job, dir);
-    nprfx_farm_job_free(&job);
+    status = farm_slurm_emit(&job, &so, dir);
+    if (!status && submit) status = farm_slurm_submit(&job, dir);
+    farm_job_free(&job);
     return status;
 }

@@ -54,8 +54,8 @@ static int write_one(nprfx_graph *g, const char *graph, out_kind kind, const cha
         *slash = 0;
     else
         snprintf(dir, sizeof dir, ".");
-    nprfx_host_project hp;
-    if (nprfx_host_project_build(g, graph, dir, path, &hp)) {
+    host_project hp;
+    if (host_project_build(g, graph, dir, path, &hp)) {
         fprintf(stderr, "nprfx host-project: %s\n", nprfx_cli_message(env->ctx));
         return 2;
     }
@@ -63,13 +63,13 @@ static int write_one(nprfx_graph *g, const char *graph, out_kind kind, const cha
     FILE *f = fopen(tmp, "w");
     if (!f) {
         fprintf(stderr, "nprfx host-project: cannot write %s\n", tmp);
-        nprfx_host_project_free(&hp);
+        host_project_free(&hp);
         return 2;
     }
-    nprfx_result r = kind == OUT_NATRON      ? nprfx_host_write_natron(&hp, f)
-                     : kind == OUT_NATRON_PY ? nprfx_host_write_natron_py(&hp, f, path)
-                                             : nprfx_host_write_nuke(&hp, f);
-    nprfx_host_project_free(&hp);
+    nprfx_result r = kind == OUT_NATRON      ? host_write_natron(&hp, f)
+                     : kind == OUT_NATRON_PY ? host_write_natron_py(&hp, f, path)
+                                             : host_write_nuke(&hp, f);
+    host_project_free(&hp);
     if (fclose(f) || r || rename(tmp, path)) {
         if (r)
             fprintf(stderr, "nprfx host-project: %s\n", nprfx_cli_message(env->ctx));
@@ -81,7 +81,7 @@ static int write_one(nprfx_graph *g, const char *graph, out_kind kind, const cha
     return 0;
 }
 
-int nprfx_cmd_host_project(int argc, char **argv)
+int cli_cmd_host_project(int argc, char **argv)
 {
     const char *graph = NULL, *outs[3] = {NULL, NULL, NULL};
     const char *sets[256];

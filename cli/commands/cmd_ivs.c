@@ -1,7 +1,7 @@
 /* nprfx ivs — generate, write and check the compact IVS sequence file (nprfx/ivs.h).
  *
  * The core generates and encodes the sequence in memory; this command writes the bytes (through
- * a temporary name and a rename, nprfx_io_write_text) and, with --check, reads a file back,
+ * a temporary name and a rename, cli_io_write_text) and, with --check, reads a file back,
  * decodes and validates it and measures its spacing. */
 #include <errno.h>
 #include <math.h>
@@ -66,7 +66,7 @@ static int generate(nprfx_context *ctx, long long n, unsigned long long seed, co
     double t0 = cli_now();
     if (nprfx_ivs_generate(ctx, seed, (int)n, xy, NULL) != NPRFX_OK ||
         nprfx_ivs_encode(ctx, seed, (int)n, xy, buf, size) != NPRFX_OK ||
-        nprfx_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
+        cli_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
         fprintf(stderr, "nprfx ivs: %s\n", nprfx_cli_message(ctx));
         status = IVS_FAILED;
         goto done;
@@ -232,7 +232,7 @@ static int check(nprfx_context *ctx, const char *path)
     return status;
 }
 
-int nprfx_cmd_ivs(int argc, char **argv)
+int cli_cmd_ivs(int argc, char **argv)
 {
     const char *out = NULL, *check_path = NULL, *count_text = NULL, *seed_text = NULL;
     for (int i = 1; i < argc; i++) {

@@ -96,8 +96,8 @@ static nprfx_result take(nprfx_graph *g, const char *spec, int frame, int want_l
     if (colon) {
         char bad[128];
         int amb = 0;
-        n = nprfx_channels_select((const char *const *)e->names, e->im.channels, colon + 1, idx,
-                                  NPRFX_MAX_CHANNELS, bad, sizeof bad, &amb);
+        n = cli_channels_select((const char *const *)e->names, e->im.channels, colon + 1, idx,
+                                NPRFX_MAX_CHANNELS, bad, sizeof bad, &amb);
         if (n < 1)
             return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "'%s': '%s' %s in node '%s'", spec,
                                bad, amb ? "matches several channels" : "is not a channel", name);
@@ -358,10 +358,10 @@ done:
     return status;
 }
 
-int nprfx_cmd_measure(int argc, char **argv)
+int cli_cmd_measure(int argc, char **argv)
 {
     /* `nprfx measure flow`: an optical flow sequence against exact motion (cmd_measure_flow.c). */
-    if (argc > 1 && !strcmp(argv[1], "flow")) return nprfx_cmd_measure_flow(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "flow")) return cli_cmd_measure_flow(argc - 1, argv + 1);
     measure_opts o;
     memset(&o, 0, sizeof o);
     for (int i = 1; i < argc; i++) {

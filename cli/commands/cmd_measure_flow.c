@@ -39,19 +39,19 @@ static void print_error(void *user, const nprfx_context *ctx, nprfx_result code,
 }
 
 /* Frame `frame` of pattern, with the channels named (each must exist) as views. */
-static int load(nprfx_context *ctx, const char *pattern, int frame, nprfx_plate *p,
+static int load(nprfx_context *ctx, const char *pattern, int frame, cli_plate *p,
                 const char *const *names, int n, nprfx_image *views)
 {
     char path[4096];
-    if (nprfx_seq_expand(ctx, pattern, frame, path, sizeof path) || nprfx_io_read(ctx, path, p))
+    if (nprfx_seq_expand(ctx, pattern, frame, path, sizeof path) || cli_io_read(ctx, path, p))
         return 1;
     for (int i = 0; i < n; i++) {
-        int c = nprfx_plate_channel(p, names[i]);
+        int c = cli_plate_channel(p, names[i]);
         if (c < 0) {
             fprintf(stderr, "nprfx measure flow: %s has no channel %s\n", path, names[i]);
             return 1;
         }
-        views[i] = nprfx_plate_view(p, c, 1);
+        views[i] = cli_plate_view(p, c, 1);
     }
     return 0;
 }
@@ -65,7 +65,7 @@ static int pair_view(const nprfx_image *x, const nprfx_image *y, nprfx_image *ou
     return 0;
 }
 
-int nprfx_cmd_measure_flow(int argc, char **argv)
+int cli_cmd_measure_flow(int argc, char **argv)
 {
     const char *est = NULL, *truth = NULL, *frames = NULL;
     double thr = 0.5;
@@ -113,7 +113,7 @@ int nprfx_cmd_measure_flow(int argc, char **argv)
         for (int j = 0; j < fl.count; j++)
             has_prev |= fl.frames[j] == t - 1;
         if (!has_prev) continue;
-        nprfx_plate pe = {0}, pt = {0}, pp = {0};
+        cli_plate pe = {0}, pt = {0}, pp = {0};
         nprfx_image ve[3], vt[5], vp[5], ef, tf, tn, vis = {0};
         if (load(ctx, est, t, &pe, est_names, 3, ve) ||
             load(ctx, truth, t, &pt, truth_names, 5, vt) ||
@@ -144,9 +144,9 @@ int nprfx_cmd_measure_flow(int argc, char **argv)
             measured++;
         }
         nprfx_image_free(&vis);
-        nprfx_plate_free(&pe);
-        nprfx_plate_free(&pt);
-        nprfx_plate_free(&pp);
+        cli_plate_free(&pe);
+        cli_plate_free(&pt);
+        cli_plate_free(&pp);
     }
     if (status == MF_OK && !measured) {
         fprintf(stderr, "nprfx measure flow: no frame of '%s' has its previous frame there\n",

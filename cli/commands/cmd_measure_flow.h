@@ -3,6 +3,6 @@
 #define NPRFX_CLI_CMD_MEASURE_FLOW_H
 
 /* nprfx measure flow: argv[0] is "flow". */
-int nprfx_cmd_measure_flow(int argc, char **argv);
+int cli_cmd_measure_flow(int argc, char **argv);
 
 #endif

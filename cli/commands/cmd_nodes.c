@@ -187,7 +187,7 @@ static void print_node(FILE *f, const nprfx_node_desc *d, int md)
     free(defs);
 }
 
-int nprfx_cmd_list(int argc, char **argv)
+int cli_cmd_list(int argc, char **argv)
 {
     if (argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
         printf("usage: nprfx list\n\nLists every node: id, group and the first line of its help.\n"
@@ -208,7 +208,7 @@ int nprfx_cmd_list(int argc, char **argv)
     return 0;
 }
 
-int nprfx_cmd_help(int argc, char **argv)
+int cli_cmd_help(int argc, char **argv)
 {
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
         printf("usage: nprfx help NODE\n\nDocuments a node: what it does, its inputs with the AOV "
@@ -225,7 +225,7 @@ int nprfx_cmd_help(int argc, char **argv)
     return 0;
 }
 
-int nprfx_cmd_docs(int argc, char **argv)
+int cli_cmd_docs(int argc, char **argv)
 {
     const char *out = NULL;
     for (int i = 1; i < argc; i++) {

@@ -124,13 +124,13 @@ static void graph_notice(void *user, const char *message)
 
 /* Lock every sequence g writes before its first frame (output_lock.h). */
 static nprfx_result lock_outputs(nprfx_context *ctx, nprfx_graph *g, const char *graph_path,
-                                 const run_opts *ro, nprfx_output_locks **locks)
+                                 const run_opts *ro, cli_output_locks **locks)
 {
     char **paths;
     int n;
     nprfx_result r = nprfx_graph_output_patterns(g, &paths, &n);
     if (r) return r;
-    r = (ro->shared_lock ? nprfx_output_locks_take_shared : nprfx_output_locks_take)(
+    r = (ro->shared_lock ? cli_output_locks_take_shared : cli_output_locks_take)(
         ctx, (const char *const *)paths, n, graph_path, ro->wait, lock_notice, (void *)ro, locks);
     nprfx_graph_output_patterns_free(paths, n);
     return r;
@@ -147,7 +147,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     int nsets = ro->nsets, keep_going = ro->keep_going, quiet = ro->quiet;
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
-    nprfx_output_locks *locks = NULL;
+    cli_output_locks *locks = NULL;
     int status = 0;
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
         fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
@@ -251,13 +251,13 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     }
     if (ro->stats) cli_print_stats(stdout, g, fl.count, &plan);
 done:
-    nprfx_output_locks_release(locks);
+    cli_output_locks_release(locks);
     nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
     return status;
 }
 
-int nprfx_cmd_run(int argc, char **argv)
+int cli_cmd_run(int argc, char **argv)
 {
     return nprfx_cmd_run_extended(argc, argv, NULL);
 }

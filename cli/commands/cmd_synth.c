@@ -124,7 +124,7 @@ static void usage(FILE *f)
             "example: nprfx synth orbit --frames 1-48 --size 512x512 -o plates/orbit.####.exr\n");
 }
 
-int nprfx_cmd_synth(int argc, char **argv)
+int cli_cmd_synth(int argc, char **argv)
 {
     const char *scene = NULL, *out = NULL, *frames_spec = "1", *size = "256x256";
     const char *compression = NULL;
@@ -191,9 +191,8 @@ int nprfx_cmd_synth(int argc, char **argv)
     cli_env env;
     if (cli_env_init(&env, threads)) return SYNTH_FAILED;
     /* Refused before anything is allocated, with the size and the limit (NPRFX_READ_LIMIT). */
-    if (nprfx_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
-                                nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0),
-                                0)) {
+    if (cli_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
+                              nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0), 0)) {
         fprintf(stderr, "%s\n", nprfx_cli_message(env.ctx));
         cli_env_free(&env);
         return SYNTH_USAGE;
@@ -231,14 +230,14 @@ int nprfx_cmd_synth(int argc, char **argv)
     }
     const nprfx_image *written = blender ? &packed : &im;
     const char *const *names = blender ? bnames : nprfx_synth_channel_names();
-    nprfx_write_options opt = {sizeof opt, compression, half};
+    cli_write_options opt = {sizeof opt, compression, half};
     for (int i = 0; i < frames.count; i++) {
         int frame = frames.frames[i];
         char path[4096];
         if (nprfx_seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
             nprfx_synth_render(env.ctx, scene, frame, &im) != NPRFX_OK ||
             (blender && (to_blender(&im, &packed), 0)) ||
-            nprfx_io_write(env.ctx, path, written, names, NULL, &opt) != NPRFX_OK) {
+            cli_io_write(env.ctx, path, written, names, NULL, &opt) != NPRFX_OK) {
             fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, nprfx_cli_message(env.ctx));
             status = SYNTH_FAILED;
             goto done;

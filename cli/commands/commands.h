@@ -9,20 +9,20 @@ extern "C" {
 #endif
 
 /* argv[0] is the sub-command name ("run"), options follow. */
-int nprfx_cmd_list(int argc, char **argv);
-int nprfx_cmd_help(int argc, char **argv);
-int nprfx_cmd_run(int argc, char **argv);
-int nprfx_cmd_info(int argc, char **argv);
-int nprfx_cmd_diff(int argc, char **argv);
-int nprfx_cmd_synth(int argc, char **argv);
-int nprfx_cmd_bench(int argc, char **argv);
-int nprfx_cmd_bench_graph(int argc, char **argv);
-int nprfx_cmd_docs(int argc, char **argv);
-int nprfx_cmd_ivs(int argc, char **argv);
-int nprfx_cmd_measure(int argc, char **argv);
-int nprfx_cmd_host_project(int argc, char **argv);
-int nprfx_cmd_pam(int argc, char **argv);
-int nprfx_cmd_farm(int argc, char **argv);
+int cli_cmd_list(int argc, char **argv);
+int cli_cmd_help(int argc, char **argv);
+int cli_cmd_run(int argc, char **argv);
+int cli_cmd_info(int argc, char **argv);
+int cli_cmd_diff(int argc, char **argv);
+int cli_cmd_synth(int argc, char **argv);
+int cli_cmd_bench(int argc, char **argv);
+int cli_cmd_bench_graph(int argc, char **argv);
+int cli_cmd_docs(int argc, char **argv);
+int cli_cmd_ivs(int argc, char **argv);
+int cli_cmd_measure(int argc, char **argv);
+int cli_cmd_host_project(int argc, char **argv);
+int cli_cmd_pam(int argc, char **argv);
+int cli_cmd_farm(int argc, char **argv);
 
 /* What a program built on the runner adds to `run` (the OpenFX test host of tests/ofxhost/ gives
  * every node a render hook that drives the plug-ins): options of its own and a render hook for
@@ -42,7 +42,7 @@ typedef struct nprfx_run_extension {
     void *user;
 } nprfx_run_extension;
 
-/* `run` with an extension (NULL: nprfx_cmd_run). */
+/* `run` with an extension (NULL: cli_cmd_run). */
 int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext);
 
 #ifdef __cplusplus

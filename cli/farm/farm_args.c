@@ -12,7 +12,7 @@
 #include "graph/graph.h"
 #include "util/cli_util.h"
 
-void nprfx_farm_job_free(nprfx_farm_job *job)
+void farm_job_free(farm_job *job)
 {
     for (int i = 0; i < job->nchunks; i++)
         free(job->chunks[i]);
@@ -23,7 +23,7 @@ void nprfx_farm_job_free(nprfx_farm_job *job)
     job->nchunks = 0;
 }
 
-void nprfx_farm_put_quoted(FILE *f, const char *s)
+void farm_put_quoted(FILE *f, const char *s)
 {
     int plain = *s != '\0';
     for (const char *p = s; *p && plain; p++)
@@ -43,31 +43,31 @@ void nprfx_farm_put_quoted(FILE *f, const char *s)
     fputc('\'', f);
 }
 
-void nprfx_farm_put_graph_args(FILE *f, const nprfx_farm_job *job)
+void farm_put_graph_args(FILE *f, const farm_job *job)
 {
     if (job->shot[0]) {
         fputs(" --shot ", f);
-        nprfx_farm_put_quoted(f, job->shot);
+        farm_put_quoted(f, job->shot);
     }
     for (int i = 0; i < job->nsets; i++) {
         fputs(" --set ", f);
-        nprfx_farm_put_quoted(f, job->sets[i]);
+        farm_put_quoted(f, job->sets[i]);
     }
     if (job->output_dir) {
         fputs(" --output-dir ", f);
-        nprfx_farm_put_quoted(f, job->output_dir);
+        farm_put_quoted(f, job->output_dir);
     }
 }
 
-void nprfx_farm_put_run(FILE *f, const nprfx_farm_job *job)
+void farm_put_run(FILE *f, const farm_job *job)
 {
-    nprfx_farm_put_quoted(f, job->nprfx);
+    farm_put_quoted(f, job->nprfx);
     fputs(" run ", f);
-    nprfx_farm_put_quoted(f, job->graph);
-    nprfx_farm_put_graph_args(f, job);
+    farm_put_quoted(f, job->graph);
+    farm_put_graph_args(f, job);
 }
 
-int nprfx_farm_take_graph_arg(nprfx_farm_graph_args *a, const char *arg, const char *next)
+int farm_take_graph_arg(farm_graph_args *a, const char *arg, const char *next)
 {
     if (!strcmp(arg, "--frames") && next)
         a->frames = next;
@@ -85,7 +85,7 @@ int nprfx_farm_take_graph_arg(nprfx_farm_graph_args *a, const char *arg, const c
     return 2;
 }
 
-char *nprfx_farm_frames_spec(const int *frames, int count)
+char *farm_frames_spec(const int *frames, int count)
 {
     /* At most 24 characters a frame ("-2147483648--2147483647,"). */
     char *s = malloc((size_t)count * 24 + 1), *p = s;
@@ -144,20 +144,20 @@ static int check_reads(nprfx_graph *g, nprfx_context *ctx, const char *cmd,
 }
 
 /* The chunks: `chunk` frames of the list each, in its order. */
-static int make_chunks(nprfx_farm_job *job, const nprfx_frame_list *fl, int chunk)
+static int make_chunks(farm_job *job, const nprfx_frame_list *fl, int chunk)
 {
     job->nchunks = (fl->count + chunk - 1) / chunk;
     job->chunks = calloc((size_t)(job->nchunks > 0 ? job->nchunks : 1), sizeof *job->chunks);
     if (!job->chunks) return -1;
     for (int c = 0; c < job->nchunks; c++) {
         int lo = c * chunk, n = fl->count - lo < chunk ? fl->count - lo : chunk;
-        if (!(job->chunks[c] = nprfx_farm_frames_spec(fl->frames + lo, n))) return -1;
+        if (!(job->chunks[c] = farm_frames_spec(fl->frames + lo, n))) return -1;
     }
     return 0;
 }
 
-int nprfx_farm_prepare(cli_env *env, const char *cmd, const nprfx_farm_graph_args *a,
-                       int chunk, int check_inputs, nprfx_farm_job *job, nprfx_graph **gout)
+int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int chunk,
+                 int check_inputs, farm_job *job, nprfx_graph **gout)
 {
     nprfx_context *ctx = env->ctx;
     nprfx_graph *g = NULL;
@@ -213,7 +213,7 @@ int nprfx_farm_prepare(cli_env *env, const char *cmd, const nprfx_farm_graph_arg
         snprintf(job->shot, sizeof job->shot, "%d-%d", first, last);
     }
     job->nframes = fl.count;
-    if (!(job->frames = nprfx_farm_frames_spec(fl.frames, fl.count)) ||
+    if (!(job->frames = farm_frames_spec(fl.frames, fl.count)) ||
         (chunk > 0 && make_chunks(job, &fl, chunk))) {
         fprintf(stderr, "nprfx %s: out of memory\n", cmd);
         goto done;
@@ -232,7 +232,7 @@ fail:
 done:
     nprfx_seq_frames_free(&fl);
     if (status) {
-        nprfx_farm_job_free(job);
+        farm_job_free(job);
         nprfx_graph_free(g);
     } else if (gout)
         *gout = g;

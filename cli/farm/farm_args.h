@@ -14,7 +14,7 @@
 #include "util/cli_util.h"
 
 /* What every chunk's `nprfx run` gets besides its frames, and the shot as a whole. */
-typedef struct nprfx_farm_job {
+typedef struct farm_job {
     char nprfx[4096];   /* the nprfx executable, absolute */
     char graph[4096];   /* the graph file, absolute */
     char workdir[4096]; /* where write paths are relative to: the directory farm ran in */
@@ -28,37 +28,37 @@ typedef struct nprfx_farm_job {
     char *frames;  /* every frame, as one frame-list spec (malloc'd) */
     char **chunks; /* nchunks frame-list specs (malloc'd) */
     int nchunks, chunk, nframes;
-} nprfx_farm_job;
+} farm_job;
 
-void nprfx_farm_job_free(nprfx_farm_job *job);
+void farm_job_free(farm_job *job);
 
 /* s quoted for a POSIX shell: as is when it needs no quoting, else in single quotes. */
-void nprfx_farm_put_quoted(FILE *f, const char *s);
+void farm_put_quoted(FILE *f, const char *s);
 
 /* The graph's arguments every command of the job repeats: --shot, each --set, --output-dir. */
-void nprfx_farm_put_graph_args(FILE *f, const nprfx_farm_job *job);
+void farm_put_graph_args(FILE *f, const farm_job *job);
 /* "'NPRFX' run 'GRAPH' [--shot S] [--set ...] [--output-dir D]": the chunk command without its
  * frames. */
-void nprfx_farm_put_run(FILE *f, const nprfx_farm_job *job);
+void farm_put_run(FILE *f, const farm_job *job);
 
 /* The options farm and farm check share (argv[i], with the next argument): 1 or 2 when taken, 0
  * when not one of them. */
-typedef struct nprfx_farm_graph_args {
+typedef struct farm_graph_args {
     const char *graph, *frames, *shot, *output_dir;
     const char *sets[256];
     int nsets;
-} nprfx_farm_graph_args;
-int nprfx_farm_take_graph_arg(nprfx_farm_graph_args *a, const char *arg, const char *next);
+} farm_graph_args;
+int farm_take_graph_arg(farm_graph_args *a, const char *arg, const char *next);
 
 /* Load the graph as every chunk will (--shot, --set, --frames), fill job's paths, shot and frames
  * (chunks of `chunk` frames; 0: none), and check what a chunk would refuse before its first
  * frame: the graph, the frames against its shot, and with check_inputs the memory plan and every
  * read node's file for every frame. Errors are printed naming the file ("nprfx farm: ..."); returns
  * 0 or 2. On success *g holds the graph (free with nprfx_graph_free) when g is not NULL. */
-int nprfx_farm_prepare(cli_env *env, const char *cmd, const nprfx_farm_graph_args *a,
-                       int chunk, int check_inputs, nprfx_farm_job *job, nprfx_graph **g);
+int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int chunk,
+                 int check_inputs, farm_job *job, nprfx_graph **g);
 
 /* A frame list as one spec: ascending runs as "A-B", joined by ','; malloc'd. */
-char *nprfx_farm_frames_spec(const int *frames, int count);
+char *farm_frames_spec(const int *frames, int count);
 
 #endif

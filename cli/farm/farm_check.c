@@ -60,29 +60,29 @@ static const char *fault(nprfx_context *ctx, const char *path, char *why, size_t
     if (stat(path, &st)) return "missing";
     if (!S_ISREG(st.st_mode)) return "not a plain file";
     if (!is_image(path)) return NULL;
-    nprfx_plate pl;
-    if (nprfx_io_read(ctx, path, &pl)) {
+    cli_plate pl;
+    if (cli_io_read(ctx, path, &pl)) {
         snprintf(why, n, "damaged: %s", nprfx_cli_message(ctx));
         return why;
     }
-    nprfx_plate_free(&pl);
+    cli_plate_free(&pl);
     return NULL;
 }
 
-static void put_rerender(const nprfx_farm_job *job, const char *frames)
+static void put_rerender(const farm_job *job, const char *frames)
 {
     fputs("cd ", stdout);
-    nprfx_farm_put_quoted(stdout, job->workdir);
+    farm_put_quoted(stdout, job->workdir);
     fputs(" && ", stdout);
-    nprfx_farm_put_run(stdout, job);
+    farm_put_run(stdout, job);
     fputs(" --frames ", stdout);
-    nprfx_farm_put_quoted(stdout, frames);
+    farm_put_quoted(stdout, frames);
     fputc('\n', stdout);
 }
 
-int nprfx_farm_check(int argc, char **argv)
+int farm_check(int argc, char **argv)
 {
-    nprfx_farm_graph_args ga;
+    farm_graph_args ga;
     memset(&ga, 0, sizeof ga);
     int quiet = 0;
     for (int i = 1; i < argc; i++) {
@@ -93,7 +93,7 @@ int nprfx_farm_check(int argc, char **argv)
             return 0;
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = 1;
-        else if ((took = nprfx_farm_take_graph_arg(&ga, a, i + 1 < argc ? argv[i + 1] : NULL)))
+        else if ((took = farm_take_graph_arg(&ga, a, i + 1 < argc ? argv[i + 1] : NULL)))
             i += took - 1;
         else {
             fprintf(stderr, "nprfx farm check: unexpected argument '%s'\n\n", a);
@@ -107,11 +107,11 @@ int nprfx_farm_check(int argc, char **argv)
     }
     cli_env env;
     if (cli_env_init(&env, 0)) return 1;
-    nprfx_farm_job job;
+    farm_job job;
     nprfx_graph *g = NULL;
     nprfx_frame_list fl = {NULL, 0};
     char **patterns = NULL;
-    int npatterns = 0, status = nprfx_farm_prepare(&env, "farm check", &ga, 0, 0, &job, &g);
+    int npatterns = 0, status = farm_prepare(&env, "farm check", &ga, 0, 0, &job, &g);
     if (status) goto done;
     if (nprfx_graph_frames(g, ga.frames, &fl) ||
         nprfx_graph_output_patterns(g, &patterns, &npatterns)) {
@@ -121,12 +121,12 @@ int nprfx_farm_check(int argc, char **argv)
     }
     /* The lock a plain run takes: it clears what killed chunks left, and a chunk still running
      * keeps it from doing so (then its frames are likely missing too, and listed below). */
-    nprfx_output_locks *locks = NULL;
-    if (nprfx_output_locks_take(env.ctx, (const char *const *)patterns, npatterns, job.graph, 0,
-                                lock_notice, NULL, &locks))
+    cli_output_locks *locks = NULL;
+    if (cli_output_locks_take(env.ctx, (const char *const *)patterns, npatterns, job.graph, 0,
+                              lock_notice, NULL, &locks))
         fprintf(stderr, "nprfx farm check: warning: temporary files not cleared: %s\n",
                 nprfx_cli_message(env.ctx));
-    nprfx_output_locks_release(locks);
+    cli_output_locks_release(locks);
     int *bad = malloc((size_t)fl.count * sizeof *bad), nbad = 0, files = 0;
     if (!bad) {
         fprintf(stderr, "nprfx farm check: out of memory\n");
@@ -152,7 +152,7 @@ int nprfx_farm_check(int argc, char **argv)
         if (frame_bad) bad[nbad++] = fl.frames[k];
     }
     if (nbad) {
-        char *spec = nprfx_farm_frames_spec(bad, nbad);
+        char *spec = farm_frames_spec(bad, nbad);
         printf("nprfx farm check: %d of %d frames missing or damaged (%s); to render them all "
                "again:\n  ",
                nbad, fl.count, spec ? spec : "?");
@@ -167,7 +167,7 @@ done:
     nprfx_graph_output_patterns_free(patterns, npatterns);
     nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
-    nprfx_farm_job_free(&job); /* after nprfx_farm_prepare, even a failed one: idempotent */
+    farm_job_free(&job); /* after farm_prepare, even a failed one: idempotent */
     cli_env_free(&env);
     return status;
 }

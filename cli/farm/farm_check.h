@@ -3,6 +3,6 @@
 #define NPRFX_CLI_FARM_CHECK_H
 
 /* nprfx farm check (argv[0] is "check"). */
-int nprfx_farm_check(int argc, char **argv);
+int farm_check(int argc, char **argv);
 
 #endif

@@ -45,8 +45,8 @@ static void put_sbatch_path(FILE *f, const char *s)
     }
 }
 
-static void put_common(FILE *f, const nprfx_farm_job *job, const nprfx_farm_slurm *opt,
-                       const char *name, int cpus)
+static void put_common(FILE *f, const farm_job *job, const farm_slurm *opt, const char *name,
+                       int cpus)
 {
     fprintf(f, "#!/bin/bash\n#SBATCH --job-name=%s\n#SBATCH --cpus-per-task=%d\n", name, cpus);
     if (opt->partition) fprintf(f, "#SBATCH --partition=%s\n", opt->partition);
@@ -57,7 +57,7 @@ static void put_common(FILE *f, const nprfx_farm_job *job, const nprfx_farm_slur
     fputc('\n', f);
 }
 
-static int write_render(const char *path, const nprfx_farm_job *job, const nprfx_farm_slurm *opt,
+static int write_render(const char *path, const farm_job *job, const farm_slurm *opt,
                         const char *name, const char *logs)
 {
     FILE *f = fopen(path, "w");
@@ -77,20 +77,20 @@ static int write_render(const char *path, const nprfx_farm_job *job, const nprfx
             job->graph, job->frames, job->nframes, job->nchunks, job->chunk, path);
     for (int c = 0; c < job->nchunks; c++) {
         fputs(c ? " " : "", f);
-        nprfx_farm_put_quoted(f, job->chunks[c]);
+        farm_put_quoted(f, job->chunks[c]);
     }
     fputs(")\n"
           "task=${SLURM_ARRAY_TASK_ID:?not a Slurm array task: set SLURM_ARRAY_TASK_ID}\n"
           "frames=${chunks[$task]:?no chunk $task}\n"
           "cd ",
           f);
-    nprfx_farm_put_quoted(f, job->workdir);
+    farm_put_quoted(f, job->workdir);
     fputs(" || exit 1\n"
           "echo \"nprfx farm: chunk $task (frames $frames) on $(hostname), restart"
           " ${SLURM_RESTART_COUNT:-0}, $(date -u +%Y-%m-%dT%H:%M:%SZ)\"\n",
           f);
     fprintf(f, "tries=%d\nwhile :; do\n    ", opt->retries);
-    nprfx_farm_put_run(f, job);
+    farm_put_run(f, job);
     fputs(" --frames \"$frames\" --threads \"${SLURM_CPUS_PER_TASK:-1}\" --shared-lock && exit 0\n"
           "    status=$?\n"
           "    [ \"$tries\" -gt 0 ] || exit \"$status\"\n"
@@ -101,12 +101,12 @@ static int write_render(const char *path, const nprfx_farm_job *job, const nprfx
     return fclose(f) ? -1 : 0;
 }
 
-static int write_check(const char *path, const nprfx_farm_job *job, const nprfx_farm_slurm *opt,
+static int write_check(const char *path, const farm_job *job, const farm_slurm *opt,
                        const char *name, const char *logs)
 {
     FILE *f = fopen(path, "w");
     if (!f) return -1;
-    nprfx_farm_slurm one = *opt;
+    farm_slurm one = *opt;
     put_common(f, job, &one, name, 1);
     fputs("#SBATCH --output=", f);
     put_sbatch_path(f, logs);
@@ -115,20 +115,20 @@ static int write_check(const char *path, const nprfx_farm_job *job, const nprfx_
                "# ones too (submit.sh: --dependency=afterany), and lists each missing or damaged\n"
                "# frame with the command that renders it again; it fails when there is one.\n"
                "cd ");
-    nprfx_farm_put_quoted(f, job->workdir);
+    farm_put_quoted(f, job->workdir);
     fputs(" || exit 1\nexec ", f);
-    nprfx_farm_put_quoted(f, job->nprfx);
+    farm_put_quoted(f, job->nprfx);
     fputs(" farm check ", f);
-    nprfx_farm_put_quoted(f, job->graph);
+    farm_put_quoted(f, job->graph);
     fputs(" --frames ", f);
-    nprfx_farm_put_quoted(f, job->frames);
-    nprfx_farm_put_graph_args(f, job);
+    farm_put_quoted(f, job->frames);
+    farm_put_graph_args(f, job);
     fputc('\n', f);
     return fclose(f) ? -1 : 0;
 }
 
 static int write_submit(const char *path, const char *render, const char *check,
-                        const nprfx_farm_job *job, const char *logs)
+                        const farm_job *job, const char *logs)
 {
     FILE *f = fopen(path, "w");
     if (!f) return -1;
@@ -137,11 +137,11 @@ static int write_submit(const char *path, const char *render, const char *check,
           "# all of its tasks, whatever their outcome.\n"
           "set -eu\nrender=$(sbatch --parsable ",
           f);
-    nprfx_farm_put_quoted(f, render);
+    farm_put_quoted(f, render);
     fputs(")\nrender=${render%%;*}\n"
           "check=$(sbatch --parsable --dependency=afterany:\"$render\" ",
           f);
-    nprfx_farm_put_quoted(f, check);
+    farm_put_quoted(f, check);
     fprintf(f,
             ")\ncheck=${check%%%%;*}\n"
             "echo \"render job: $render (%d chunks)\"\necho \"check job: $check\"\n"
@@ -151,7 +151,7 @@ static int write_submit(const char *path, const char *render, const char *check,
     return chmod(path, 0755);
 }
 
-int nprfx_farm_slurm_emit(const nprfx_farm_job *job, const nprfx_farm_slurm *opt, const char *dir)
+int farm_slurm_emit(const farm_job *job, const farm_slurm *opt, const char *dir)
 {
     char real[PATH_MAX], logs[PATH_MAX + 8], render[PATH_MAX + 16], check[PATH_MAX + 16],
         submit[PATH_MAX + 16], name[256];
@@ -203,7 +203,7 @@ static int sbatch(const char *dependency, const char *script, char *id, size_t n
     if (!f) return -1;
     fputs("sbatch --parsable ", f);
     if (dependency) fprintf(f, "--dependency=afterany:%s ", dependency);
-    nprfx_farm_put_quoted(f, script);
+    farm_put_quoted(f, script);
     fclose(f);
     FILE *p = popen(cmd, "r");
     free(cmd);
@@ -217,7 +217,7 @@ static int sbatch(const char *dependency, const char *script, char *id, size_t n
     return 0;
 }
 
-int nprfx_farm_slurm_submit(const nprfx_farm_job *job, const char *dir)
+int farm_slurm_submit(const farm_job *job, const char *dir)
 {
     char real[PATH_MAX], render[PATH_MAX + 16], check[PATH_MAX + 16], rid[64], cid[64];
     if (!realpath(dir, real)) {

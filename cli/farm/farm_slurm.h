@@ -4,14 +4,14 @@
 
 #include "farm_args.h"
 
-typedef struct nprfx_farm_slurm {
+typedef struct farm_slurm {
     const char *name, *partition, *time, *mem;
     int cpus, retries;
-} nprfx_farm_slurm;
+} farm_slurm;
 /* Write DIR/render.sbatch (the array job, one task a chunk), DIR/check.sbatch (nprfx farm check)
  * and DIR/submit.sh (both, the check after the array); DIR/logs/ receives the logs. 0 or 1. */
-int nprfx_farm_slurm_emit(const nprfx_farm_job *job, const nprfx_farm_slurm *opt, const char *dir);
-/* Submit what nprfx_farm_slurm_emit wrote to dir through sbatch and print the job ids. 0 or 1. */
-int nprfx_farm_slurm_submit(const nprfx_farm_job *job, const char *dir);
+int farm_slurm_emit(const farm_job *job, const farm_slurm *opt, const char *dir);
+/* Submit what farm_slurm_emit wrote to dir through sbatch and print the job ids. 0 or 1. */
+int farm_slurm_submit(const farm_job *job, const char *dir);
 
 #endif

@@ -15,24 +15,24 @@ typedef struct idle_buf {
     struct idle_buf *next; /* most recently released first */
 } idle_buf;
 
-struct nprfx_frame_pool {
+struct frame_pool {
     int disabled, poison;
     unsigned epoch;
     idle_buf *idle;
     size_t idle_bytes, fresh_bytes;
 };
 
-nprfx_frame_pool *nprfx_frame_pool_create(int disabled)
+frame_pool *frame_pool_create(int disabled)
 {
-    nprfx_frame_pool *p = calloc(1, sizeof *p);
+    frame_pool *p = calloc(1, sizeof *p);
     if (p) p->disabled = disabled;
     return p;
 }
 
-void nprfx_frame_pool_destroy(nprfx_frame_pool *p)
+void frame_pool_destroy(frame_pool *p)
 {
     if (!p) return;
-    nprfx_frame_pool_trim(p, 0);
+    frame_pool_trim(p, 0);
     free(p);
 }
 
@@ -42,16 +42,16 @@ static void zero_floats(nprfx_context *ctx, float *data, size_t floats)
 {
     size_t bytes = floats * sizeof(float), parts = (bytes + ((size_t)1 << 20) - 1) >> 20;
     cli_parallel_bytes(ctx ? nprfx_context_executor(ctx) : NULL, data, NULL, bytes,
-                             parts < 3 ? 1 : (int)parts);
+                       parts < 3 ? 1 : (int)parts);
 }
 
-void nprfx_frame_pool_poison(nprfx_frame_pool *p, int on)
+void frame_pool_poison(frame_pool *p, int on)
 {
     if (p) p->poison = on;
 }
 
-nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, nprfx_rect bounds,
-                                    int channels, int clear, nprfx_image *out, int *reused)
+nprfx_result frame_pool_alloc(frame_pool *p, nprfx_context *ctx, nprfx_rect bounds, int channels,
+                              int clear, nprfx_image *out, int *reused)
 {
     if (reused) *reused = 0;
     size_t w = (size_t)nprfx_rect_width(bounds), h = (size_t)nprfx_rect_height(bounds);
@@ -84,7 +84,7 @@ nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, npr
     return r;
 }
 
-void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im)
+void frame_pool_release(frame_pool *p, nprfx_image *im)
 {
     if (!im || !im->data) return;
     size_t floats = (size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
@@ -103,12 +103,12 @@ void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im)
     memset(im, 0, sizeof *im);
 }
 
-size_t nprfx_frame_pool_idle_bytes(const nprfx_frame_pool *p)
+size_t frame_pool_idle_bytes(const frame_pool *p)
 {
     return p ? p->idle_bytes : 0;
 }
 
-void nprfx_frame_pool_trim(nprfx_frame_pool *p, size_t max_idle)
+void frame_pool_trim(frame_pool *p, size_t max_idle)
 {
     while (p->idle_bytes > max_idle && p->idle) {
         /* the least recently released is the last one */
@@ -123,7 +123,7 @@ void nprfx_frame_pool_trim(nprfx_frame_pool *p, size_t max_idle)
     }
 }
 
-void nprfx_frame_pool_age(nprfx_frame_pool *p)
+void frame_pool_age(frame_pool *p)
 {
     for (idle_buf **link = &p->idle; *link;) {
         idle_buf *b = *link;
@@ -139,7 +139,7 @@ void nprfx_frame_pool_age(nprfx_frame_pool *p)
     p->epoch++;
 }
 
-size_t nprfx_frame_pool_take_fresh_bytes(nprfx_frame_pool *p)
+size_t frame_pool_take_fresh_bytes(frame_pool *p)
 {
     size_t n = p->fresh_bytes;
     p->fresh_bytes = 0;

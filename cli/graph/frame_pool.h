@@ -6,7 +6,7 @@
  * paid its page faults again, inside the node's time. The pool keeps released buffers and hands
  * them out again to a request of the same size, zeroed as nprfx_image_alloc's calloc would give
  * them, so a node sees exactly what it saw before and outputs stay bit-identical. Idle buffers
- * are bounded: the caller trims them (nprfx_frame_pool_trim) under its byte bounds.
+ * are bounded: the caller trims them (frame_pool_trim) under its byte bounds.
  *
  * Not thread-safe: the runner allocates frames from its one evaluation thread. */
 #ifndef NPRFX_CLI_FRAME_POOL_H
@@ -16,33 +16,33 @@
 
 #include "nprfx/nprfx.h"
 
-typedef struct nprfx_frame_pool nprfx_frame_pool;
+typedef struct frame_pool frame_pool;
 
 /* A pool; disabled != 0 makes it a pass-through (calloc and free, nothing kept): the runner's
  * --no-pool, which must give the same pixels. NULL on no memory. */
-nprfx_frame_pool *nprfx_frame_pool_create(int disabled);
+frame_pool *frame_pool_create(int disabled);
 /* Frees every idle buffer and the pool. Buffers still out must be released before. */
-void nprfx_frame_pool_destroy(nprfx_frame_pool *p);
+void frame_pool_destroy(frame_pool *p);
 
 /* An image of bounds x channels, from an idle buffer of the same size when there is one, zeroed
  * (clear) or not (the caller sets every pixel before reading any). *reused (may be NULL) tells
  * whether it was. */
-nprfx_result nprfx_frame_pool_alloc(nprfx_frame_pool *p, nprfx_context *ctx, nprfx_rect bounds,
-                                    int channels, int clear, nprfx_image *out, int *reused);
+nprfx_result frame_pool_alloc(frame_pool *p, nprfx_context *ctx, nprfx_rect bounds, int channels,
+                              int clear, nprfx_image *out, int *reused);
 /* Testing: reused buffers handed out uncleared are filled with NaN instead, so that a pixel a
  * caller fails to set shows in its output rather than an earlier frame's value. */
-void nprfx_frame_pool_poison(nprfx_frame_pool *p, int on);
-/* Give im's pixels (from nprfx_frame_pool_alloc) back to the pool and reset im. */
-void nprfx_frame_pool_release(nprfx_frame_pool *p, nprfx_image *im);
+void frame_pool_poison(frame_pool *p, int on);
+/* Give im's pixels (from frame_pool_alloc) back to the pool and reset im. */
+void frame_pool_release(frame_pool *p, nprfx_image *im);
 
 /* Bytes held idle in the pool. */
-size_t nprfx_frame_pool_idle_bytes(const nprfx_frame_pool *p);
+size_t frame_pool_idle_bytes(const frame_pool *p);
 /* Free idle buffers, least recently released first, until at most max_idle bytes stay idle. */
-void nprfx_frame_pool_trim(nprfx_frame_pool *p, size_t max_idle);
+void frame_pool_trim(frame_pool *p, size_t max_idle);
 /* A frame has ended: free the idle buffers that waited through it without being taken (released
  * before it began), so that buffers of a size the graph no longer makes do not stay. */
-void nprfx_frame_pool_age(nprfx_frame_pool *p);
+void frame_pool_age(frame_pool *p);
 /* Bytes of fresh buffers allocated since the last call (what the pool did not save); resets. */
-size_t nprfx_frame_pool_take_fresh_bytes(nprfx_frame_pool *p);
+size_t frame_pool_take_fresh_bytes(frame_pool *p);
 
 #endif

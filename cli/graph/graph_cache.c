@@ -104,10 +104,10 @@ void internal_graph_cache_evict(nprfx_graph *g)
 {
     /* The byte bound covers the pool's idle buffers too, so that pooling keeps what --cache-mb
      * promised; they go first, as they only save page faults while a result saves a render. */
-    size_t idle = nprfx_frame_pool_idle_bytes(g->pool);
+    size_t idle = frame_pool_idle_bytes(g->pool);
     if (idle && g->cache_bytes + idle > g->cache_limit)
-        nprfx_frame_pool_trim(
-            g->pool, g->cache_limit > g->cache_bytes ? g->cache_limit - g->cache_bytes : 0);
+        frame_pool_trim(g->pool,
+                        g->cache_limit > g->cache_bytes ? g->cache_limit - g->cache_bytes : 0);
     /* Oldest first; the newest entry stays, as it is about to be used. */
     for (centry *e = g->tail, *prev; e && e != g->head; e = prev) {
         if (g->cache_bytes <= g->cache_limit && g->cache_entries <= g->cache_entry_limit) break;

@@ -17,7 +17,6 @@
 #include "io/plate.h"
 #include "util/cli_util.h"
 
-
 /* One node's frame in the estimate: its size, channels and their names. */
 typedef struct shape {
     int w, h, channels, known;
@@ -71,7 +70,8 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         sh->h = n->height;
         sh->channels = nc;
         sh->known = 1;
-        /* internal_graph_synth_plate renders only the channels its readers take: no whole plate to hold */
+        /* internal_graph_synth_plate renders only the channels its readers take: no whole plate to
+         * hold */
         int map[1024];
         int kept = internal_graph_plate_pick(g, i, (const char *const *)sh->names, nc, map);
         if (kept > 0) {
@@ -92,12 +92,12 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
     if (n->kind == GK_READ) {
         char file[4096];
         internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
-        nprfx_file_info info;
+        cli_file_info info;
         memset(&info, 0, sizeof info);
-        if (nprfx_io_info(g->ctx, file, &info)) return 1;
+        if (cli_io_info(g->ctx, file, &info)) return 1;
         int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
-        /* The read delivers only the channels it picks (internal_graph_read_plate), then appends the motion
-         * channels; the trim drops what only those were read for. */
+        /* The read delivers only the channels it picks (internal_graph_read_plate), then appends
+         * the motion channels; the trim drops what only those were read for. */
         int pick[1024], nread = info.nchannels;
         int m = info.nchannels <= 1024
                     ? internal_graph_read_pick(g, i, (const char *const *)info.names,
@@ -116,7 +116,7 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         sh->w = nprfx_rect_width(info.bounds);
         sh->h = nprfx_rect_height(info.bounds);
         sh->channels = nread + extra;
-        nprfx_file_info_free(&info);
+        cli_file_info_free(&info);
         if (!sh->names) return 1;
         sh->known = 1;
         trim_shape(g, i, sh, scratch);
@@ -404,7 +404,7 @@ static nprfx_result plan_strips(nprfx_graph *g, int frame, int over, nprfx_graph
         if (err == NPRFX_ERR_OUT_OF_MEMORY) {
             char why_strips[1024], wb[32];
             nprfx_context_last_error(g->ctx, why_strips, sizeof why_strips);
-            nprfx_format_bytes(wb, sizeof wb, out->whole_need);
+            cli_format_bytes(wb, sizeof wb, out->whole_need);
             g->strip_rows = 0;
             return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                                "frame %d needs %s of frames whole, and strips of %d rows do not "
@@ -436,15 +436,15 @@ static nprfx_result plan_strips(nprfx_graph *g, int frame, int over, nprfx_graph
     if (g->mem_limit == UINT64_MAX || need <= g->mem_limit) return NPRFX_OK;
     g->strip_rows = 0;
     char nb[32], wb[32], lim[32];
-    nprfx_format_bytes(nb, sizeof nb, need);
-    nprfx_format_bytes(wb, sizeof wb, out->whole_need);
-    nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
+    cli_format_bytes(nb, sizeof nb, need);
+    cli_format_bytes(wb, sizeof wb, out->whole_need);
+    cli_format_bytes(lim, sizeof lim, g->mem_limit);
     return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                        "frame %d needs %s of frames whole, and still %s in strips of %d rows "
                        "(write node '%s' and the nodes it reads, %dx%d): above the %s memory "
                        "limit (%s); nothing was rendered (fewer rows: --strip-rows)",
                        frame, wb, nb, rows, g->nodes[writer].name, out->width, out->height, lim,
-                       nprfx_mem_limit_origin());
+                       cli_mem_limit_origin());
 }
 
 nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out)
@@ -485,21 +485,21 @@ nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *
             over = 0; /* strips decided, or refused with their own message */
         } else if (over) {
             char need[32], lim[32], one[32], kept[96] = "";
-            nprfx_format_bytes(need, sizeof need, s.need);
+            cli_format_bytes(need, sizeof need, s.need);
             if (s.state) {
                 char sb[32];
-                nprfx_format_bytes(sb, sizeof sb, s.state);
+                cli_format_bytes(sb, sizeof sb, s.state);
                 snprintf(kept, sizeof kept, " (%s of it the caches nodes keep between frames)", sb);
             }
-            nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
-            nprfx_format_bytes(one, sizeof one, shape_bytes(sh));
+            cli_format_bytes(lim, sizeof lim, g->mem_limit);
+            cli_format_bytes(one, sizeof one, shape_bytes(sh));
             r = nprfx_error(
                 g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                 "frame %d needs %s of frames%s at its peak, at node '%s' (its %dx%d frame "
                 "with %d channel%s, %s, joins the frames still held): above the %s "
                 "memory limit (%s); nothing was rendered%s%s%s",
                 frame, need, kept, g->nodes[s.peak_node].name, sh->w, sh->h, sh->channels,
-                sh->channels == 1 ? "" : "s", one, lim, nprfx_mem_limit_origin(),
+                sh->channels == 1 ? "" : "s", one, lim, cli_mem_limit_origin(),
                 why[0] ? " (nor can it render by strips of rows: " : "", why, why[0] ? ")" : "");
         }
     }

@@ -21,7 +21,6 @@
 #include "io/io_write.h"
 #include "util/cli_util.h"
 
-
 /* Packing channels out of a plate, rows [begin, end): a frame's worth of strided reads per
  * input, on every thread (it ran on the evaluating thread alone, pixel by pixel). */
 typedef struct pack_job {
@@ -247,7 +246,7 @@ static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_arg
             r = nprfx_node_export(a, path, &text, &len);
             a->ctx = n->ctx;
         }
-        if (!r) r = nprfx_io_write_text(ectx, path, text, len);
+        if (!r) r = cli_io_write_text(ectx, path, text, len);
         nprfx_context_destroy(ectx);
         free(text);
         if (r) return r;

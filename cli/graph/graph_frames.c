@@ -8,7 +8,6 @@
 #include "graph_frames.h"
 #include "graph_model.h"
 
-
 size_t internal_graph_image_bytes(const nprfx_image *im)
 {
     return (size_t)nprfx_rect_width(im->bounds) * (size_t)nprfx_rect_height(im->bounds) *
@@ -17,7 +16,7 @@ size_t internal_graph_image_bytes(const nprfx_image *im)
 
 void internal_graph_note_peak(nprfx_graph *g)
 {
-    size_t now = g->held_bytes + g->state_bytes + nprfx_frame_pool_idle_bytes(g->pool);
+    size_t now = g->held_bytes + g->state_bytes + frame_pool_idle_bytes(g->pool);
     if (now > g->mem_peak) g->mem_peak = now;
 }
 
@@ -55,7 +54,7 @@ void internal_graph_frame_release(nprfx_graph *g, nprfx_image *im)
     if (!im || !im->data) return;
     size_t bytes = internal_graph_image_bytes(im);
     g->held_bytes -= bytes < g->held_bytes ? bytes : g->held_bytes;
-    nprfx_frame_pool_release(g->pool, im);
+    frame_pool_release(g->pool, im);
 }
 
 void internal_graph_frame_begin(nprfx_graph *g, int frame)

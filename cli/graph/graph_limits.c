@@ -17,14 +17,15 @@ nprfx_result internal_graph_check_limits(nprfx_graph *g)
         if (n->kind != GK_SYNTH) continue;
         char what[600];
         snprintf(what, sizeof what, "node '%s': synth size", n->name);
-        /* One channel: a graph's synth makes only the channels its readers take (internal_graph_synth_plate),
-         * which are known once the graph is planned; the frame is checked again with them
-         * before it is allocated. This refuses the sizes no plate could have. */
-        nprfx_result r = nprfx_image_limit_check(g->ctx, what, n->width, n->height, 1, 0);
+        /* One channel: a graph's synth makes only the channels its readers take
+         * (internal_graph_synth_plate), which are known once the graph is planned; the frame is
+         * checked again with them before it is allocated. This refuses the sizes no plate could
+         * have. */
+        nprfx_result r = cli_image_limit_check(g->ctx, what, n->width, n->height, 1, 0);
         if (r) return r;
     }
     int w = 0, h = 0;
     if (g->fmt_text && sscanf(g->fmt_text, "%dx%d", &w, &h) == 2 && w > 0 && h > 0)
-        return nprfx_image_limit_check(g->ctx, "\"format\"", w, h, 1, 0);
+        return cli_image_limit_check(g->ctx, "\"format\"", w, h, 1, 0);
     return NPRFX_OK;
 }

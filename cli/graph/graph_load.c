@@ -374,9 +374,9 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     if (opt && opt->size >= offsetof(nprfx_graph_options, strip_rows) + sizeof opt->strip_rows)
         g->strip_option = opt->strip_rows;
     g->strip_rows = g->strip_option > 0 ? g->strip_option : 0;
-    g->pool = nprfx_frame_pool_create(g->no_pool);
+    g->pool = frame_pool_create(g->no_pool);
     /* tests: pixels a node leaves unset in a reused frame show as NaN (docs/design.md §1) */
-    if (g->pool && getenv("NPRFX_POOL_POISON")) nprfx_frame_pool_poison(g->pool, 1);
+    if (g->pool && getenv("NPRFX_POOL_POISON")) frame_pool_poison(g->pool, 1);
     if (!g->pool) {
         cJSON_Delete(root);
         free(g->base_dir);
@@ -466,7 +466,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     if (g->frames_text && (r = shot_range(g))) goto done;
     r = link_graph(g);
     if (!r) r = internal_graph_check_limits(g);
-    if (!r) r = nprfx_image_limit(ctx, &g->mem_limit);
+    if (!r) r = cli_image_limit(ctx, &g->mem_limit);
 done:
     cJSON_Delete(root);
     if (r) {
@@ -519,7 +519,7 @@ void nprfx_graph_free(nprfx_graph *g)
 {
     if (!g) return;
     internal_graph_cache_clear(g);
-    nprfx_frame_pool_destroy(g->pool);
+    frame_pool_destroy(g->pool);
     free(g->plan_uses);
     free(g->plan_temporal);
     free(g->plan_first);
@@ -673,6 +673,6 @@ nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const ch
     }
     internal_graph_cache_clear(g);
     g->plan_ready = 0;
-    nprfx_result r = nprfx_image_limit(g->ctx, &g->mem_limit);
+    nprfx_result r = cli_image_limit(g->ctx, &g->mem_limit);
     return r ? r : internal_graph_check_limits(g);
 }

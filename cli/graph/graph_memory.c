@@ -12,16 +12,14 @@
 #include "graph_model.h"
 #include "io/io_limits.h"
 
-
 /* Make room for `bytes` more under the limit, beside the caches nodes keep: the pool's idle
  * buffers first, then unpinned results, least recently used first. Whether it fits now. */
 static int make_room(nprfx_graph *g, size_t bytes)
 {
     if (g->mem_limit == UINT64_MAX) return 1;
     size_t kept = g->state_bytes;
-    if (g->held_bytes + kept + nprfx_frame_pool_idle_bytes(g->pool) + bytes <= g->mem_limit)
-        return 1;
-    nprfx_frame_pool_trim(g->pool, 0);
+    if (g->held_bytes + kept + frame_pool_idle_bytes(g->pool) + bytes <= g->mem_limit) return 1;
+    frame_pool_trim(g->pool, 0);
     for (centry *e = g->tail, *prev; e && g->held_bytes + kept + bytes > g->mem_limit; e = prev) {
         prev = e->prev;
         if (!e->pins) internal_graph_cache_drop(g, e);
@@ -33,27 +31,26 @@ static nprfx_result frame_alloc(nprfx_graph *g, int node, const char *what, nprf
                                 int channels, int clear, nprfx_image *im)
 {
     int w = nprfx_rect_width(bounds), h = nprfx_rect_height(bounds);
-    nprfx_result r = nprfx_image_limit_check(g->ctx, what, w, h, channels, 0);
+    nprfx_result r = cli_image_limit_check(g->ctx, what, w, h, channels, 0);
     if (r) return r;
     size_t bytes = (size_t)w * (size_t)h * (size_t)(channels > 0 ? channels : 0) * sizeof(float);
     if (!make_room(g, bytes)) {
         char need[32], held[32], lim[32], kept[32], caches[64] = "";
-        nprfx_format_bytes(need, sizeof need, bytes);
-        nprfx_format_bytes(held, sizeof held, g->held_bytes);
-        nprfx_format_bytes(lim, sizeof lim, g->mem_limit);
+        cli_format_bytes(need, sizeof need, bytes);
+        cli_format_bytes(held, sizeof held, g->held_bytes);
+        cli_format_bytes(lim, sizeof lim, g->mem_limit);
         if (g->state_bytes) {
-            nprfx_format_bytes(kept, sizeof kept, g->state_bytes);
+            cli_format_bytes(kept, sizeof kept, g->state_bytes);
             snprintf(caches, sizeof caches, " and %s of caches nodes keep", kept);
         }
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY,
                            "%s %dx%d with %d channel%s needs %s while the graph holds %s of frames "
                            "it still reads%s: above the %s memory limit (%s)",
                            what, w, h, channels, channels == 1 ? "" : "s", need, held, caches, lim,
-                           nprfx_mem_limit_origin());
+                           cli_mem_limit_origin());
     }
     int reused = 0;
-    if ((r = nprfx_frame_pool_alloc(g->pool, g->ctx, bounds, channels, clear, im, &reused)))
-        return r;
+    if ((r = frame_pool_alloc(g->pool, g->ctx, bounds, channels, clear, im, &reused))) return r;
     g->held_bytes += bytes;
     if (node >= 0 && node < g->count) {
         g->stats[node].bytes += bytes;
@@ -100,6 +97,6 @@ void internal_graph_frame_sweep(nprfx_graph *g)
         if (e->pins || (g->plan_temporal[e->node] && off >= lo && off <= hi)) continue;
         internal_graph_cache_drop(g, e);
     }
-    nprfx_frame_pool_age(g->pool);
+    frame_pool_age(g->pool);
     internal_graph_cache_evict(g); /* the pool's idle buffers under the byte bound */
 }

@@ -102,7 +102,7 @@ struct nprfx_graph {
      * plan frees each result once its consumers at the frame have run, unless a temporal node
      * reads its node at other frames. no_pool: neither (plain calloc/free and the cache alone,
      * to check that pooling never changes a pixel). */
-    struct nprfx_frame_pool *pool;
+    struct frame_pool *pool;
     int no_pool;
     /* Strip renders (graph_strips.c): the option (nprfx_graph_options.strip_rows), and the rows
      * per strip the plan chose (0: whole frames). */

@@ -26,7 +26,6 @@
 #include "graph_resolve.h"
 #include "io/channels.h"
 
-
 /* Whether temporal node n reads input k at frames other than the one it renders, asked at the
  * shot's first, middle and last frames; when the node cannot say, it is taken to. */
 static int reads_other_frames(const nprfx_graph *g, const gnode *n, int k)
@@ -134,8 +133,8 @@ static int same_pick(const char *sel, const char *const *whole, int nw, const ch
 {
     int a[8], b[8], amb;
     char bad[64];
-    int ca = nprfx_channels_select(whole, nw, sel, a, 8, bad, sizeof bad, &amb);
-    int cb = nprfx_channels_select(names, nc, sel, b, 8, bad, sizeof bad, &amb);
+    int ca = cli_channels_select(whole, nw, sel, a, 8, bad, sizeof bad, &amb);
+    int cb = cli_channels_select(names, nc, sel, b, 8, bad, sizeof bad, &amb);
     if (ca != cb) return 0;
     for (int c = 0; c < ca; c++)
         if (map[b[c]] != a[c]) return 0;
@@ -165,8 +164,8 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
     if (motion && internal_graph_motion_sources(g, n, "", names, nc, src, sign)) return -1;
     for (int k = 0; k < motion; k++)
         keep[src[k]] = 1;
-    int have_rgb = n->colorspace &&
-                   nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad, sizeof bad, &amb) == 3;
+    int have_rgb =
+        n->colorspace && cli_channels_select(all, na, "R,G,B", rgb, 3, bad, sizeof bad, &amb) == 3;
     for (int c = 0; have_rgb && c < 3; c++)
         keep[rgb[c]] = 1;
     int m = 0;

@@ -20,9 +20,8 @@
 #include "io/plate.h"
 #include "util/cli_util.h"
 
-
 static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *file,
-                                        nprfx_plate *plate)
+                                        cli_plate *plate)
 {
     int idx[4];
     double sign[4];
@@ -103,7 +102,7 @@ static int pick_channels(void *user, const char *const *names, int n, int *pick)
 
 /* What a read makes of the channels it read, the same for a whole plate and a strip of rows:
  * the note on parts and views (once per node), the motion channels, the colour conversion. */
-static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, nprfx_plate *plate)
+static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, cli_plate *plate)
 {
     nprfx_result r = NPRFX_OK;
     if (plate->note && !n->noted && g->notice) {
@@ -118,23 +117,23 @@ static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, npr
     if (n->colorspace) {
         int idx[3], amb;
         char bad[64];
-        if (nprfx_channels_select((const char *const *)plate->names, plate->nchannels, "R,G,B", idx,
-                                  3, bad, sizeof bad, &amb) == 3 &&
+        if (cli_channels_select((const char *const *)plate->names, plate->nchannels, "R,G,B", idx,
+                                3, bad, sizeof bad, &amb) == 3 &&
             idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
-            nprfx_image rgb = nprfx_plate_view(plate, idx[0], 3);
+            nprfx_image rgb = cli_plate_view(plate, idx[0], 3);
             nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
             r = nprfx_context_create_scoped(n->ctx, file, &fctx);
             if (!r)
-                r = nprfx_io_convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+                r = cli_io_convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
             nprfx_context_destroy(fctx);
         }
     }
     return r;
 }
 
-static nprfx_read_options read_options_of(gnode *n, read_pick *rp)
+static cli_read_options read_options_of(gnode *n, read_pick *rp)
 {
-    nprfx_read_options ro;
+    cli_read_options ro;
     memset(&ro, 0, sizeof ro);
     ro.size = sizeof ro;
     ro.part = n->part;
@@ -149,20 +148,20 @@ static nprfx_read_options read_options_of(gnode *n, read_pick *rp)
 }
 
 nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, char *file,
-                                           size_t n, nprfx_plate *shape, nprfx_row_reader **rr)
+                                           size_t n, cli_plate *shape, cli_row_reader **rr)
 {
     gnode *nd = &g->nodes[node];
     internal_graph_resolve_path(g, g->base_dir, nd->path, frame, file, n);
     nprfx_result r = nd->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
     read_pick rp = {g, node};
-    nprfx_read_options ro = read_options_of(nd, &rp);
-    return nprfx_io_rows_open(nd->ctx, file, &ro, shape, rr);
+    cli_read_options ro = read_options_of(nd, &rp);
+    return cli_io_rows_open(nd->ctx, file, &ro, shape, rr);
 }
 
 nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
-                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
-                                      int y1, nprfx_plate *out)
+                                      cli_row_reader *rr, const cli_plate *shape, int y0, int y1,
+                                      cli_plate *out)
 {
     gnode *n = &g->nodes[node];
     memset(out, 0, sizeof *out);
@@ -186,27 +185,27 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
         out->note = cli_strdup(shape->note);
         out->note_is_warning = shape->note_is_warning;
     }
-    nprfx_result r = nprfx_io_rows_read(n->ctx, rr, y0, y1, out->pixels);
+    nprfx_result r = cli_io_rows_read(n->ctx, rr, y0, y1, out->pixels);
     if (!r) r = finish_plate(g, n, file, out);
-    if (r) nprfx_plate_free(out);
+    if (r) cli_plate_free(out);
     return r;
 }
 
-nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
-                              gmeta *meta)
+nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprfx_image *im,
+                                       char ***names, gmeta *meta)
 {
     gnode *n = &g->nodes[node];
     char file[4096];
     internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
-    nprfx_plate plate;
+    cli_plate plate;
     memset(&plate, 0, sizeof plate);
     nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
     read_pick rp = {g, node};
-    nprfx_read_options ro = read_options_of(n, &rp);
-    if ((r = nprfx_io_read_ex(n->ctx, file, &ro, &plate))) return r;
+    cli_read_options ro = read_options_of(n, &rp);
+    if ((r = cli_io_read_ex(n->ctx, file, &ro, &plate))) return r;
     if ((r = finish_plate(g, n, file, &plate))) {
-        nprfx_plate_free(&plate);
+        cli_plate_free(&plate);
         return r;
     }
     im->data = plate.pixels;
@@ -231,12 +230,12 @@ nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprf
     plate.pixels = NULL;
     plate.names = NULL;
     plate.nchannels = 0;
-    nprfx_plate_free(&plate);
+    cli_plate_free(&plate);
     return NPRFX_OK;
 }
 
-nprfx_result internal_graph_synth_plate(nprfx_graph *g, int node, int frame, nprfx_image *im, char ***names,
-                               gmeta *meta)
+nprfx_result internal_graph_synth_plate(nprfx_graph *g, int node, int frame, nprfx_image *im,
+                                        char ***names, gmeta *meta)
 {
     gnode *n = &g->nodes[node];
     const char *const *all = nprfx_synth_channel_names();

@@ -17,14 +17,15 @@ nprfx_result internal_graph_synth_plate(nprfx_graph *g, int node, int frame, npr
                                         char ***names, gmeta *meta);
 
 /* Read node `node`'s file at frame (its path into file, n bytes)
- * opened for rows with the channels internal_graph_read_plate would read; *shape describes the plate. */
+ * opened for rows with the channels internal_graph_read_plate would read; *shape describes the
+ * plate. */
 nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, char *file,
-                                           size_t n, nprfx_plate *shape, nprfx_row_reader **rr);
+                                           size_t n, cli_plate *shape, cli_row_reader **rr);
 
 /* Rows [y0, y1) of it as a plate of their own (malloc'd), with the motion channels and the
  * colour conversion internal_graph_read_plate applies to a whole plate. */
 nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
-                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
-                                      int y1, nprfx_plate *out);
+                                      cli_row_reader *rr, const cli_plate *shape, int y0, int y1,
+                                      cli_plate *out);
 
 #endif

@@ -11,7 +11,6 @@
 #include "io/channels.h"
 #include "util/cli_util.h"
 
-
 char **internal_graph_names_dup(const char *const *names, int n)
 {
     char **d = calloc((size_t)n, sizeof *d);
@@ -71,7 +70,7 @@ nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const
                            n->vectors);
     int amb;
     char bad[256];
-    if (nprfx_channels_select(names, nc, vc->layer, idx, 4, bad, sizeof bad, &amb) != 4)
+    if (cli_channels_select(names, nc, vc->layer, idx, 4, bad, sizeof bad, &amb) != 4)
         return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                            "node '%s': %s has no %s channel '%s' for vectors=%s", n->name, file,
                            amb ? "unique" : "", bad, n->vectors);
@@ -93,7 +92,7 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
     char bad[256];
     int amb = 0;
     if (ref->sel) {
-        count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
+        count = cli_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
         if (count < 0) {
             char list[1024] = "";
             for (int c = 0; c < nc && strlen(list) < 900; c++) {
@@ -106,7 +105,7 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
                                src, list);
         }
     } else if (in && in->aov) {
-        count = nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
+        count = cli_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
         if (count < 0 && nc <= 4 && (in->channels == 0 || in->channels == nc)) {
             count = nc;
             for (int c = 0; c < nc; c++)
@@ -122,8 +121,8 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
         for (int c = 0; c < count; c++)
             idx[c] = c;
     } else {
-        count = nprfx_channels_from_hint(names, nc, "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx,
-                                         NPRFX_MAX_CHANNELS + 1);
+        count = cli_channels_from_hint(names, nc, "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx,
+                                       NPRFX_MAX_CHANNELS + 1);
         if (count < 0)
             return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
                                "node '%s': input '%s': '%s' has %d channels and no R,G,B; name "

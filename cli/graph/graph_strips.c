@@ -3,8 +3,8 @@
  * A write whose whole chain renders by rows (reads of EXR files, nodes with NPRFX_NODE_ROWS and
  * a footprint) goes a strip of rows at a time: every node of the chain renders the strip's rows
  * plus the margin its readers' footprints need, from inputs that hold just those rows; the plates
- * are read a block of chunks at a time (nprfx_io_rows_read) and the output is written strip by
- * strip under a temporary name, renamed once its last row is in (nprfx_io_rows_finish). So the
+ * are read a block of chunks at a time (cli_io_rows_read) and the output is written strip by
+ * strip under a temporary name, renamed once its last row is in (cli_io_rows_finish). So the
  * memory a frame takes is bounded by the strip's height, not the frame's. The pixels are the
  * whole frame's, bit for bit: a node's result is the same whatever the window (§1, render
  * contract), and NPRFX_NODE_ROWS promises it reads no input pixel beyond its footprint. Strips
@@ -43,8 +43,8 @@ typedef struct snode {
     unsigned char *types; /* a read's per-channel file types (owned), NULL for nodes */
     /* reads */
     char file[4096];
-    nprfx_plate shape;
-    nprfx_row_reader *rr;
+    cli_plate shape;
+    cli_row_reader *rr;
     /* the strip's rows of its result */
     nprfx_image buf;
     int own; /* buf is a read's malloc'd plate, not a pool frame */
@@ -168,8 +168,8 @@ static void strips_free(strips *st)
             free(s->names[c]);
         free(s->names);
         free(s->types);
-        nprfx_io_rows_close(s->rr);
-        nprfx_plate_free(&s->shape);
+        cli_io_rows_close(s->rr);
+        cli_plate_free(&s->shape);
         if (s->own) {
             free(s->buf.data);
         } else if (s->buf.data) {
@@ -362,7 +362,7 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
     double t0 = cli_now();
     nprfx_result r = NPRFX_OK;
     if (nd->kind == GK_READ) {
-        nprfx_plate p;
+        cli_plate p;
         r = internal_graph_read_rows(g, s->node, s->file, s->rr, &s->shape, rows.y0, rows.y1, &p);
         if (r) return r;
         s->buf.data = p.pixels;
@@ -372,7 +372,7 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
         s->buf.bounds = p.bounds;
         s->own = 1;
         p.pixels = NULL;
-        nprfx_plate_free(&p);
+        cli_plate_free(&p);
         internal_graph_frame_adopt(g, s->node, &s->buf);
     } else {
         const nprfx_node_desc *d = nd->desc;
@@ -456,7 +456,7 @@ done:
 /* One write of a strip render: its file, open for rows, and the channels it writes. */
 typedef struct swrite {
     snode *src;
-    nprfx_row_writer *out;
+    cli_row_writer *out;
 } swrite;
 
 nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int nw, int frame)
@@ -485,12 +485,11 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
             types[c] = src->types ? src->types[idx[c]] : NPRFX_PIXEL_FLOAT;
         }
         if (!r) {
-            nprfx_write_options wo = {sizeof wo, w->compression ? w->compression : "zip", w->half};
+            cli_write_options wo = {sizeof wo, w->compression ? w->compression : "zip", w->half};
             wo.types = src->types ? types : NULL;
             wo.pixel_aspect = src->pixel_aspect;
             const nprfx_rect *display = nprfx_rect_empty(src->display) ? NULL : &src->display;
-            r = nprfx_io_rows_create(w->ctx, path, st.frame, count, names, display, &wo,
-                                     &sw[i].out);
+            r = cli_io_rows_create(w->ctx, path, st.frame, count, names, display, &wo, &sw[i].out);
         }
     }
     double tw = cli_now() - t0;
@@ -511,7 +510,7 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
              * margin too */
             if (!r)
                 view = nprfx_image_crop(&view, nprfx_rect_make(st.frame.x0, y0, st.frame.x1, y1));
-            if (!r) r = nprfx_io_rows_write(w->ctx, sw[i].out, &view);
+            if (!r) r = cli_io_rows_write(w->ctx, sw[i].out, &view);
             internal_graph_frame_release(g, &scratch);
             if (--sw[i].src->left == 0) release_buf(&st, sw[i].src);
         }
@@ -521,7 +520,7 @@ nprfx_result internal_graph_write_strips(nprfx_graph *g, const int *writes, int 
     double t1 = cli_now();
     for (int i = 0; sw && i < nw; i++) {
         if (!sw[i].out) continue;
-        nprfx_result fr = nprfx_io_rows_finish(g->nodes[writes[i]].ctx, sw[i].out, !r);
+        nprfx_result fr = cli_io_rows_finish(g->nodes[writes[i]].ctx, sw[i].out, !r);
         if (!r) r = fr;
     }
     tw += cli_now() - t1;

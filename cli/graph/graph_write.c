@@ -35,8 +35,8 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
                                  nprfx_image *view, float **scratch)
 {
     int idx[4];
-    int k = nprfx_channels_from_hint((const char *const *)names, im->channels,
-                                     "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx, 4);
+    int k = cli_channels_from_hint((const char *const *)names, im->channels,
+                                   "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx, 4);
     if (k < 0) {
         k = im->channels < 4 ? im->channels : 3;
         for (int c = 0; c < k; c++)
@@ -78,8 +78,8 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         /* names of the selected channels, in selection order */
         int idx[256], amb;
         char bad[64];
-        int k = nprfx_channels_select((const char *const *)e->names, e->im.channels,
-                                      n->inputs[0].sel, idx, 256, bad, sizeof bad, &amb);
+        int k = cli_channels_select((const char *const *)e->names, e->im.channels, n->inputs[0].sel,
+                                    idx, 256, bad, sizeof bad, &amb);
         sel_names = calloc((size_t)(k > 0 ? k : 1), sizeof *sel_names);
         for (int c = 0; sel_names && c < k; c++)
             sel_names[c] = e->names[idx[c]];
@@ -103,11 +103,11 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         have_types = !r;
     }
     if (!r) {
-        nprfx_write_options wo = {sizeof wo, n->compression ? n->compression : "zip", n->half};
+        cli_write_options wo = {sizeof wo, n->compression ? n->compression : "zip", n->half};
         wo.types = have_types ? types : NULL;
         wo.pixel_aspect = e->meta.pixel_aspect;
         const nprfx_rect *display = nprfx_rect_empty(e->meta.display) ? NULL : &e->meta.display;
-        r = nprfx_io_write(n->ctx, path, &view, (const char *const *)names, display, &wo);
+        r = cli_io_write(n->ctx, path, &view, (const char *const *)names, display, &wo);
     }
     if (!r && n->preview) {
         nprfx_image pv;
@@ -116,9 +116,9 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         r = internal_graph_check_not_input(g, n, path, frame);
         if (!r) r = preview_view(g, &view, names, &pv, &pscratch);
         if (!r) {
-            nprfx_preview_options po = {sizeof po,  g->ocio, n->colorspace,
-                                        n->display, n->view, n->raw};
-            r = nprfx_io_write_preview(n->ctx, path, &pv, &po);
+            cli_preview_options po = {sizeof po,  g->ocio, n->colorspace,
+                                      n->display, n->view, n->raw};
+            r = cli_io_write_preview(n->ctx, path, &pv, &po);
         }
         free(pscratch);
     }

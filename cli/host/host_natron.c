@@ -321,18 +321,18 @@ static void param_knob(ntp *w, const gnode *n, int i)
     knob(w, "\t\t\t", p->name, type, 0, dims, vals, defs, label);
 }
 
-static void ofx_node(ntp *w, const nprfx_host_node *hn)
+static void ofx_node(ntp *w, const host_node *hn)
 {
     const gnode *n = hn->n;
     const nprfx_node_desc *d = n->desc;
     int knobs = 0;
     for (int i = 0; i < d->num_params; i++)
-        knobs += nprfx_host_param_changed(n, i);
+        knobs += host_param_changed(n, i);
     for (int k = 0; k < d->num_inputs; k++)
         knobs += hn->links[k].src != NULL;
     node_begin(w, hn->name, hn->plugin_id, d->version_major, d->version_minor, knobs);
     for (int i = 0; i < d->num_params; i++)
-        if (nprfx_host_param_changed(n, i)) param_knob(w, n, i);
+        if (host_param_changed(n, i)) param_knob(w, n, i);
     const char *labels[32], *srcs[32];
     char clip[32][NPRFX_OFX_NAME_MAX];
     int nin = 0;
@@ -351,7 +351,7 @@ static void ofx_node(ntp *w, const nprfx_host_node *hn)
     node_end(w, hn->name, labels, srcs, nin, knobs, 1);
 }
 
-nprfx_result nprfx_host_write_natron(const nprfx_host_project *hp, FILE *f)
+nprfx_result host_write_natron(const host_project *hp, FILE *f)
 {
     ntp w = {f, {0}};
     int total = 1 + hp->nreads + hp->nnodes + hp->nwrites;
@@ -381,7 +381,7 @@ nprfx_result nprfx_host_write_natron(const nprfx_host_project *hp, FILE *f)
     snprintf(first, sizeof first, "%d", hp->first_frame);
     snprintf(last, sizeof last, "%d", hp->last_frame);
     for (int i = 0; i < hp->nreads; i++) {
-        const nprfx_host_read *rd = &hp->reads[i];
+        const host_read *rd = &hp->reads[i];
         char file[4200];
         snprintf(file, sizeof file, "%s%s", rd->path[0] == '/' ? "" : "[Project]/", rd->path);
         node_begin(&w, rd->name, "fr.inria.built-in.Read", 1, 0, 6);
@@ -395,7 +395,7 @@ nprfx_result nprfx_host_write_natron(const nprfx_host_project *hp, FILE *f)
         gui[ng++] = (gui_node){rd->name, 200.0 * i, 0, rgb_plain, 1, 1};
     }
     for (int i = 0; i < hp->nsets; i++) {
-        const nprfx_host_chanset *cs = &hp->sets[i];
+        const host_chanset *cs = &hp->sets[i];
         const char *rname = NULL;
         for (int r = 0; r < hp->nreads; r++)
             if (hp->reads[r].n == &hp->g->nodes[cs->read]) rname = hp->reads[r].name;
@@ -433,7 +433,7 @@ nprfx_result nprfx_host_write_natron(const nprfx_host_project *hp, FILE *f)
             (gui_node){hp->nodes[i].name, 160.0 * (i % 4) - 150, 340 + 100.0 * i, rgb_plain, 0, 0};
     }
     for (int i = 0; i < hp->nwrites; i++) {
-        const nprfx_host_write *wr = &hp->writes[i];
+        const host_write *wr = &hp->writes[i];
         char file[4200];
         snprintf(file, sizeof file, "%s%s", wr->path[0] == '/' ? "" : "[Project]/", wr->path);
         node_begin(&w, wr->name, "fr.inria.built-in.Write", 1, 0, 4);

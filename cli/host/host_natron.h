@@ -8,6 +8,6 @@
 
 /* Write hp as a Natron project (.ntp) to f: 0 on success, else an error raised on hp->g's
  * context. */
-nprfx_result nprfx_host_write_natron(const nprfx_host_project *hp, FILE *f);
+nprfx_result host_write_natron(const host_project *hp, FILE *f);
 
 #endif

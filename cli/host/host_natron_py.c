@@ -87,7 +87,7 @@ static void param_line(FILE *f, const gnode *n, const char *var, int i)
     switch (p->type) {
     case NPRFX_PARAM_DOUBLE:
         /* a float literal for a double param, also for whole numbers */
-        nprfx_host_double(v->v[0], a, sizeof a);
+        host_double(v->v[0], a, sizeof a);
         if (!strpbrk(a, ".eni")) strcat(a, ".0");
         fprintf(f, "%s.getParam(\"%s\").setValue(%s)\n", var, p->name, a);
         break;
@@ -103,8 +103,8 @@ static void param_line(FILE *f, const gnode *n, const char *var, int i)
         break;
     case NPRFX_PARAM_COLOR:
         fprintf(f, "%s.getParam(\"%s\").set(%s, %s, %s, %s)\n", var, p->name,
-                nprfx_host_double(v->v[0], a, sizeof a), nprfx_host_double(v->v[1], b, sizeof b),
-                nprfx_host_double(v->v[2], c, sizeof c), nprfx_host_double(v->v[3], d, sizeof d));
+                host_double(v->v[0], a, sizeof a), host_double(v->v[1], b, sizeof b),
+                host_double(v->v[2], c, sizeof c), host_double(v->v[3], d, sizeof d));
         break;
     case NPRFX_PARAM_STRING:
         fprintf(f, "%s.getParam(\"%s\").setValue(", var, p->name);
@@ -114,7 +114,7 @@ static void param_line(FILE *f, const gnode *n, const char *var, int i)
     }
 }
 
-nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f, const char *out_file)
+nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *out_file)
 {
     char parent[4096], dir[4096], first[4096];
     folder_names(out_file, parent, dir, sizeof dir);
@@ -145,7 +145,7 @@ nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f, c
         fprintf(f, "))\n    %s.setScriptName(\"%s\")\n", hp->reads[i].name, hp->reads[i].name);
     }
     for (int i = 0; i < hp->nsets; i++) {
-        const nprfx_host_chanset *cs = &hp->sets[i];
+        const host_chanset *cs = &hp->sets[i];
         const char *rname = NULL;
         for (int r = 0; r < hp->nreads; r++)
             if (hp->reads[r].n == &hp->g->nodes[cs->read]) rname = hp->reads[r].name;
@@ -159,7 +159,7 @@ nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f, c
         if (!cs->has_sign) continue;
         char s[4][64];
         for (int c = 0; c < 4; c++)
-            nprfx_host_double(c < cs->count ? cs->sign[c] : 1, s[c], sizeof s[c]);
+            host_double(c < cs->count ? cs->sign[c] : 1, s[c], sizeof s[c]);
         fprintf(f, "    # the runner's vectors convention: ");
         for (int c = 0; c < cs->count; c++)
             fprintf(f, "%s%s = %s * %s", c ? ", " : "", cs->want[c], s[c], cs->chan[c]);
@@ -172,7 +172,7 @@ nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f, c
             fprintf(f, "    %s.getParam(\"a\").setValue(True)\n", cs->multiply);
     }
     for (int i = 0; i < hp->nnodes; i++) {
-        const nprfx_host_node *hn = &hp->nodes[i];
+        const host_node *hn = &hp->nodes[i];
         const gnode *n = hn->n;
         const nprfx_node_desc *d = n->desc;
         fprintf(f, "    %s = create(app, \"%s\", \"%s\")\n", hn->name, hn->plugin_id, hn->name);
@@ -188,10 +188,10 @@ nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f, c
                     hn->links[k].label);
         }
         for (int p = 0; p < d->num_params; p++)
-            if (nprfx_host_param_changed(n, p)) param_line(f, n, hn->name, p);
+            if (host_param_changed(n, p)) param_line(f, n, hn->name, p);
     }
     for (int i = 0; i < hp->nwrites; i++) {
-        const nprfx_host_write *w = &hp->writes[i];
+        const host_write *w = &hp->writes[i];
         fprintf(f, "    %s = app.createWriter(", w->name);
         if (w->path[0] == '/')
             py_string(f, w->path);

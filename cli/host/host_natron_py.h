@@ -9,7 +9,6 @@
 /* Write hp as a Natron Python script to f: 0 on success, else an error raised on hp->g's
  * context. out_file: the script's path, whose folder names it looks for when Natron gives no
  * __file__. */
-nprfx_result nprfx_host_write_natron_py(const nprfx_host_project *hp, FILE *f,
-                                        const char *out_file);
+nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *out_file);
 
 #endif

@@ -7,6 +7,6 @@
 #include "host_project.h"
 
 /* Write hp as a Nuke script (.nk) to f: 0 on success, else an error raised on hp->g's context. */
-nprfx_result nprfx_host_write_nuke(const nprfx_host_project *hp, FILE *f);
+nprfx_result host_write_nuke(const host_project *hp, FILE *f);
 
 #endif

@@ -18,7 +18,7 @@
 #include "ofx_names.h"
 #include "util/cli_util.h"
 
-char *nprfx_host_double(double v, char *buf, size_t n)
+char *host_double(double v, char *buf, size_t n)
 {
     for (int prec = 1; prec <= 17; prec++) {
         snprintf(buf, n, "%.*g", prec, v);
@@ -33,7 +33,7 @@ char *nprfx_host_double(double v, char *buf, size_t n)
     return buf;
 }
 
-int nprfx_host_param_changed(const gnode *n, int i)
+int host_param_changed(const gnode *n, int i)
 {
     const nprfx_param_desc *p = &n->desc->params[i];
     const nprfx_value *v = &n->params[i];
@@ -67,7 +67,7 @@ typedef struct src_info {
 
 typedef struct builder {
     nprfx_graph *g;
-    nprfx_host_project *hp;
+    host_project *hp;
     src_info *info;
     int *visiting;
 } builder;
@@ -85,8 +85,8 @@ static int plate_before(const char *x, const char *y)
     size_t l = lx < ly ? lx : ly;
     int c = strncmp(x, y, l);
     if (c || lx != ly) return c ? c < 0 : lx < ly;
-    int rx = nprfx_channels_component_rank(dx ? dx + 1 : x);
-    int ry = nprfx_channels_component_rank(dy ? dy + 1 : y);
+    int rx = cli_channels_component_rank(dx ? dx + 1 : x);
+    int ry = cli_channels_component_rank(dy ? dy + 1 : y);
     return rx != ry ? rx < ry : strcmp(x, y) < 0;
 }
 
@@ -105,15 +105,15 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
     gnode *n = &g->nodes[gi];
     char file[4096];
     internal_graph_resolve_path(g, g->base_dir, n->path, b->hp->first_frame, file, sizeof file);
-    nprfx_file_info fi;
+    cli_file_info fi;
     memset(&fi, 0, sizeof fi);
-    nprfx_result r = nprfx_io_info(n->ctx, file, &fi);
+    nprfx_result r = cli_io_info(n->ctx, file, &fi);
     if (r) return r;
     int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
     s->names = calloc((size_t)fi.nchannels + 4, sizeof *s->names);
     s->rank = calloc((size_t)fi.nchannels + 1, sizeof *s->rank);
     if (!s->names || !s->rank) {
-        nprfx_file_info_free(&fi);
+        cli_file_info_free(&fi);
         return oom(b);
     }
     for (int c = 0; c < fi.nchannels; c++)
@@ -124,7 +124,7 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
         b->hp->width = nprfx_rect_width(fi.bounds);
         b->hp->height = nprfx_rect_height(fi.bounds);
     }
-    nprfx_file_info_free(&fi);
+    cli_file_info_free(&fi);
     if (extra) {
         r = internal_graph_motion_sources(g, n, file, (const char *const *)s->names, s->nc,
                                           s->motion_idx, s->motion_sign);
@@ -137,10 +137,10 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
 
 /* The set of plate channels idx[0..count) of read node gi, added when new. */
 static nprfx_result add_set(builder *b, int gi, const src_info *s, const int *idx, int count,
-                            const nprfx_host_chanset **out)
+                            const host_chanset **out)
 {
-    nprfx_host_project *hp = b->hp;
-    nprfx_host_chanset cs;
+    host_project *hp = b->hp;
+    host_chanset cs;
     memset(&cs, 0, sizeof cs);
     cs.read = gi;
     cs.count = count;
@@ -163,7 +163,7 @@ static nprfx_result add_set(builder *b, int gi, const src_info *s, const int *id
         cs.has_sign |= cs.sign[c] != 1;
     }
     for (int i = 0; i < hp->nsets; i++) {
-        const nprfx_host_chanset *o = &hp->sets[i];
+        const host_chanset *o = &hp->sets[i];
         int same = o->read == gi && o->count == count;
         for (int c = 0; same && c < count; c++)
             same = !strcmp(o->want[c], cs.want[c]);
@@ -193,7 +193,7 @@ static nprfx_result add_set(builder *b, int gi, const src_info *s, const int *id
         size_t len = strlen(cs.shuffle);
         snprintf(cs.shuffle + len, sizeof cs.shuffle - len, "_plate");
     }
-    nprfx_host_chanset *sets = realloc(hp->sets, sizeof *sets * (size_t)(hp->nsets + 1));
+    host_chanset *sets = realloc(hp->sets, sizeof *sets * (size_t)(hp->nsets + 1));
     if (!sets) return oom(b);
     hp->sets = sets;
     sets[hp->nsets] = cs;
@@ -204,12 +204,12 @@ static nprfx_result add_set(builder *b, int gi, const src_info *s, const int *id
 static nprfx_result visit(builder *b, int gi);
 
 /* Input k of OpenFX node hn: resolve its channels and link it to a Shuffle or an OpenFX node. */
-static nprfx_result link_input(builder *b, nprfx_host_node *hn, int k)
+static nprfx_result link_input(builder *b, host_node *hn, int k)
 {
     nprfx_graph *g = b->g;
     const gnode *n = hn->n;
     const nprfx_input_desc *in = &n->desc->inputs[k];
-    nprfx_host_link *l = &hn->links[k];
+    host_link *l = &hn->links[k];
     int src = n->inputs[k].src;
     if (src < 0) return NPRFX_OK;
     nprfx_result r = visit(b, src);
@@ -225,7 +225,7 @@ static nprfx_result link_input(builder *b, nprfx_host_node *hn, int k)
                            n->name, in->name, count);
     int first = 0;
     if (g->nodes[src].kind == GK_READ) {
-        const nprfx_host_chanset *cs;
+        const host_chanset *cs;
         if ((r = add_set(b, src, s, idx, count, &cs))) return r;
         l->src = cs->has_sign ? cs->multiply : cs->shuffle;
     } else {
@@ -272,7 +272,7 @@ static nprfx_result visit(builder *b, int gi)
         r = read_info(b, gi, s);
     } else if (n->kind == GK_NODE) {
         const nprfx_node_desc *d = n->desc;
-        nprfx_host_node hn;
+        host_node hn;
         memset(&hn, 0, sizeof hn);
         hn.n = n;
         nprfx_ofx_plugin_id(d, hn.plugin_id, sizeof hn.plugin_id);
@@ -303,8 +303,8 @@ static nprfx_result visit(builder *b, int gi)
         if (!r) {
             s->nc = oi.channels;
             s->names = internal_graph_names_dup(oi.names, oi.channels);
-            nprfx_host_project *hp = b->hp;
-            nprfx_host_node *nodes = realloc(hp->nodes, sizeof *nodes * (size_t)(hp->nnodes + 1));
+            host_project *hp = b->hp;
+            host_node *nodes = realloc(hp->nodes, sizeof *nodes * (size_t)(hp->nnodes + 1));
             if (!nodes || !s->names) {
                 free(hn.links);
                 return oom(b);
@@ -359,8 +359,8 @@ static void relative_to(const char *from, const char *target, char *buf, size_t 
     if (k < n) snprintf(buf + k, n - k, "%s", leaf);
 }
 
-nprfx_result nprfx_host_project_build(nprfx_graph *g, const char *graph_path, const char *out_dir,
-                                      const char *out_file, nprfx_host_project *hp)
+nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const char *out_dir,
+                                const char *out_file, host_project *hp)
 {
     memset(hp, 0, sizeof *hp);
     hp->g = g;
@@ -391,7 +391,7 @@ nprfx_result nprfx_host_project_build(nprfx_graph *g, const char *graph_path, co
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->kind != GK_READ) continue;
-        nprfx_host_read *rd = &hp->reads[hp->nreads++];
+        host_read *rd = &hp->reads[hp->nreads++];
         rd->n = n;
         host_name(rd->name, sizeof rd->name, n->name, NULL);
         char full[4096];
@@ -412,7 +412,7 @@ nprfx_result nprfx_host_project_build(nprfx_graph *g, const char *graph_path, co
         }
         int src = n->inputs[0].src;
         if ((r = visit(&b, src))) break;
-        nprfx_host_write *w = &hp->writes[hp->nwrites++];
+        host_write *w = &hp->writes[hp->nwrites++];
         w->n = n;
         w->path = n->path;
         host_name(w->name, sizeof w->name, n->name, NULL);
@@ -433,7 +433,7 @@ nprfx_result nprfx_host_project_build(nprfx_graph *g, const char *graph_path, co
         hp->sets[i].out = hp->sets[i].has_sign ? hp->sets[i].multiply : hp->sets[i].shuffle;
     /* links point at set names inside the array that realloc may have moved: point them again */
     for (int i = 0; i < hp->nnodes && !r; i++) {
-        nprfx_host_node *hn = &hp->nodes[i];
+        host_node *hn = &hp->nodes[i];
         for (int k = 0; k < hn->n->desc->num_inputs; k++) {
             int src = hn->n->inputs[k].src;
             if (src < 0) continue;
@@ -444,7 +444,7 @@ nprfx_result nprfx_host_project_build(nprfx_graph *g, const char *graph_path, co
             }
             src_info *s = &b.info[src];
             int idx[256], count = 0;
-            const nprfx_host_chanset *cs = NULL;
+            const host_chanset *cs = NULL;
             internal_graph_input_channels(g, hn->n, k, (const char *const *)s->names, s->nc, idx,
                                           &count);
             if (!(r = add_set(&b, src, s, idx, count, &cs))) hn->links[k].src = cs->out;
@@ -463,11 +463,11 @@ done:
     }
     free(b.info);
     free(b.visiting);
-    if (r) nprfx_host_project_free(hp);
+    if (r) host_project_free(hp);
     return r;
 }
 
-void nprfx_host_project_free(nprfx_host_project *hp)
+void host_project_free(host_project *hp)
 {
     for (int i = 0; i < hp->nnodes; i++)
         free(hp->nodes[i].links);

@@ -17,7 +17,7 @@ static int suffix_match(const char *name, const char *suffix)
 /* Canonical order of the last component inside a layer: colour, vectors, texture coordinates,
  * then alpha/coverage, then the rest alphabetically (EXR stores channels alphabetically, which
  * would give A,B,G,R, and Blender's UV layer A,U,V). */
-int nprfx_channels_component_rank(const char *c)
+int cli_channels_component_rank(const char *c)
 {
     static const char *const order[] = {"R", "G", "B", "X", "Y", "Z", "W", "U", "V", "A", NULL};
     for (int i = 0; order[i]; i++)
@@ -75,7 +75,7 @@ static int layer_channels(const char *const *names, int n, const char *layer, in
     for (int a = 1; a < count; a++)
         for (int b = a; b > 0; b--) {
             const char *x = last_component(names[idx[b - 1]]), *y = last_component(names[idx[b]]);
-            int rx = nprfx_channels_component_rank(x), ry = nprfx_channels_component_rank(y);
+            int rx = cli_channels_component_rank(x), ry = cli_channels_component_rank(y);
             if (rx > ry || (rx == ry && strcmp(x, y) > 0)) {
                 int t = idx[b - 1];
                 idx[b - 1] = idx[b];
@@ -86,8 +86,8 @@ static int layer_channels(const char *const *names, int n, const char *layer, in
     return count;
 }
 
-int nprfx_channels_select(const char *const *names, int n, const char *selection, int *idx, int max,
-                          char *bad, size_t bad_size, int *ambiguous)
+int cli_channels_select(const char *const *names, int n, const char *selection, int *idx, int max,
+                        char *bad, size_t bad_size, int *ambiguous)
 {
     char buf[1024];
     int count = 0;
@@ -143,14 +143,14 @@ int nprfx_channels_select(const char *const *names, int n, const char *selection
     return count;
 }
 
-int nprfx_channels_from_hint(const char *const *names, int n, const char *hint, int *idx, int max)
+int cli_channels_from_hint(const char *const *names, int n, const char *hint, int *idx, int max)
 {
     char buf[1024], bad[256];
     snprintf(buf, sizeof buf, "%s", hint);
     for (char *save = NULL, *alt = strtok_r(buf, "|", &save); alt;
          alt = strtok_r(NULL, "|", &save)) {
         int amb;
-        int k = nprfx_channels_select(names, n, alt, idx, max, bad, sizeof bad, &amb);
+        int k = cli_channels_select(names, n, alt, idx, max, bad, sizeof bad, &amb);
         if (k > 0) return k;
     }
     return -1;

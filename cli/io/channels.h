@@ -12,15 +12,15 @@
  *   - a layer name ("Vector", "Pref") -> its channels, R G B A / X Y Z W / U V first.
  * Returns the number of indices written (<= max), or -1 with *bad set to the item that matched
  * nothing (or matched several channels: *ambiguous = 1). */
-int nprfx_channels_select(const char *const *names, int n, const char *selection, int *idx, int max,
-                          char *bad, size_t bad_size, int *ambiguous);
+int cli_channels_select(const char *const *names, int n, const char *selection, int *idx, int max,
+                        char *bad, size_t bad_size, int *ambiguous);
 
 /* Try each '|'-separated alternative of an AOV hint; returns the count of the first alternative
  * that resolves completely, or -1. */
-int nprfx_channels_from_hint(const char *const *names, int n, const char *hint, int *idx, int max);
+int cli_channels_from_hint(const char *const *names, int n, const char *hint, int *idx, int max);
 
 /* Rank of a channel's last component inside its layer: colour, vectors, texture coordinates,
  * then alpha, then the rest (the order layer selections and hosts list them in). */
-int nprfx_channels_component_rank(const char *component);
+int cli_channels_component_rank(const char *component);
 
 #endif

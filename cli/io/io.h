@@ -14,31 +14,31 @@ extern "C" {
 #endif
 
 /* The pixel type a channel has in its file, so that a copy can write it back the same way. */
-typedef enum nprfx_pixel_type {
+typedef enum cli_pixel_type {
     NPRFX_PIXEL_FLOAT = 0, /* float, or any non-EXR type (read as normalised float) */
     NPRFX_PIXEL_HALF = 1,
     NPRFX_PIXEL_UINT = 2 /* EXR uint (object ids): read as integers, exact up to 2^24 */
-} nprfx_pixel_type;
+} cli_pixel_type;
 
 /* A decoded plate: the channels of one part of an image file (or of several parts with the same
  * data and display windows), interleaved. docs/design.md §2.3 says which parts a read takes. */
-typedef struct nprfx_plate {
+typedef struct cli_plate {
     nprfx_rect bounds;  /* data window */
     nprfx_rect display; /* display window */
     int nchannels;
     char **names;         /* nchannels full channel names ("ViewLayer.Vector.X") */
     float *pixels;        /* nchannels floats per pixel, rows of bounds' width, top row first */
-    unsigned char *types; /* nchannels nprfx_pixel_type */
+    unsigned char *types; /* nchannels cli_pixel_type */
     float pixel_aspect;   /* the PixelAspectRatio attribute (1 when absent) */
     /* What a user should know about the read (malloc'd, NULL when nothing): which parts and view
      * were used and which parts were not, uint values beyond float's exact range. */
     char *note;
     int note_is_warning; /* 1: parts were left out or values were rounded */
-} nprfx_plate;
+} cli_plate;
 
 /* Which part and view of a file a read takes. */
-typedef struct nprfx_read_options {
-    size_t size;      /* sizeof(nprfx_read_options) */
+typedef struct cli_read_options {
+    size_t size;      /* sizeof(cli_read_options) */
     const char *part; /* a part's name or index (NULL or "": the default, below) */
     const char *view; /* a view of a multi-view file (NULL or "": the file's default view) */
     /* Channel selections (channels.h syntax) the caller needs: without `part`, the read takes
@@ -46,7 +46,7 @@ typedef struct nprfx_read_options {
     const char *const *want;
     int nwant;
     /* Appended (read when size covers them). The channels to read, by the names a whole read
-     * gives them (nprfx_plate.names), in the order the plate should have them; NULL: all. Only
+     * gives them (cli_plate.names), in the order the plate should have them; NULL: all. Only
      * these are decoded into the plate (EXR: a block of whole chunks at a time, converting only
      * the span of a part's channels that holds them) and counted against the memory limit. */
     const char *const *channels;
@@ -57,10 +57,10 @@ typedef struct nprfx_read_options {
      * all of them. */
     int (*pick)(void *user, const char *const *names, int n, int *pick);
     void *pick_user;
-} nprfx_read_options;
+} cli_read_options;
 
 /* One part (subimage) of a file, for `nprfx info`. */
-typedef struct nprfx_part_info {
+typedef struct cli_part_info {
     int index;
     char name[128]; /* "" when unnamed */
     char view[64];  /* the part's "view" attribute, "" when none */
@@ -72,10 +72,10 @@ typedef struct nprfx_part_info {
     int miplevels;      /* 1: no MIP map */
     float pixel_aspect; /* PixelAspectRatio */
     int used;           /* 1: a read without "part" or "view" takes it */
-} nprfx_part_info;
+} cli_part_info;
 
 /* Header facts for `nprfx info`. */
-typedef struct nprfx_file_info {
+typedef struct cli_file_info {
     char format[32]; /* "openexr" */
     int subimages;
     nprfx_rect bounds, display; /* what a default read delivers */
@@ -84,34 +84,34 @@ typedef struct nprfx_file_info {
     char **types;               /* nchannels: "half", "float", "uint8", ... */
     char compression[32];       /* "" when not applicable */
     int nparts;                 /* == subimages */
-    nprfx_part_info *parts;
+    cli_part_info *parts;
     int nviews; /* the multiView attribute, or the parts' views; views[0] is the default */
     char **views;
-} nprfx_file_info;
+} cli_file_info;
 
 /* A header attribute, given as text and stored with its type (EXR: int, float or string). */
-typedef enum nprfx_attribute_type {
+typedef enum cli_attribute_type {
     NPRFX_ATTR_STRING = 0,
     NPRFX_ATTR_INT = 1,
     NPRFX_ATTR_FLOAT = 2
-} nprfx_attribute_type;
-typedef struct nprfx_attribute {
+} cli_attribute_type;
+typedef struct cli_attribute {
     const char *name; /* "nprfx:pamCount" */
-    int type;         /* nprfx_attribute_type */
+    int type;         /* cli_attribute_type */
     const char *value;
-} nprfx_attribute;
+} cli_attribute;
 
-typedef struct nprfx_write_options {
-    size_t size;                       /* sizeof(nprfx_write_options) */
-    const char *compression;           /* EXR: "zip" (default), "piz", "none", "dwaa", ... */
-    int half;                          /* 1: store EXR channels as half floats */
-    const nprfx_attribute *attributes; /* extra header attributes (NULL: none) */
+typedef struct cli_write_options {
+    size_t size;                     /* sizeof(cli_write_options) */
+    const char *compression;         /* EXR: "zip" (default), "piz", "none", "dwaa", ... */
+    int half;                        /* 1: store EXR channels as half floats */
+    const cli_attribute *attributes; /* extra header attributes (NULL: none) */
     int nattributes;
     /* Appended: read when size covers them. */
-    const unsigned char *types; /* per channel nprfx_pixel_type (NULL: all float, or half);
+    const unsigned char *types; /* per channel cli_pixel_type (NULL: all float, or half);
                                    with `half`, float channels become half, uint stays uint */
     float pixel_aspect;         /* the PixelAspectRatio attribute (0: not written) */
-} nprfx_write_options;
+} cli_write_options;
 
 #ifdef __cplusplus
 }

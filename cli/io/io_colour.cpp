@@ -86,7 +86,6 @@ float srgb_decode(float v)
     return v < 0.0f ? -r : r;
 }
 
-
 builtin_space builtin_named(const char *n)
 {
     if (!strcasecmp(n, "linear") || !strcasecmp(n, "scene_linear")) return SPACE_LINEAR;
@@ -105,9 +104,9 @@ uint8_t quantize(float v)
 
 using namespace cli_io;
 
-extern "C" nprfx_result nprfx_io_convert_colorspace(nprfx_context *ctx, nprfx_image *im,
-                                                    const char *from, const char *to,
-                                                    const char *ocio_config)
+extern "C" nprfx_result cli_io_convert_colorspace(nprfx_context *ctx, nprfx_image *im,
+                                                  const char *from, const char *to,
+                                                  const char *ocio_config)
 {
     if (!im || !from || !to)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,

@@ -10,8 +10,8 @@ extern "C" {
 
 /* Convert the first three channels of im in place from colour space `from` to `to` (names from
  * the OCIO config, or "linear"/"srgb" without one). Same names: no-op. */
-nprfx_result nprfx_io_convert_colorspace(nprfx_context *ctx, nprfx_image *im, const char *from,
-                                         const char *to, const char *ocio_config);
+nprfx_result cli_io_convert_colorspace(nprfx_context *ctx, nprfx_image *im, const char *from,
+                                       const char *to, const char *ocio_config);
 
 #ifdef __cplusplus
 }

@@ -43,7 +43,7 @@ nprfx_result guard_other(nprfx_context *ctx, const char *path)
         OIIO::geterror(); /* the reader opens it again and reports in its own words */
         return NPRFX_OK;
     }
-    /* What nprfx_io_read allocates: the float plate of every subimage of the first one's size
+    /* What cli_io_read allocates: the float plate of every subimage of the first one's size
      * (the larger of that and any one subimage, so a huge later one is caught too). */
     int64_t w0 = 0, h0 = 0, channels = 0;
     for (int s = 0; s < 4096 && in->seek_subimage(s, 0); s++) {
@@ -56,7 +56,7 @@ nprfx_result guard_other(nprfx_context *ctx, const char *path)
             channels += spec.nchannels;
         } else {
             std::string what = std::string("'") + path + "': subimage " + std::to_string(s);
-            nprfx_result r = nprfx_image_limit_check(
+            nprfx_result r = cli_image_limit_check(
                 ctx, what.c_str(), spec.width, spec.height,
                 (int64_t)spec.nchannels * (spec.depth > 1 ? spec.depth : 1), 0);
             if (r) return r;
@@ -66,23 +66,23 @@ nprfx_result guard_other(nprfx_context *ctx, const char *path)
     in->geterror();
     in->close();
     std::string what = std::string("'") + path + "': image";
-    return nprfx_image_limit_check(ctx, what.c_str(), w0, h0, channels, 0);
+    return cli_image_limit_check(ctx, what.c_str(), w0, h0, channels, 0);
 }
 
 } // namespace
 
-extern "C" nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int mode)
+extern "C" nprfx_result cli_io_guard(nprfx_context *ctx, const char *path, int mode)
 {
     try {
         uint64_t limit;
         double timeout;
-        nprfx_result r = nprfx_image_limit(ctx, &limit);
-        if (!r) r = nprfx_read_timeout(ctx, &timeout);
+        nprfx_result r = cli_image_limit(ctx, &limit);
+        if (!r) r = cli_read_timeout(ctx, &timeout);
         if (r) return r;
         set_oiio_limits(limit);
         double now = cli_now();
         read_deadline = timeout > 0 ? now + timeout : 0;
-        if (nprfx_io_is_exr(path)) return nprfx_io_validate_exr(ctx, path, mode, read_deadline);
+        if (cli_io_is_exr(path)) return cli_io_validate_exr(ctx, path, mode, read_deadline);
         /* Other formats decode every channel whatever a read keeps: all of them count. */
         if (mode != NPRFX_GUARD_HEADER) return guard_other(ctx, path);
         return NPRFX_OK;
@@ -91,22 +91,22 @@ extern "C" nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int
     }
 }
 
-extern "C" int nprfx_io_deadline_passed(void)
+extern "C" int cli_io_deadline_passed(void)
 {
     return read_deadline > 0 && cli_now() > read_deadline;
 }
 
-extern "C" bool nprfx_io_read_progress(void *user, float done)
+extern "C" bool cli_io_read_progress(void *user, float done)
 {
     (void)user;
     (void)done;
-    return nprfx_io_deadline_passed() != 0;
+    return cli_io_deadline_passed() != 0;
 }
 
-extern "C" nprfx_result nprfx_io_deadline_error(nprfx_context *ctx, const char *path)
+extern "C" nprfx_result cli_io_deadline_error(nprfx_context *ctx, const char *path)
 {
     double timeout = 0;
-    nprfx_read_timeout(nullptr, &timeout);
+    cli_read_timeout(nullptr, &timeout);
     return nprfx_error(ctx, NPRFX_ERR_IO,
                        "'%s': reading took longer than %g s and was stopped (NPRFX_READ_TIMEOUT)",
                        path, timeout);

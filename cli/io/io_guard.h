@@ -13,18 +13,18 @@ extern "C" {
 #endif
 
 /* The guard every io.h reader calls first. EXR files (by their magic number) go through
- * nprfx_io_validate_exr; other formats have their header's size checked through OpenImageIO in
+ * cli_io_validate_exr; other formats have their header's size checked through OpenImageIO in
  * NPRFX_GUARD_READ mode. A file that cannot be opened passes: the reader reports that itself.
- * Also arms this thread's read deadline (nprfx_io_deadline_passed). */
-nprfx_result nprfx_io_guard(nprfx_context *ctx, const char *path, int mode);
+ * Also arms this thread's read deadline (cli_io_deadline_passed). */
+nprfx_result cli_io_guard(nprfx_context *ctx, const char *path, int mode);
 
-/* The read deadline of this thread, armed by nprfx_io_guard from NPRFX_READ_TIMEOUT: non-zero
- * once it has passed. nprfx_io_read_progress has OpenImageIO's ProgressCallback signature
+/* The read deadline of this thread, armed by cli_io_guard from NPRFX_READ_TIMEOUT: non-zero
+ * once it has passed. cli_io_read_progress has OpenImageIO's ProgressCallback signature
  * (returns true to stop a read_image). */
-int nprfx_io_deadline_passed(void);
-bool nprfx_io_read_progress(void *user, float done);
+int cli_io_deadline_passed(void);
+bool cli_io_read_progress(void *user, float done);
 /* The message for a read stopped by the deadline, naming the file. */
-nprfx_result nprfx_io_deadline_error(nprfx_context *ctx, const char *path);
+nprfx_result cli_io_deadline_error(nprfx_context *ctx, const char *path);
 
 #ifdef __cplusplus
 }

@@ -26,13 +26,13 @@ static uint64_t default_limit(void)
 static int have_override;
 static uint64_t override_bytes;
 
-void nprfx_mem_limit_set(uint64_t bytes)
+void cli_mem_limit_set(uint64_t bytes)
 {
     have_override = 1;
     override_bytes = bytes;
 }
 
-nprfx_result nprfx_parse_size(const char *e, uint64_t *bytes)
+nprfx_result cli_parse_size(const char *e, uint64_t *bytes)
 {
     char *end = NULL;
     double v = strtod(e, &end);
@@ -65,7 +65,7 @@ nprfx_result nprfx_parse_size(const char *e, uint64_t *bytes)
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_image_limit(nprfx_context *ctx, uint64_t *bytes)
+nprfx_result cli_image_limit(nprfx_context *ctx, uint64_t *bytes)
 {
     if (have_override) {
         *bytes = override_bytes;
@@ -74,13 +74,13 @@ nprfx_result nprfx_image_limit(nprfx_context *ctx, uint64_t *bytes)
     const char *e = getenv("NPRFX_READ_LIMIT");
     *bytes = default_limit();
     if (!e || !*e) return NPRFX_OK;
-    if (nprfx_parse_size(e, bytes))
+    if (cli_parse_size(e, bytes))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "NPRFX_READ_LIMIT='%s' is not a size (e.g. 4G, 512M, or 0 for none)", e);
     return NPRFX_OK;
 }
 
-const char *nprfx_mem_limit_origin(void)
+const char *cli_mem_limit_origin(void)
 {
     if (have_override) return "--mem-limit";
     const char *e = getenv("NPRFX_READ_LIMIT");
@@ -88,7 +88,7 @@ const char *nprfx_mem_limit_origin(void)
     return "half the physical memory; --mem-limit or NPRFX_READ_LIMIT sets it";
 }
 
-nprfx_result nprfx_read_timeout(nprfx_context *ctx, double *seconds)
+nprfx_result cli_read_timeout(nprfx_context *ctx, double *seconds)
 {
     const char *e = getenv("NPRFX_READ_TIMEOUT");
     *seconds = 60.0;
@@ -102,7 +102,7 @@ nprfx_result nprfx_read_timeout(nprfx_context *ctx, double *seconds)
     return NPRFX_OK;
 }
 
-void nprfx_format_bytes(char *buf, size_t n, uint64_t bytes)
+void cli_format_bytes(char *buf, size_t n, uint64_t bytes)
 {
     static const char *const units[] = {"KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
     if (bytes < 1024) {
@@ -122,11 +122,11 @@ void nprfx_format_bytes(char *buf, size_t n, uint64_t bytes)
         snprintf(buf, n, "%.1f %s", v, units[u]);
 }
 
-nprfx_result nprfx_image_limit_check(nprfx_context *ctx, const char *what, int64_t w, int64_t h,
-                                     int64_t channels, uint64_t extra_bytes)
+nprfx_result cli_image_limit_check(nprfx_context *ctx, const char *what, int64_t w, int64_t h,
+                                   int64_t channels, uint64_t extra_bytes)
 {
     uint64_t limit;
-    nprfx_result r = nprfx_image_limit(ctx, &limit);
+    nprfx_result r = cli_image_limit(ctx, &limit);
     if (r) return r;
     if (w < 0 || h < 0 || channels < 0) return NPRFX_OK; /* the caller's own check reports it */
     /* In long double: w*h*channels*4 overflows 64 bits for windows a damaged header can give. */
@@ -134,10 +134,10 @@ nprfx_result nprfx_image_limit_check(nprfx_context *ctx, const char *what, int64
         (long double)w * (long double)h * (long double)channels * 4.0L + (long double)extra_bytes;
     if (limit == UINT64_MAX || need <= (long double)limit) return NPRFX_OK;
     char needs[32], lim[32];
-    nprfx_format_bytes(needs, sizeof needs, need >= 1.8e19L ? UINT64_MAX : (uint64_t)need);
-    nprfx_format_bytes(lim, sizeof lim, limit);
+    cli_format_bytes(needs, sizeof needs, need >= 1.8e19L ? UINT64_MAX : (uint64_t)need);
+    cli_format_bytes(lim, sizeof lim, limit);
     return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY,
                        "%s %lldx%lld with %lld channel%s needs %s, above the %s memory limit (%s)",
                        what, (long long)w, (long long)h, (long long)channels,
-                       channels == 1 ? "" : "s", needs, lim, nprfx_mem_limit_origin());
+                       channels == 1 ? "" : "s", needs, lim, cli_mem_limit_origin());
 }

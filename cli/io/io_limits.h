@@ -27,28 +27,28 @@ extern "C" {
 #endif
 
 /* The memory bound in bytes (UINT64_MAX: none). A malformed NPRFX_READ_LIMIT is an error. */
-nprfx_result nprfx_image_limit(nprfx_context *ctx, uint64_t *bytes);
+nprfx_result cli_image_limit(nprfx_context *ctx, uint64_t *bytes);
 /* Set the limit for the rest of the process (--mem-limit; UINT64_MAX: none), over the
  * environment's. */
-void nprfx_mem_limit_set(uint64_t bytes);
+void cli_mem_limit_set(uint64_t bytes);
 /* Where the limit comes from, for messages: "--mem-limit", "NPRFX_READ_LIMIT" or the default. */
-const char *nprfx_mem_limit_origin(void);
+const char *cli_mem_limit_origin(void);
 /* Parse a size: "4G", "512M", "1.5GiB", "1073741824"; "0" is no limit (UINT64_MAX).
  * NPRFX_ERR_INVALID_ARGUMENT (nothing raised) when text is not one. */
-nprfx_result nprfx_parse_size(const char *text, uint64_t *bytes);
+nprfx_result cli_parse_size(const char *text, uint64_t *bytes);
 
 /* The read time bound in seconds (0: none). A malformed NPRFX_READ_TIMEOUT is an error. */
-nprfx_result nprfx_read_timeout(nprfx_context *ctx, double *seconds);
+nprfx_result cli_read_timeout(nprfx_context *ctx, double *seconds);
 
 /* "44.7 GiB", "512 MiB", "900 bytes": sizes in messages. */
-void nprfx_format_bytes(char *buf, size_t n, uint64_t bytes);
+void cli_format_bytes(char *buf, size_t n, uint64_t bytes);
 
 /* Refuse an image of w x h pixels and `channels` float channels (plus extra_bytes of scratch)
  * when it would exceed the memory bound: "WHAT WxH with N channels needs 27.0 GiB, above the
  * 4 GiB memory limit (NPRFX_READ_LIMIT)". what names the file, node or option and what the
  * size is ("'a.exr': data window", "synth --size"). */
-nprfx_result nprfx_image_limit_check(nprfx_context *ctx, const char *what, int64_t w, int64_t h,
-                                     int64_t channels, uint64_t extra_bytes);
+nprfx_result cli_image_limit_check(nprfx_context *ctx, const char *what, int64_t w, int64_t h,
+                                   int64_t channels, uint64_t extra_bytes);
 
 #ifdef __cplusplus
 }

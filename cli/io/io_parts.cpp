@@ -54,11 +54,6 @@ std::string oiio_error(const ImageOutput *out)
 
 /* ---- reading: parts and views ------------------------------------------------------------- */
 
-
-
-
-
-
 std::string part_label(const part &p)
 {
     std::string s = "part " + std::to_string(p.index);
@@ -210,7 +205,7 @@ std::vector<chan> group_channels(const header &h, const std::vector<const part *
     return out;
 }
 
-bool holds_all(const std::vector<chan> &chans, const nprfx_read_options &o)
+bool holds_all(const std::vector<chan> &chans, const cli_read_options &o)
 {
     std::vector<const char *> names;
     for (const chan &c : chans)
@@ -220,8 +215,8 @@ bool holds_all(const std::vector<chan> &chans, const nprfx_read_options &o)
         char bad[256];
         int amb = 0;
         if (!o.want[i] || !*o.want[i]) continue;
-        if (nprfx_channels_select(names.data(), (int)names.size(), o.want[i], idx.data(),
-                                  (int)idx.size(), bad, sizeof bad, &amb) < 0)
+        if (cli_channels_select(names.data(), (int)names.size(), o.want[i], idx.data(),
+                                (int)idx.size(), bad, sizeof bad, &amb) < 0)
             return false;
     }
     return true;
@@ -251,7 +246,7 @@ std::string list_text(const std::vector<std::string> &v)
 }
 
 /* Choose the parts and view a read takes (docs/design.md §2.3). */
-failure choose(const char *path, const header &h, const nprfx_read_options &o, choice &ch)
+failure choose(const char *path, const header &h, const cli_read_options &o, choice &ch)
 {
     const std::string file = "'" + std::string(path) + "'";
     const std::string want_view = o.view && *o.view ? o.view : "";

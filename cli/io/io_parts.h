@@ -38,7 +38,7 @@ struct chan {
     const part *p;
     int c;
     std::string name;
-    unsigned char type; /* nprfx_pixel_type */
+    unsigned char type; /* cli_pixel_type */
 };
 
 /* What a read takes: parts of one data and display window, one view, and what to tell. */
@@ -67,13 +67,14 @@ bool same_windows(const ImageSpec &a, const ImageSpec &b);
 unsigned char pixel_type(const header &h, const ImageSpec &s, int c);
 nprfx_result scan(nprfx_context *ctx, const char *path, std::unique_ptr<ImageInput> &in, header &h);
 std::vector<std::string> split_dots(const std::string &s);
-std::string channel_view(const header &h, const part &p, const std::string &name, std::string &bare);
+std::string channel_view(const header &h, const part &p, const std::string &name,
+                         std::string &bare);
 std::vector<chan> group_channels(const header &h, const std::vector<const part *> &group,
                                  const std::string &view);
-bool holds_all(const std::vector<chan> &chans, const nprfx_read_options &o);
+bool holds_all(const std::vector<chan> &chans, const cli_read_options &o);
 failure refuse_part(const char *path, const part &p);
 std::string list_text(const std::vector<std::string> &v);
-failure choose(const char *path, const header &h, const nprfx_read_options &o, choice &ch);
+failure choose(const char *path, const header &h, const cli_read_options &o, choice &ch);
 char *dup_cstr(const std::string &s);
 char **dup_names(const std::vector<std::string> &v);
 void copy_field(char *dst, size_t n, const std::string &s);

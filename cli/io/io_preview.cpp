@@ -32,14 +32,13 @@ using OIIO::TypeDesc;
 
 using namespace cli_io;
 
-extern "C" nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *path,
-                                               const nprfx_image *im,
-                                               const nprfx_preview_options *opt)
+extern "C" nprfx_result cli_io_write_preview(nprfx_context *ctx, const char *path,
+                                             const nprfx_image *im, const cli_preview_options *opt)
 {
     if (!path || !im || !im->data || im->channels < 1 || nprfx_rect_empty(im->bounds))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write preview '%s': no image",
                            path ? path : "(null)");
-    nprfx_preview_options o;
+    cli_preview_options o;
     std::memset(&o, 0, sizeof o);
     o.size = sizeof o;
     if (opt) {

@@ -14,16 +14,16 @@ extern "C" {
  * 4: RGBA. With an OCIO config (ocio_config path, or $OCIO when NULL) the image goes from
  * `colorspace` (NULL: the config's scene_linear role) through display/view (NULL: the config's
  * defaults); with no config, the plain sRGB transfer function is applied. */
-typedef struct nprfx_preview_options {
+typedef struct cli_preview_options {
     size_t size;
     const char *ocio_config;
     const char *colorspace;
     const char *display;
     const char *view;
     int raw; /* 1: no transform at all (data passes: noise, masks), values clamped to [0,1] */
-} nprfx_preview_options;
-nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *path, const nprfx_image *im,
-                                    const nprfx_preview_options *opt);
+} cli_preview_options;
+nprfx_result cli_io_write_preview(nprfx_context *ctx, const char *path, const nprfx_image *im,
+                                  const cli_preview_options *opt);
 
 #ifdef __cplusplus
 }

@@ -40,9 +40,9 @@ namespace cli_io
 /* ---- reading ------------------------------------------------------------------------------ */
 
 /* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
-nprfx_read_options read_options(const nprfx_read_options *opt)
+cli_read_options read_options(const cli_read_options *opt)
 {
-    nprfx_read_options o;
+    cli_read_options o;
     std::memset(&o, 0, sizeof o);
     o.size = sizeof o;
     if (opt && opt->size >= sizeof(size_t))
@@ -104,7 +104,7 @@ void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, 
 }
 
 /* Guard, header, choice of parts and view, and the channels to deliver: everything but pixels. */
-nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read_options &o,
+nprfx_result open_reading(nprfx_context *ctx, const char *path, const cli_read_options &o,
                           reading &rd, bool rows = false)
 {
     rd.path = path;
@@ -112,7 +112,7 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
     /* Damaged files are refused before OIIO allocates anything (io_validate.h). A read of chosen
      * channels is held to the memory limit by what it delivers, checked once they are known. */
     if (nprfx_result g =
-            nprfx_io_guard(ctx, path, rd.chosen ? NPRFX_GUARD_READ_CHOSEN : NPRFX_GUARD_READ))
+            cli_io_guard(ctx, path, rd.chosen ? NPRFX_GUARD_READ_CHOSEN : NPRFX_GUARD_READ))
         return g;
     nprfx_result r = scan(ctx, path, rd.in, rd.h);
     if (r) return r;
@@ -190,10 +190,9 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const nprfx_read
         }
         std::string what =
             "'" + std::string(path) + (rows ? "': a block of rows" : "': data window");
-        if ((r = rows
-                     ? nprfx_image_limit_check(ctx, what.c_str(), first.width, block_h, block_ch, 0)
-                     : nprfx_image_limit_check(ctx, what.c_str(), first.width, first.height,
-                                               (int64_t)nch, scratch)))
+        if ((r = rows ? cli_image_limit_check(ctx, what.c_str(), first.width, block_h, block_ch, 0)
+                      : cli_image_limit_check(ctx, what.c_str(), first.width, first.height,
+                                              (int64_t)nch, scratch)))
             return r;
     }
     rd.umax.assign(nch, 0);
@@ -241,9 +240,9 @@ nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1, float 
                         ? rd.in->read_tiles(p->index, 0, p->spec.x, p->spec.x + p->spec.width, by,
                                             be, 0, 1, lo, hi + 1, type, buf)
                         : rd.in->read_scanlines(p->index, 0, by, be, 0, lo, hi + 1, type, buf);
-                if (nprfx_io_deadline_passed()) {
+                if (cli_io_deadline_passed()) {
                     oiio_error(rd.in.get());
-                    return nprfx_io_deadline_error(ctx, rd.path.c_str());
+                    return cli_io_deadline_error(ctx, rd.path.c_str());
                 }
                 const chan *a = nullptr, *b = nullptr;
                 for (const chan &c : rd.sel)
@@ -301,12 +300,12 @@ nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
         if (!as_uint) {
             /* The read deadline (NPRFX_READ_TIMEOUT) stops OIIO between strips of rows. */
             ok = rd.in->read_image(a.p->index, 0, c0, c1, TypeDesc::FLOAT, d, xstride, ystride,
-                                   OIIO::AutoStride, nprfx_io_read_progress, nullptr);
+                                   OIIO::AutoStride, cli_io_read_progress, nullptr);
         } else {
             rd.ubuf.resize(npix * (size_t)n);
             ok = rd.in->read_image(a.p->index, 0, c0, c1, TypeDesc::UINT, rd.ubuf.data(),
                                    OIIO::AutoStride, OIIO::AutoStride, OIIO::AutoStride,
-                                   nprfx_io_read_progress, nullptr);
+                                   cli_io_read_progress, nullptr);
             for (size_t i = 0; ok && i < npix; i++)
                 for (int j = 0; j < n; j++) {
                     uint32_t v = rd.ubuf[i * n + j];
@@ -314,9 +313,9 @@ nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
                     if (v > rd.umax[k0 + j]) rd.umax[k0 + j] = v;
                 }
         }
-        if (nprfx_io_deadline_passed()) {
+        if (cli_io_deadline_passed()) {
             oiio_error(rd.in.get());
-            return nprfx_io_deadline_error(ctx, rd.path.c_str());
+            return cli_io_deadline_error(ctx, rd.path.c_str());
         }
         if (!ok) return channels_error(ctx, rd, rd.sel[k0], rd.sel[k1 - 1]);
         k0 = k1;
@@ -326,7 +325,7 @@ nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
 
 /* out's description of the plate (everything but pixels) and the read's note: which parts and
  * view, and uint values float cannot hold (once the pixels are read). */
-nprfx_result describe(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
+nprfx_result describe(nprfx_context *ctx, const reading &rd, cli_plate *out)
 {
     const ImageSpec &first = rd.ch.group[0]->spec;
     std::vector<std::string> names;
@@ -337,7 +336,7 @@ nprfx_result describe(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
     out->names = dup_names(names);
     out->nchannels = out->names ? (int)nch : 0;
     if (!out->names || !out->types) {
-        nprfx_plate_free(out);
+        cli_plate_free(out);
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'",
                            rd.path.c_str());
     }
@@ -349,7 +348,7 @@ nprfx_result describe(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
     return NPRFX_OK;
 }
 
-nprfx_result set_note(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
+nprfx_result set_note(nprfx_context *ctx, const reading &rd, cli_plate *out)
 {
     std::string note = rd.ch.note, rounded;
     bool warn = rd.ch.warn;
@@ -379,13 +378,13 @@ nprfx_result set_note(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
 
 using namespace cli_io;
 
-extern "C" nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path,
-                                         const nprfx_read_options *opt, nprfx_plate *out)
+extern "C" nprfx_result cli_io_read_ex(nprfx_context *ctx, const char *path,
+                                       const cli_read_options *opt, cli_plate *out)
 {
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_read: NULL argument");
     std::memset(out, 0, sizeof *out);
-    const nprfx_read_options o = read_options(opt);
+    const cli_read_options o = read_options(opt);
     try {
         reading rd;
         nprfx_result r = open_reading(ctx, path, o, rd);
@@ -399,7 +398,7 @@ extern "C" nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path,
         if ((r = describe(ctx, rd, out))) return r;
         out->pixels = static_cast<float *>(std::malloc(npix * nch * sizeof(float)));
         if (!out->pixels) {
-            nprfx_plate_free(out);
+            cli_plate_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY,
                                "out of memory reading %s (%dx%d, %zu channels)", where.c_str(),
                                first.width, first.height, nch);
@@ -408,28 +407,28 @@ extern "C" nprfx_result nprfx_io_read_ex(nprfx_context *ctx, const char *path,
                       : read_runs(ctx, rd, out->pixels);
         if (!r) r = set_note(ctx, rd, out);
         if (r) {
-            nprfx_plate_free(out);
+            cli_plate_free(out);
             return r;
         }
         rd.in->close();
         return NPRFX_OK;
     } catch (const std::exception &e) {
-        nprfx_plate_free(out);
+        cli_plate_free(out);
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
     }
 }
 
-extern "C" nprfx_result nprfx_io_read(nprfx_context *ctx, const char *path, nprfx_plate *out)
+extern "C" nprfx_result cli_io_read(nprfx_context *ctx, const char *path, cli_plate *out)
 {
-    return nprfx_io_read_ex(ctx, path, nullptr, out);
+    return cli_io_read_ex(ctx, path, nullptr, out);
 }
 
-extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprfx_file_info *out)
+extern "C" nprfx_result cli_io_info(nprfx_context *ctx, const char *path, cli_file_info *out)
 {
     if (!out || !path)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_info: NULL argument");
     std::memset(out, 0, sizeof *out);
-    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
+    if (nprfx_result g = cli_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
     try {
         std::unique_ptr<ImageInput> in;
         header h;
@@ -438,7 +437,7 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
         /* What a default read takes; a file no read can take (deep only) is still described,
          * from its first part. */
         choice ch;
-        const nprfx_read_options o = read_options(nullptr);
+        const cli_read_options o = read_options(nullptr);
         if (choose(path, h, o, ch).code) {
             ch.group = {&h.parts[0]};
             ch.chans.clear();
@@ -468,11 +467,11 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
         out->views = dup_names(h.views);
         out->nviews = out->views ? (int)h.views.size() : 0;
         out->parts =
-            static_cast<nprfx_part_info *>(std::calloc(h.parts.size(), sizeof(nprfx_part_info)));
+            static_cast<cli_part_info *>(std::calloc(h.parts.size(), sizeof(cli_part_info)));
         bool ok = out->names && out->types && out->views && out->parts;
         for (size_t i = 0; ok && i < h.parts.size(); i++) {
             const part &p = h.parts[i];
-            nprfx_part_info &pi = out->parts[i];
+            cli_part_info &pi = out->parts[i];
             out->nparts = (int)i + 1;
             pi.index = p.index;
             copy_field(pi.name, sizeof pi.name, p.name);
@@ -497,27 +496,27 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
             ok = pi.names && pi.types;
         }
         if (!ok) {
-            nprfx_file_info_free(out);
+            cli_file_info_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'", path);
         }
         in->close();
         return NPRFX_OK;
     } catch (const std::exception &e) {
-        nprfx_file_info_free(out);
+        cli_file_info_free(out);
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
     }
 }
 
-extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char *path,
-                                                 const char *prefix, char ***names, char ***values,
-                                                 int *count)
+extern "C" nprfx_result cli_io_read_attributes(nprfx_context *ctx, const char *path,
+                                               const char *prefix, char ***names, char ***values,
+                                               int *count)
 {
     if (!path || !names || !values || !count)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "nprfx_io_read_attributes: NULL argument");
     *names = *values = nullptr;
     *count = 0;
-    if (nprfx_result g = nprfx_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
+    if (nprfx_result g = cli_io_guard(ctx, path, NPRFX_GUARD_HEADER)) return g;
     try {
         std::unique_ptr<ImageInput> in = ImageInput::open(path);
         if (!in) {
@@ -542,7 +541,7 @@ extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char 
         *names = dup_names(n);
         *values = dup_names(v);
         if (!*names || !*values) {
-            nprfx_attributes_free(*names, *values, (int)n.size());
+            cli_attributes_free(*names, *values, (int)n.size());
             *names = *values = nullptr;
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading '%s'", path);
         }
@@ -553,7 +552,7 @@ extern "C" nprfx_result nprfx_io_read_attributes(nprfx_context *ctx, const char 
     }
 }
 
-extern "C" void nprfx_attributes_free(char **names, char **values, int count)
+extern "C" void cli_attributes_free(char **names, char **values, int count)
 {
     for (int i = 0; i < count; i++) {
         if (names) std::free(names[i]);
@@ -565,38 +564,38 @@ extern "C" void nprfx_attributes_free(char **names, char **values, int count)
 
 /* ---- rows: strip renders ----------------------------------------------------------------- */
 
-struct nprfx_row_reader {
+struct cli_row_reader {
     reading rd;
 };
 
-extern "C" nprfx_result nprfx_io_rows_open(nprfx_context *ctx, const char *path,
-                                           const nprfx_read_options *opt, nprfx_plate *shape,
-                                           nprfx_row_reader **out)
+extern "C" nprfx_result cli_io_rows_open(nprfx_context *ctx, const char *path,
+                                         const cli_read_options *opt, cli_plate *shape,
+                                         cli_row_reader **out)
 {
     if (!path || !shape || !out)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_open: NULL argument");
     std::memset(shape, 0, sizeof *shape);
     *out = nullptr;
-    const nprfx_read_options o = read_options(opt);
+    const cli_read_options o = read_options(opt);
     try {
-        std::unique_ptr<nprfx_row_reader> r(new nprfx_row_reader);
+        std::unique_ptr<cli_row_reader> r(new cli_row_reader);
         nprfx_result e = open_reading(ctx, path, o, r->rd, true);
         if (!e) e = describe(ctx, r->rd, shape);
         if (!e) e = set_note(ctx, r->rd, shape);
         if (e) {
-            nprfx_plate_free(shape);
+            cli_plate_free(shape);
             return e;
         }
         *out = r.release();
         return NPRFX_OK;
     } catch (const std::exception &e) {
-        nprfx_plate_free(shape);
+        cli_plate_free(shape);
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", path, e.what());
     }
 }
 
-extern "C" nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader *r, int y0, int y1,
-                                           float *dst)
+extern "C" nprfx_result cli_io_rows_read(nprfx_context *ctx, cli_row_reader *r, int y0, int y1,
+                                         float *dst)
 {
     if (!r || !dst)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_read: NULL argument");
@@ -612,7 +611,7 @@ extern "C" nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader 
     }
 }
 
-extern "C" void nprfx_io_rows_close(nprfx_row_reader *r)
+extern "C" void cli_io_rows_close(cli_row_reader *r)
 {
     if (r && r->rd.in) r->rd.in->close();
     delete r;

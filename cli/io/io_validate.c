@@ -41,7 +41,7 @@ static const char *exr_why(exr_result_t rv)
     return exr_get_default_error_message(rv);
 }
 
-int nprfx_io_is_exr(const char *path)
+int cli_io_is_exr(const char *path)
 {
     FILE *f = fopen(path, "rb");
     if (!f) return 0;
@@ -361,7 +361,7 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' is damaged: %d parts%s%s", path, nparts,
                            rv ? ": " : "", rv ? exr_why(rv) : "");
     uint64_t limit;
-    nprfx_result r = nprfx_image_limit(ctx, &limit);
+    nprfx_result r = cli_image_limit(ctx, &limit);
     if (r) return r;
     int64_t total_channels = 0, x0 = 0, y0 = 0, x1 = 0, y1 = 0, uint_scratch = 0;
     int seen = 0;          /* pixel parts whose windows are in x0..y1 (deep parts are not) */
@@ -447,8 +447,8 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
             int over_limit = mode == NPRFX_GUARD_READ && plate > (double)limit;
             if (decoded > most && !over_limit) {
                 char need[32], have[32];
-                nprfx_format_bytes(need, sizeof need, (uint64_t)decoded);
-                nprfx_format_bytes(have, sizeof have, file_size);
+                cli_format_bytes(need, sizeof need, (uint64_t)decoded);
+                cli_format_bytes(have, sizeof have, file_size);
                 return nprfx_error(ctx, NPRFX_ERR_IO,
                                    "'%s' is damaged: part %d declares a %lldx%lld data window of "
                                    "%d channels (%s of pixels), more than a file of %s can hold",
@@ -513,8 +513,8 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         char what[4200];
         snprintf(what, sizeof what, "'%s': data window", path);
         double scratch = (double)uint_scratch * 4.0 + (double)tile_row;
-        if ((r = nprfx_image_limit_check(ctx, what, x1 - x0, y1 - y0, total_channels,
-                                         scratch > 1.8e19 ? UINT64_MAX : (uint64_t)scratch)))
+        if ((r = cli_image_limit_check(ctx, what, x1 - x0, y1 - y0, total_channels,
+                                       scratch > 1.8e19 ? UINT64_MAX : (uint64_t)scratch)))
             return r;
     }
     walk wk = {ctx, path, f, 0, file_size, 0.0, deadline, timeout, 0};
@@ -542,13 +542,13 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_io_validate_exr(nprfx_context *ctx, const char *path, int mode, double deadline)
+nprfx_result cli_io_validate_exr(nprfx_context *ctx, const char *path, int mode, double deadline)
 {
     struct stat sb;
     if (stat(path, &sb) != 0 || !S_ISREG(sb.st_mode))
         return NPRFX_OK; /* the reader reports a missing or special file in its own words */
     double timeout = 0;
-    nprfx_result r = nprfx_read_timeout(ctx, &timeout);
+    nprfx_result r = cli_read_timeout(ctx, &timeout);
     if (r || (r = prescan(ctx, path, (uint64_t)sb.st_size))) return r;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;

@@ -15,8 +15,8 @@
 extern "C" {
 #endif
 
-/* How far the checks go (io_guard.h's nprfx_io_guard takes the same modes). */
-typedef enum nprfx_io_guard_mode {
+/* How far the checks go (io_guard.h's cli_io_guard takes the same modes). */
+typedef enum cli_io_guard_mode {
     /* Header facts only (nprfx info, attributes): structure and names, no memory bound. */
     NPRFX_GUARD_HEADER = 0,
     /* A full read: also the decoded size against the memory bound (NPRFX_READ_LIMIT). */
@@ -24,16 +24,16 @@ typedef enum nprfx_io_guard_mode {
     /* A read of channels the caller chooses: as NPRFX_GUARD_READ, but the decoded size is held
      * to the memory bound by the reader, once it knows the channels it delivers. */
     NPRFX_GUARD_READ_CHOSEN = 2
-} nprfx_io_guard_mode;
+} cli_io_guard_mode;
 
 /* The EXR checks: header parse, parts, windows, channel names and count, tile sizes, chunk
  * counts and every chunk's place against the file's size and a plausible compression ratio, and
  * in NPRFX_GUARD_READ mode the decoded size. deadline: cli_now() time after which the
  * walk over the chunks gives up (0: none). */
-nprfx_result nprfx_io_validate_exr(nprfx_context *ctx, const char *path, int mode, double deadline);
+nprfx_result cli_io_validate_exr(nprfx_context *ctx, const char *path, int mode, double deadline);
 
 /* 1 when the file begins with the EXR magic number. */
-int nprfx_io_is_exr(const char *path);
+int cli_io_is_exr(const char *path);
 
 #ifdef __cplusplus
 }

@@ -128,14 +128,13 @@ std::vector<std::string> default_names(int n)
     return v;
 }
 
-
 /* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
-nprfx_result write_options(nprfx_context *ctx, const char *path, const nprfx_write_options *opt,
-                           nprfx_write_options &o)
+nprfx_result write_options(nprfx_context *ctx, const char *path, const cli_write_options *opt,
+                           cli_write_options &o)
 {
     o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
     if (opt) {
-        if (opt->size < offsetof(nprfx_write_options, compression) + sizeof(const char *) ||
+        if (opt->size < offsetof(cli_write_options, compression) + sizeof(const char *) ||
             opt->size > sizeof o)
             return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                                "cannot write '%s': bad nprfx_write_options size %zu", path,
@@ -150,8 +149,7 @@ nprfx_result write_options(nprfx_context *ctx, const char *path, const nprfx_wri
  * they differ (formats empty: all float, or all half). */
 nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds, int channels,
                         const char *const *names, const nprfx_rect *display,
-                        const nprfx_write_options &o, ImageSpec &spec,
-                        std::vector<TypeDesc> &formats)
+                        const cli_write_options &o, ImageSpec &spec, std::vector<TypeDesc> &formats)
 {
     std::vector<std::string> cn;
     if (names) {
@@ -192,7 +190,7 @@ nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds,
                            path, o.compression);
     spec.attribute("compression", o.compression);
     for (int i = 0; o.attributes && i < o.nattributes; i++) {
-        const nprfx_attribute &a = o.attributes[i];
+        const cli_attribute &a = o.attributes[i];
         if (!a.name || !*a.name || !a.value)
             return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                                "cannot write '%s': attribute %d has no name or value", path, i);
@@ -265,14 +263,13 @@ void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &formats,
         }
 }
 
-
 } // namespace cli_io
 
 using namespace cli_io;
 
-extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
-                                       const char *const *names, const nprfx_rect *display,
-                                       const nprfx_write_options *opt)
+extern "C" nprfx_result cli_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
+                                     const char *const *names, const nprfx_rect *display,
+                                     const cli_write_options *opt)
 {
     if (!path || !im || !im->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': no image",
@@ -281,7 +278,7 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
         return nprfx_error(
             ctx, NPRFX_ERR_INVALID_ARGUMENT, "cannot write '%s': empty image (%dx%d, %d channels)",
             path, nprfx_rect_width(im->bounds), nprfx_rect_height(im->bounds), im->channels);
-    nprfx_write_options o;
+    cli_write_options o;
     if (nprfx_result r = write_options(ctx, path, opt, o)) return r;
     try {
         ImageSpec spec;
@@ -302,7 +299,7 @@ extern "C" nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, con
     }
 }
 
-struct nprfx_row_writer {
+struct cli_row_writer {
     std::string path, tmp;
     std::unique_ptr<ImageOutput> out;
     std::vector<TypeDesc> formats;
@@ -315,7 +312,7 @@ struct nprfx_row_writer {
 namespace
 {
 
-void rows_discard(nprfx_row_writer *w)
+void rows_discard(cli_row_writer *w)
 {
     if (w->out) w->out->close();
     w->out.reset();
@@ -326,10 +323,10 @@ void rows_discard(nprfx_row_writer *w)
 
 } // namespace
 
-extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path,
-                                             nprfx_rect bounds, int channels,
-                                             const char *const *names, const nprfx_rect *display,
-                                             const nprfx_write_options *opt, nprfx_row_writer **out)
+extern "C" nprfx_result cli_io_rows_create(nprfx_context *ctx, const char *path, nprfx_rect bounds,
+                                           int channels, const char *const *names,
+                                           const nprfx_rect *display, const cli_write_options *opt,
+                                           cli_row_writer **out)
 {
     namespace fs = std::filesystem;
     if (!path || !out)
@@ -339,10 +336,10 @@ extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *pat
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "cannot write '%s': empty image (%dx%d, %d channels)", path,
                            nprfx_rect_width(bounds), nprfx_rect_height(bounds), channels);
-    nprfx_write_options o;
+    cli_write_options o;
     if (nprfx_result r = write_options(ctx, path, opt, o)) return r;
     try {
-        std::unique_ptr<nprfx_row_writer> w(new nprfx_row_writer);
+        std::unique_ptr<cli_row_writer> w(new cli_row_writer);
         ImageSpec spec;
         nprfx_result r =
             write_spec(ctx, path, bounds, channels, names, display, o, spec, w->formats);
@@ -370,7 +367,7 @@ extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *pat
         w->bounds = bounds;
         w->next_y = bounds.y0;
         w->dy = spec.y - bounds.y0;
-        /* Written under a temporary name, renamed by nprfx_io_rows_finish (as every write). */
+        /* Written under a temporary name, renamed by cli_io_rows_finish (as every write). */
         if (!w->out->open(w->tmp, spec)) {
             std::string e = oiio_error(w->out.get());
             rows_discard(w.release());
@@ -383,8 +380,8 @@ extern "C" nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *pat
     }
 }
 
-extern "C" nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer *w,
-                                            const nprfx_image *rows)
+extern "C" nprfx_result cli_io_rows_write(nprfx_context *ctx, cli_row_writer *w,
+                                          const nprfx_image *rows)
 {
     if (!w || !rows || !rows->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_write: NULL argument");
@@ -418,7 +415,7 @@ extern "C" nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer
     }
 }
 
-extern "C" nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_writer *w, int keep)
+extern "C" nprfx_result cli_io_rows_finish(nprfx_context *ctx, cli_row_writer *w, int keep)
 {
     if (!w) return NPRFX_OK;
     if (!keep || w->next_y != w->bounds.y1) {
@@ -446,8 +443,8 @@ extern "C" nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_write
     return nprfx_error(ctx, NPRFX_ERR_IO, "cannot write '%s': %s", path.c_str(), err.c_str());
 }
 
-extern "C" nprfx_result nprfx_io_write_text(nprfx_context *ctx, const char *path, const char *text,
-                                            size_t len)
+extern "C" nprfx_result cli_io_write_text(nprfx_context *ctx, const char *path, const char *text,
+                                          size_t len)
 {
     namespace fs = std::filesystem;
     try {

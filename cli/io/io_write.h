@@ -11,26 +11,25 @@ extern "C" {
 
 /* Write an EXR (or any format OIIO knows, by extension) with the given channel names
  * (names may be NULL: default names by count). display: the display window (NULL = bounds). */
-nprfx_result nprfx_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
-                            const char *const *names, const nprfx_rect *display,
-                            const nprfx_write_options *opt);
+nprfx_result cli_io_write(nprfx_context *ctx, const char *path, const nprfx_image *im,
+                          const char *const *names, const nprfx_rect *display,
+                          const cli_write_options *opt);
 
-/* An image written a strip of rows at a time, top to bottom: as nprfx_io_write (same header,
- * types and options, a temporary name beside path), but each nprfx_io_rows_write gives the next
- * rows (full width of bounds), and nprfx_io_rows_finish with keep renames the file into place
+/* An image written a strip of rows at a time, top to bottom: as cli_io_write (same header,
+ * types and options, a temporary name beside path), but each cli_io_rows_write gives the next
+ * rows (full width of bounds), and cli_io_rows_finish with keep renames the file into place
  * once every row is written; without keep (or on any error) the temporary file is removed. The
  * writer is freed by finish. */
-typedef struct nprfx_row_writer nprfx_row_writer;
-nprfx_result nprfx_io_rows_create(nprfx_context *ctx, const char *path, nprfx_rect bounds,
-                                  int channels, const char *const *names, const nprfx_rect *display,
-                                  const nprfx_write_options *opt, nprfx_row_writer **out);
-nprfx_result nprfx_io_rows_write(nprfx_context *ctx, nprfx_row_writer *w, const nprfx_image *rows);
-nprfx_result nprfx_io_rows_finish(nprfx_context *ctx, nprfx_row_writer *w, int keep);
+typedef struct cli_row_writer cli_row_writer;
+nprfx_result cli_io_rows_create(nprfx_context *ctx, const char *path, nprfx_rect bounds,
+                                int channels, const char *const *names, const nprfx_rect *display,
+                                const cli_write_options *opt, cli_row_writer **out);
+nprfx_result cli_io_rows_write(nprfx_context *ctx, cli_row_writer *w, const nprfx_image *rows);
+nprfx_result cli_io_rows_finish(nprfx_context *ctx, cli_row_writer *w, int keep);
 
 /* Write len bytes of text to path through a temporary name and a rename, creating missing
  * parent directories (vector exports: CSV, SVG). */
-nprfx_result nprfx_io_write_text(nprfx_context *ctx, const char *path, const char *text,
-                                 size_t len);
+nprfx_result cli_io_write_text(nprfx_context *ctx, const char *path, const char *text, size_t len);
 
 #ifdef __cplusplus
 }

@@ -26,7 +26,7 @@ typedef struct lock_entry {
     int fd;
 } lock_entry;
 
-struct nprfx_output_locks {
+struct cli_output_locks {
     lock_entry *entries;
     int count;
     int shared; /* LOCK_SH: other shared holders may hold the same files */
@@ -137,7 +137,7 @@ static void write_holder(int fd, const char *graph_path)
  * because a releasing run unlinks its lock file: a run that opened the old file and got its
  * lock after the release holds a lock nobody else can see, so it opens the path again. */
 static nprfx_result acquire(nprfx_context *ctx, lock_entry *e, const char *graph_path, int wait,
-                            int shared, nprfx_output_lock_notice notice, void *user)
+                            int shared, cli_output_lock_notice notice, void *user)
 {
     int told = 0, transient = 0, how = shared ? LOCK_SH : LOCK_EX;
     for (;;) {
@@ -148,7 +148,7 @@ static nprfx_result acquire(nprfx_context *ctx, lock_entry *e, const char *graph
         int rc = flock(fd, how | LOCK_NB);
         if (rc && errno == EWOULDBLOCK && shared && transient < 100) {
             /* The last shared holder makes its lock exclusive for a moment to remove the file
-             * (nprfx_output_locks_release): try again before calling it another run's. */
+             * (cli_output_locks_release): try again before calling it another run's. */
             close(fd);
             transient++;
             struct timespec ts = {0, 10 * 1000 * 1000};
@@ -225,7 +225,7 @@ static int is_temp_of(const char *base, const char *name)
 
 /* Remove what a killed run left of e's sequence (only its temporary names, only plain files):
  * while the lock is held no other run writes them. */
-static void remove_stale_temps(const lock_entry *e, nprfx_output_lock_notice notice, void *user)
+static void remove_stale_temps(const lock_entry *e, cli_output_lock_notice notice, void *user)
 {
     DIR *d = opendir(e->dir);
     if (!d) return;
@@ -249,10 +249,10 @@ static void remove_stale_temps(const lock_entry *e, nprfx_output_lock_notice not
 
 static nprfx_result take(nprfx_context *ctx, const char *const *patterns, int count,
                          const char *graph_path, int wait, int shared,
-                         nprfx_output_lock_notice notice, void *user, nprfx_output_locks **out)
+                         cli_output_lock_notice notice, void *user, cli_output_locks **out)
 {
     *out = NULL;
-    nprfx_output_locks *l = calloc(1, sizeof *l);
+    cli_output_locks *l = calloc(1, sizeof *l);
     lock_entry *es = calloc((size_t)(count > 0 ? count : 1), sizeof *es);
     if (!l || !es) {
         free(l);
@@ -274,13 +274,13 @@ static nprfx_result take(nprfx_context *ctx, const char *const *patterns, int co
         r = acquire(ctx, &es[i], graph_path, wait, shared, notice, user);
         if (r) {
             l->count = i; /* release the ones taken */
-            nprfx_output_locks_release(l);
+            cli_output_locks_release(l);
             return r;
         }
     }
     if (r) {
         l->count = 0;
-        nprfx_output_locks_release(l);
+        cli_output_locks_release(l);
         return r;
     }
     for (int i = 0; !shared && i < l->count; i++)
@@ -289,23 +289,22 @@ static nprfx_result take(nprfx_context *ctx, const char *const *patterns, int co
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patterns, int count,
-                                     const char *graph_path, int wait,
-                                     nprfx_output_lock_notice notice, void *user,
-                                     nprfx_output_locks **out)
+nprfx_result cli_output_locks_take(nprfx_context *ctx, const char *const *patterns, int count,
+                                   const char *graph_path, int wait, cli_output_lock_notice notice,
+                                   void *user, cli_output_locks **out)
 {
     return take(ctx, patterns, count, graph_path, wait, 0, notice, user, out);
 }
 
-nprfx_result nprfx_output_locks_take_shared(nprfx_context *ctx, const char *const *patterns,
-                                            int count, const char *graph_path, int wait,
-                                            nprfx_output_lock_notice notice, void *user,
-                                            nprfx_output_locks **out)
+nprfx_result cli_output_locks_take_shared(nprfx_context *ctx, const char *const *patterns,
+                                          int count, const char *graph_path, int wait,
+                                          cli_output_lock_notice notice, void *user,
+                                          cli_output_locks **out)
 {
     return take(ctx, patterns, count, graph_path, wait, 1, notice, user, out);
 }
 
-void nprfx_output_locks_release(nprfx_output_locks *l)
+void cli_output_locks_release(cli_output_locks *l)
 {
     if (!l) return;
     for (int i = l->count - 1; i >= 0; i--) {

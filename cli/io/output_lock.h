@@ -18,33 +18,32 @@
 
 #include "nprfx/context.h"
 
-typedef struct nprfx_output_locks nprfx_output_locks;
+typedef struct cli_output_locks cli_output_locks;
 
 /* Told what the run is doing while taking its locks: that it waits for another run, that it
  * removed a dead run's temporary files (one finished line of text, no newline). */
-typedef void (*nprfx_output_lock_notice)(void *user, const char *message);
+typedef void (*cli_output_lock_notice)(void *user, const char *message);
 
 /* Lock every pattern ("out/x.####.exr"; repeats and spellings of one sequence are locked once),
  * creating missing folders. graph_path is recorded for other runs to name (may be NULL). wait 0:
  * a sequence another run holds is an error naming that run and the path; wait 1: block until it
  * is free. On error nothing stays locked and *out is NULL. */
-nprfx_result nprfx_output_locks_take(nprfx_context *ctx, const char *const *patterns, int count,
-                                     const char *graph_path, int wait,
-                                     nprfx_output_lock_notice notice, void *user,
-                                     nprfx_output_locks **out);
+nprfx_result cli_output_locks_take(nprfx_context *ctx, const char *const *patterns, int count,
+                                   const char *graph_path, int wait, cli_output_lock_notice notice,
+                                   void *user, cli_output_locks **out);
 
-/* As nprfx_output_locks_take, but the locks are shared: runs that lock shared (nprfx farm's
+/* As cli_output_locks_take, but the locks are shared: runs that lock shared (nprfx farm's
  * chunk tasks, `run --shared-lock`, which write disjoint frames of one sequence) run together,
  * and a run locking exclusively still excludes them all, and they it. A shared holder removes no
  * temporary file, since another holder may be writing it: the next exclusive holder does (the
  * farm's check job, after the last chunk). */
-nprfx_result nprfx_output_locks_take_shared(nprfx_context *ctx, const char *const *patterns,
-                                            int count, const char *graph_path, int wait,
-                                            nprfx_output_lock_notice notice, void *user,
-                                            nprfx_output_locks **out);
+nprfx_result cli_output_locks_take_shared(nprfx_context *ctx, const char *const *patterns,
+                                          int count, const char *graph_path, int wait,
+                                          cli_output_lock_notice notice, void *user,
+                                          cli_output_locks **out);
 
 /* Remove the lock files and release the locks (NULL: nothing). A shared holder removes a lock
  * file only when it is the last holder. */
-void nprfx_output_locks_release(nprfx_output_locks *locks);
+void cli_output_locks_release(cli_output_locks *locks);
 
 #endif

@@ -13,7 +13,7 @@ static void free_names(char **names, int n)
     free(names);
 }
 
-void nprfx_plate_free(nprfx_plate *p)
+void cli_plate_free(cli_plate *p)
 {
     if (!p) return;
     free_names(p->names, p->nchannels);
@@ -23,7 +23,7 @@ void nprfx_plate_free(nprfx_plate *p)
     memset(p, 0, sizeof *p);
 }
 
-nprfx_image nprfx_plate_view(const nprfx_plate *p, int first, int count)
+nprfx_image cli_plate_view(const cli_plate *p, int first, int count)
 {
     nprfx_image v;
     memset(&v, 0, sizeof v);
@@ -40,7 +40,7 @@ nprfx_image nprfx_plate_view(const nprfx_plate *p, int first, int count)
     return v;
 }
 
-int nprfx_plate_channel(const nprfx_plate *p, const char *name)
+int cli_plate_channel(const cli_plate *p, const char *name)
 {
     if (!p || !name) return -1;
     for (int i = 0; i < p->nchannels; i++)
@@ -48,7 +48,7 @@ int nprfx_plate_channel(const nprfx_plate *p, const char *name)
     return -1;
 }
 
-void nprfx_file_info_free(nprfx_file_info *info)
+void cli_file_info_free(cli_file_info *info)
 {
     if (!info) return;
     free_names(info->names, info->nchannels);

@@ -8,14 +8,14 @@
 extern "C" {
 #endif
 
-void nprfx_plate_free(nprfx_plate *p);
+void cli_plate_free(cli_plate *p);
 /* A view of channels [first, first+count) of the plate (shares pixels). */
-nprfx_image nprfx_plate_view(const nprfx_plate *p, int first, int count);
+nprfx_image cli_plate_view(const cli_plate *p, int first, int count);
 /* Index of a channel by exact name, or -1. */
-int nprfx_plate_channel(const nprfx_plate *p, const char *name);
+int cli_plate_channel(const cli_plate *p, const char *name);
 
-/* Free what nprfx_io_info filled in. */
-void nprfx_file_info_free(nprfx_file_info *info);
+/* Free what cli_io_info filled in. */
+void cli_file_info_free(cli_file_info *info);
 
 #ifdef __cplusplus
 }

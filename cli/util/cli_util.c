@@ -138,7 +138,7 @@ static void bytes_parts(void *user, int begin, int end, int worker)
 }
 
 void cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
-                              int parts)
+                        int parts)
 {
     bytes_job j = {src, dst, bytes, parts > 0 ? parts : 1};
     if (j.parts == 1 || !ex) {
