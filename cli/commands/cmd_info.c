@@ -151,7 +151,7 @@ static int info_file(nprfx_context *ctx, const char *path)
 }
 
 /* ---- test mode -----------------------------------------------------------------------------
- * `nprfx info --io-test OP ...` drives the io.h functions that no other command reaches yet, for
+ * `nprfx info --io-test OP ...` drives the I/O functions that no other command reaches yet, for
  * tests/cli/io.sh, which then checks the files with oiiotool as an independent reader. Not part
  * of the documented interface.
  *   write IN OUT [--half] [--compression C]          read IN, write all its channels to OUT
@@ -159,7 +159,7 @@ static int info_file(nprfx_context *ctx, const char *path)
  *   convert IN OUT FROM TO [--ocio CFG]               convert the first 3 channels, write EXR
  *   channel IN NAME                                   print the channel's index (-1: absent)
  *   view IN FIRST COUNT                               print a plate view's shape, or "absent"
- *   damaged LIST                                      a verdict for each file (cli/io_check.c)
+ *   damaged LIST                                      a verdict for each file (io_check.c)
  *   channels IN OUT A,B,...                           read only channels A, B, ... (in that
  *                                                     order), write them with their file types
  *   rows IN OUT N                                     the same, all channels, N rows at a time

@@ -2,7 +2,7 @@
  * samples, describe and check a built one, and paint procedural samples to build from.
  *
  * The core builds the strip in memory; this command reads the samples, writes the strip as an EXR
- * with the format's attributes (through cli/io.h) and reads them back for `info`. */
+ * with the format's attributes (through cli/io/io_write.h) and reads them back for `info`. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>

@@ -19,7 +19,7 @@ struct frame_pool {
     int disabled, poison;
     unsigned epoch;
     idle_buf *idle;
-    size_t idle_bytes, fresh_bytes;
+    size_t idle_bytes;
 };
 
 frame_pool *frame_pool_create(int disabled)
@@ -79,9 +79,7 @@ nprfx_result frame_pool_alloc(frame_pool *p, nprfx_context *ctx, nprfx_rect boun
             if (reused) *reused = 1;
             return NPRFX_OK;
         }
-    nprfx_result r = nprfx_image_alloc(ctx, bounds, channels, out);
-    if (!r) p->fresh_bytes += floats * sizeof(float);
-    return r;
+    return nprfx_image_alloc(ctx, bounds, channels, out);
 }
 
 void frame_pool_release(frame_pool *p, nprfx_image *im)
@@ -137,11 +135,4 @@ void frame_pool_age(frame_pool *p)
         free(b);
     }
     p->epoch++;
-}
-
-size_t frame_pool_take_fresh_bytes(frame_pool *p)
-{
-    size_t n = p->fresh_bytes;
-    p->fresh_bytes = 0;
-    return n;
 }

@@ -42,7 +42,5 @@ void frame_pool_trim(frame_pool *p, size_t max_idle);
 /* A frame has ended: free the idle buffers that waited through it without being taken (released
  * before it began), so that buffers of a size the graph no longer makes do not stay. */
 void frame_pool_age(frame_pool *p);
-/* Bytes of fresh buffers allocated since the last call (what the pool did not save); resets. */
-size_t frame_pool_take_fresh_bytes(frame_pool *p);
 
 #endif

@@ -13,6 +13,24 @@
 #include "graph_frames.h"
 #include "graph_model.h"
 
+/* Free entry e (out of the cache already) and give its frame back. */
+static void centry_free(nprfx_graph *g, centry *e)
+{
+    if (!e) return;
+    for (int c = 0; e->names && c < e->im.channels; c++)
+        free(e->names[c]);
+    free(e->names);
+    free(e->meta.types);
+    if (e->from_reader) { /* the reader never takes a buffer from the pool */
+        size_t bytes = e->bytes < g->held_bytes ? e->bytes : g->held_bytes;
+        g->held_bytes -= bytes;
+        nprfx_image_free(&e->im);
+    } else {
+        internal_graph_frame_release(g, &e->im);
+    }
+    free(e);
+}
+
 static size_t slot_of(const nprfx_graph *g, int node, int frame)
 {
     uint64_t h = (uint64_t)(uint32_t)node * 0x9e3779b97f4a7c15ull ^ (uint64_t)(uint32_t)frame;
@@ -97,7 +115,7 @@ void internal_graph_cache_drop(nprfx_graph *g, centry *e)
     table_remove(g, e);
     g->cache_bytes -= e->bytes;
     g->cache_entries--;
-    internal_graph_centry_free(g, e);
+    centry_free(g, e);
 }
 
 void internal_graph_cache_evict(nprfx_graph *g)
@@ -149,7 +167,7 @@ void internal_graph_cache_clear(nprfx_graph *g)
 {
     for (centry *e = g->head, *next; e; e = next) {
         next = e->next;
-        internal_graph_centry_free(g, e);
+        centry_free(g, e);
     }
     free(g->cache_slots);
     g->cache_slots = NULL;
@@ -157,21 +175,4 @@ void internal_graph_cache_clear(nprfx_graph *g)
     g->head = g->tail = NULL;
     g->cache_bytes = 0;
     g->cache_entries = 0;
-}
-
-void internal_graph_centry_free(nprfx_graph *g, centry *e)
-{
-    if (!e) return;
-    for (int c = 0; e->names && c < e->im.channels; c++)
-        free(e->names[c]);
-    free(e->names);
-    free(e->meta.types);
-    if (e->from_reader) { /* the reader never takes a buffer from the pool */
-        size_t bytes = e->bytes < g->held_bytes ? e->bytes : g->held_bytes;
-        g->held_bytes -= bytes;
-        nprfx_image_free(&e->im);
-    } else {
-        internal_graph_frame_release(g, &e->im);
-    }
-    free(e);
 }

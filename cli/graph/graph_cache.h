@@ -23,6 +23,4 @@ void internal_graph_cache_evict(nprfx_graph *g);
 /* Free every entry. */
 void internal_graph_cache_clear(nprfx_graph *g);
 
-void internal_graph_centry_free(nprfx_graph *g, centry *e);
-
 #endif

@@ -1,5 +1,6 @@
-/* The files a graph reads and the shot it declares: what nprfx farm checks before it submits a
- * shot in chunks (every chunk must find its plates and see the same shot). */
+/* nprfx CLI — the files a graph reads and writes: its read patterns and the shot it declares
+ * (what nprfx farm checks before it submits a shot in chunks: every chunk must find its plates
+ * and see the same shot), the patterns it writes, and the refusal to write over an input. */
 #define _DEFAULT_SOURCE /* realpath */
 #include <limits.h>
 #include <stdio.h>

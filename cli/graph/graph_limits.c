@@ -2,7 +2,7 @@
  * graph is loaded: a synth node or a "format" asking for a frame larger than NPRFX_READ_LIMIT
  * allows is refused before the first frame instead of failing in calloc after gigabytes. Frames
  * whose size comes from a file are checked when the file is read (io_validate.h), and every
- * node's output frame once more before it is allocated (graph_eval.c). */
+ * node's output frame once more before it is allocated (graph_memory.c). */
 #include <stdio.h>
 
 #include "graph.h"

@@ -1,6 +1,7 @@
 #define _DEFAULT_SOURCE /* realpath */
-/* nprfx CLI — node graphs: parsing (cJSON) and validation against the descriptors; evaluation is
- * in graph_eval.c, writing in graph_write.c.
+/* nprfx CLI — node graphs: parsing (cJSON) and validation against the descriptors, overrides
+ * (--set, --shot, synthesized reads), the frames to render, and freeing a graph; evaluation is in
+ * graph_eval.c, writing in graph_write.c.
  *
  * A graph is {"frames": "1-24", "nodes": {NAME: {...}, ...}}. Processing nodes are
  * {"node": ID, "inputs": {INPUT: REF}, "params": {PARAM: VALUE}}; the built-in I/O nodes are
@@ -11,8 +12,8 @@
  * A REF is "name" or "name:channels" (see channels.h).
  *
  * Evaluation pulls from the write nodes. Results are cached per (node, frame) under a byte bound
- * with least-recently-used eviction; temporal nodes fetch their inputs at other frames through the
- * same cache, and what a render call fetched stays pinned until it returns. */
+ * with least-recently-used eviction (graph_cache.c); temporal nodes fetch their inputs at other
+ * frames through the same cache, and what a render call fetched stays pinned until it returns. */
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <limits.h>

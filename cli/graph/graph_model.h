@@ -57,7 +57,7 @@ typedef struct centry {
     gmeta meta;
     size_t bytes;
     int pins;
-    /* The memory plan (graph_plan.c): consumers at this frame that have not yet used it; and
+    /* The memory plan (graph_plan.c, graph_memory.c): consumers at this frame that have not yet used it; and
      * the frame generation that last touched it (the sweep keeps a temporal source's entries
      * touched by the last frame, the window its temporal readers work in). */
     int uses;
@@ -98,7 +98,7 @@ struct nprfx_graph {
     double render_cpu_seconds; /* the process's CPU time (all threads) over the same spans */
     long long render_items;    /* what nodes counted (nprfx_render_args.items) */
     double render_bytes;       /* the frames' bytes the renders read (inputs) and wrote (output) */
-    /* Memory (graph_plan.c): frame buffers come from the pool and go back to it; the
+    /* Memory (graph_frames.c, graph_memory.c): frame buffers come from the pool and go back to it; the
      * plan frees each result once its consumers at the frame have run, unless a temporal node
      * reads its node at other frames. no_pool: neither (plain calloc/free and the cache alone,
      * to check that pooling never changes a pixel). */

@@ -14,7 +14,11 @@
  *  - every allocation is checked against the memory limit (io_limits.h) before it is made, and
  *    nprfx_graph_plan estimates the peak from the graph and the frame size before frame 1.
  * Results never depend on any of it: a result dropped too early is rendered again, bit for bit
- * (docs/design.md §1, "a cache may save work, never change a result"). */
+ * (docs/design.md §1, "a cache may save work, never change a result").
+ *
+ * This file makes the plan (consumer counts, temporal sources) and picks the channels plates
+ * keep; graph_frames.c counts the frames held, graph_memory.c hands them out under the limit and
+ * frees consumed results, graph_estimate.c is nprfx_graph_plan. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -74,19 +74,19 @@ float srgb_oetf(float v)
 
 /* Sign-symmetric transfer functions for conversion, so negative values survive a round trip
  * instead of turning into NaN. */
-float srgb_encode(float v)
+static float srgb_encode(float v)
 {
     return v < 0.0f ? -srgb_oetf(-v) : srgb_oetf(v);
 }
 
-float srgb_decode(float v)
+static float srgb_decode(float v)
 {
     float a = std::fabs(v);
     float r = a <= 0.04045f ? a / 12.92f : std::pow((a + 0.055f) / 1.055f, 2.4f);
     return v < 0.0f ? -r : r;
 }
 
-builtin_space builtin_named(const char *n)
+static builtin_space builtin_named(const char *n)
 {
     if (!strcasecmp(n, "linear") || !strcasecmp(n, "scene_linear")) return SPACE_LINEAR;
     if (!strcasecmp(n, "srgb")) return SPACE_SRGB;

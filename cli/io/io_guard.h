@@ -12,7 +12,7 @@
 extern "C" {
 #endif
 
-/* The guard every io.h reader calls first. EXR files (by their magic number) go through
+/* The guard every reader (io_read.h) calls first. EXR files (by their magic number) go through
  * cli_io_validate_exr; other formats have their header's size checked through OpenImageIO in
  * NPRFX_GUARD_READ mode. A file that cannot be opened passes: the reader reports that itself.
  * Also arms this thread's read deadline (cli_io_deadline_passed). */

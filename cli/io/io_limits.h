@@ -5,8 +5,8 @@
  * is allocated, so a damaged header that declares a 2000000000x3 window, or a graph asking for a
  * 16384x16384 frame of 27 channels, is refused with the size and the limit instead of failing
  * after gigabytes; and a graph's frames together are held under it (the plan's estimate before
- * the first frame, each allocation during the render: graph_plan.c). A second bound on time
- * stops one file's read (docs/design.md §4, "Damaged files").
+ * the first frame, each allocation during the render: graph_estimate.c, graph_memory.c). A second
+ * bound on time stops one file's read (docs/design.md §4, "Damaged files").
  *
  *   --mem-limit SIZE    (run, bench, bench-graph) the limit; overrides NPRFX_READ_LIMIT.
  *   NPRFX_READ_LIMIT    the same limit from the environment (named when it bounded reads only):

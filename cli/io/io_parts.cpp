@@ -62,7 +62,7 @@ std::string part_label(const part &p)
 }
 
 /* oiiotool's geometry notation, WxH+X+Y, as nprfx info prints windows. */
-std::string rect_text(nprfx_rect r)
+static std::string rect_text(nprfx_rect r)
 {
     char buf[80];
     std::snprintf(buf, sizeof buf, "%dx%d%+d%+d", nprfx_rect_width(r), nprfx_rect_height(r), r.x0,
@@ -80,13 +80,13 @@ nprfx_rect display_rect(const ImageSpec &s)
     return nprfx_rect_make(s.full_x, s.full_y, s.full_x + s.full_width, s.full_y + s.full_height);
 }
 
-bool same_windows(const ImageSpec &a, const ImageSpec &b)
+static bool same_windows(const ImageSpec &a, const ImageSpec &b)
 {
     return nprfx_rect_equal(data_rect(a), data_rect(b)) &&
            nprfx_rect_equal(display_rect(a), display_rect(b));
 }
 
-unsigned char pixel_type(const header &h, const ImageSpec &s, int c)
+static unsigned char pixel_type(const header &h, const ImageSpec &s, int c)
 {
     if (h.format != "openexr") return NPRFX_PIXEL_FLOAT; /* other formats: normalised floats */
     TypeDesc t = s.channelformat(c);
@@ -137,7 +137,7 @@ nprfx_result scan(nprfx_context *ctx, const char *path, std::unique_ptr<ImageInp
     return NPRFX_OK;
 }
 
-std::vector<std::string> split_dots(const std::string &s)
+static std::vector<std::string> split_dots(const std::string &s)
 {
     std::vector<std::string> v;
     size_t b = 0;
@@ -152,7 +152,8 @@ std::vector<std::string> split_dots(const std::string &s)
  * rule puts it next to last ("diffuse.right.R"), Nuke writes it first ("right.diffuse.R"). A name
  * with no view component belongs to the default view (OpenEXR: "R" is the default view's). The
  * bare names of every view are then alike, so a graph's references work on any view. */
-std::string channel_view(const header &h, const part &p, const std::string &name, std::string &bare)
+static std::string channel_view(const header &h, const part &p, const std::string &name,
+                                std::string &bare)
 {
     bare = name;
     std::vector<std::string> views = p.view.empty() ? h.views : std::vector<std::string>{p.view};
@@ -178,8 +179,8 @@ std::string channel_view(const header &h, const part &p, const std::string &name
 /* The channels a group of parts delivers for a view, with plate-unique names: multi-part files
  * often repeat bare names ("R" in every part), and a repeated name gets its part's name as a
  * layer prefix so every channel stays addressable. */
-std::vector<chan> group_channels(const header &h, const std::vector<const part *> &group,
-                                 const std::string &view)
+static std::vector<chan> group_channels(const header &h, const std::vector<const part *> &group,
+                                        const std::string &view)
 {
     std::vector<chan> out;
     std::set<std::string> used;
@@ -205,7 +206,7 @@ std::vector<chan> group_channels(const header &h, const std::vector<const part *
     return out;
 }
 
-bool holds_all(const std::vector<chan> &chans, const cli_read_options &o)
+static bool holds_all(const std::vector<chan> &chans, const cli_read_options &o)
 {
     std::vector<const char *> names;
     for (const chan &c : chans)
@@ -222,7 +223,7 @@ bool holds_all(const std::vector<chan> &chans, const cli_read_options &o)
     return true;
 }
 
-failure refuse_part(const char *path, const part &p)
+static failure refuse_part(const char *path, const part &p)
 {
     if (p.spec.deep)
         return {NPRFX_ERR_UNSUPPORTED,
@@ -237,7 +238,7 @@ failure refuse_part(const char *path, const part &p)
     return {};
 }
 
-std::string list_text(const std::vector<std::string> &v)
+static std::string list_text(const std::vector<std::string> &v)
 {
     std::string s;
     for (const std::string &x : v)

@@ -60,20 +60,9 @@ struct failure {
 std::string oiio_error(const ImageInput *in);
 std::string oiio_error(const ImageOutput *out);
 std::string part_label(const part &p);
-std::string rect_text(nprfx_rect r);
 nprfx_rect data_rect(const ImageSpec &s);
 nprfx_rect display_rect(const ImageSpec &s);
-bool same_windows(const ImageSpec &a, const ImageSpec &b);
-unsigned char pixel_type(const header &h, const ImageSpec &s, int c);
 nprfx_result scan(nprfx_context *ctx, const char *path, std::unique_ptr<ImageInput> &in, header &h);
-std::vector<std::string> split_dots(const std::string &s);
-std::string channel_view(const header &h, const part &p, const std::string &name,
-                         std::string &bare);
-std::vector<chan> group_channels(const header &h, const std::vector<const part *> &group,
-                                 const std::string &view);
-bool holds_all(const std::vector<chan> &chans, const cli_read_options &o);
-failure refuse_part(const char *path, const part &p);
-std::string list_text(const std::vector<std::string> &v);
 failure choose(const char *path, const header &h, const cli_read_options &o, choice &ch);
 char *dup_cstr(const std::string &s);
 char **dup_names(const std::vector<std::string> &v);

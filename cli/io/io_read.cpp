@@ -40,7 +40,7 @@ namespace cli_io
 /* ---- reading ------------------------------------------------------------------------------ */
 
 /* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
-cli_read_options read_options(const cli_read_options *opt)
+static cli_read_options read_options(const cli_read_options *opt)
 {
     cli_read_options o;
     std::memset(&o, 0, sizeof o);
@@ -55,7 +55,7 @@ const uint32_t float_exact_max = 1u << 24;
 
 /* Rows an EXR part stores per chunk (a tile's height when tiled): reads in blocks of whole chunks
  * decode each chunk once. From the compression, as OpenEXR defines it. */
-int chunk_rows(const part &p)
+static int chunk_rows(const part &p)
 {
     if (p.spec.tile_width > 0 && p.spec.tile_height > 0) return p.spec.tile_height;
     std::string c = p.spec.get_string_attribute("compression");
@@ -67,7 +67,7 @@ int chunk_rows(const part &p)
 }
 
 /* Rows a block read of part p decodes at once: at least 64 (fewer calls), whole chunks. */
-int block_rows(const part &p)
+static int block_rows(const part &p)
 {
     int cr = chunk_rows(p);
     return cr >= 64 ? cr : (64 + cr - 1) / cr * cr;
@@ -91,7 +91,7 @@ struct reading {
 };
 
 /* The spans [lo, hi] of the delivered float (or half) and uint channels of part p; -1: none. */
-void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, int &uhi)
+static void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, int &uhi)
 {
     flo = fhi = ulo = uhi = -1;
     for (const chan &c : rd.sel) {
@@ -104,8 +104,8 @@ void part_spans(const reading &rd, const part *p, int &flo, int &fhi, int &ulo, 
 }
 
 /* Guard, header, choice of parts and view, and the channels to deliver: everything but pixels. */
-nprfx_result open_reading(nprfx_context *ctx, const char *path, const cli_read_options &o,
-                          reading &rd, bool rows = false)
+static nprfx_result open_reading(nprfx_context *ctx, const char *path, const cli_read_options &o,
+                                 reading &rd, bool rows = false)
 {
     rd.path = path;
     rd.chosen = o.channels || o.pick || rows;
@@ -199,7 +199,8 @@ nprfx_result open_reading(nprfx_context *ctx, const char *path, const cli_read_o
     return NPRFX_OK;
 }
 
-nprfx_result channels_error(nprfx_context *ctx, const reading &rd, const chan &a, const chan &b)
+static nprfx_result channels_error(nprfx_context *ctx, const reading &rd, const chan &a,
+                                   const chan &b)
 {
     std::string e = oiio_error(rd.in.get());
     return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read channels %s..%s of %s of '%s': %s",
@@ -209,7 +210,7 @@ nprfx_result channels_error(nprfx_context *ctx, const reading &rd, const chan &a
 
 /* Rows [y0, y1) of the delivered channels into dst (all of them per pixel, rows of the data
  * window's width, row y0 first), part by part, a block of whole chunks at a time. */
-nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1, float *dst)
+static nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1, float *dst)
 {
     const ImageSpec &first = rd.ch.group[0]->spec;
     const size_t w = (size_t)first.width, nsel = rd.sel.size();
@@ -281,7 +282,7 @@ nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1, float 
 
 /* The whole plate of the delivered channels into dst, a read_image per run of adjacent file
  * channels of one part and kind (any format; tiled and MIP-mapped parts at level 0). */
-nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
+static nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
 {
     const ImageSpec &first = rd.ch.group[0]->spec;
     const size_t nch = rd.sel.size(), npix = (size_t)first.width * (size_t)first.height;
@@ -325,7 +326,7 @@ nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
 
 /* out's description of the plate (everything but pixels) and the read's note: which parts and
  * view, and uint values float cannot hold (once the pixels are read). */
-nprfx_result describe(nprfx_context *ctx, const reading &rd, cli_plate *out)
+static nprfx_result describe(nprfx_context *ctx, const reading &rd, cli_plate *out)
 {
     const ImageSpec &first = rd.ch.group[0]->spec;
     std::vector<std::string> names;
@@ -348,7 +349,7 @@ nprfx_result describe(nprfx_context *ctx, const reading &rd, cli_plate *out)
     return NPRFX_OK;
 }
 
-nprfx_result set_note(nprfx_context *ctx, const reading &rd, cli_plate *out)
+static nprfx_result set_note(nprfx_context *ctx, const reading &rd, cli_plate *out)
 {
     std::string note = rd.ch.note, rounded;
     bool warn = rd.ch.warn;

@@ -36,7 +36,7 @@ namespace cli_io
 
 /* ---- writing ---------------------------------------------------------------------------- */
 
-std::atomic<unsigned> temp_counter{0};
+static std::atomic<unsigned> temp_counter{0};
 
 /* The folders above target (path as the caller named it, for the message), made when missing. */
 static nprfx_result make_parent_dirs(nprfx_context *ctx, const std::filesystem::path &target,
@@ -52,7 +52,7 @@ static nprfx_result make_parent_dirs(nprfx_context *ctx, const std::filesystem::
 
 /* ".name.tmp-<pid>-<n>.ext" beside the target: same file system, so rename() is atomic, and the
  * extension is kept for anyone who inspects a leftover. The counter separates threads. */
-std::string temp_path_for(const std::filesystem::path &target)
+static std::string temp_path_for(const std::filesystem::path &target)
 {
     std::string stem = target.stem().string(), ext = target.extension().string();
     std::string name = "." + stem + ".tmp-" + std::to_string((long)getpid()) + "-" +
@@ -60,7 +60,7 @@ std::string temp_path_for(const std::filesystem::path &target)
     return (target.parent_path() / name).string();
 }
 
-bool valid_exr_compression(const std::string &c)
+static bool valid_exr_compression(const std::string &c)
 {
     static const char *const known[] = {"none",  "rle", "zips", "zip",  "piz",
                                         "pxr24", "b44", "b44a", "dwaa", "dwab"};
@@ -118,7 +118,7 @@ nprfx_result write_atomic(nprfx_context *ctx, const char *path, ImageSpec spec, 
     return NPRFX_OK;
 }
 
-std::vector<std::string> default_names(int n)
+static std::vector<std::string> default_names(int n)
 {
     static const char *const rgba[] = {"R", "G", "B", "A"};
     std::vector<std::string> v;
@@ -129,8 +129,8 @@ std::vector<std::string> default_names(int n)
 }
 
 /* The options a caller passed, read as far as its struct's size reaches (size-versioned). */
-nprfx_result write_options(nprfx_context *ctx, const char *path, const cli_write_options *opt,
-                           cli_write_options &o)
+static nprfx_result write_options(nprfx_context *ctx, const char *path,
+                                  const cli_write_options *opt, cli_write_options &o)
 {
     o = {sizeof o, "zip", 0, nullptr, 0, nullptr, 0.0f};
     if (opt) {
@@ -147,9 +147,10 @@ nprfx_result write_options(nprfx_context *ctx, const char *path, const cli_write
 
 /* The header of a write of `channels` channels over bounds, and the channels' own types when
  * they differ (formats empty: all float, or all half). */
-nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds, int channels,
-                        const char *const *names, const nprfx_rect *display,
-                        const cli_write_options &o, ImageSpec &spec, std::vector<TypeDesc> &formats)
+static nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds,
+                               int channels, const char *const *names, const nprfx_rect *display,
+                               const cli_write_options &o, ImageSpec &spec,
+                               std::vector<TypeDesc> &formats)
 {
     std::vector<std::string> cn;
     if (names) {
@@ -232,8 +233,8 @@ nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect bounds,
 
 /* im's pixels in the channels' native types (formats), packed: uint takes the float's integer
  * value; anything else in a uint channel is rounded. */
-void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &formats,
-                 std::vector<unsigned char> &buf)
+static void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &formats,
+                        std::vector<unsigned char> &buf)
 {
     size_t bytes = 0;
     for (const TypeDesc &t : formats)

@@ -193,7 +193,7 @@ static nprfx_result acquire(nprfx_context *ctx, lock_entry *e, const char *graph
     }
 }
 
-/* Whether name is a temporary file io_oiio.cpp's temp_path_for makes for some frame of pattern
+/* Whether name is a temporary file io_write.cpp's temp_path_for makes for some frame of pattern
  * base: "." + stem + ".tmp-" + pid + "-" + counter + extension, where stem and extension are
  * the frame file's as std::filesystem splits them (extension from the last '.', none when the
  * only '.' leads the name). */

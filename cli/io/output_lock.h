@@ -6,7 +6,7 @@
  * one lock. The file holds the holder's pid, host, graph and start time, for the message another
  * run gets. The OS drops the lock when the holder dies, even by kill -9, so a lock is never
  * stale; the next holder then removes the temporary files the dead run left for that sequence
- * (io_oiio.cpp's temp_path_for names) and nothing else. Locks are taken in the order of their
+ * (io_write.cpp's temp_path_for names) and nothing else. Locks are taken in the order of their
  * canonical paths, so runs that wait (--wait) for several sequences cannot deadlock.
  *
  * Limitation: flock is advisory and only as good as the file system's lock support. On Linux NFS

@@ -1,4 +1,5 @@
-/* Plate and file-info helpers: plain C, independent of the image library behind io.h. */
+/* nprfx CLI — plate and file-info helpers (plate.h): plain C, independent of the image library
+ * behind the readers. */
 #include <stdlib.h>
 #include <string.h>
 

@@ -1,4 +1,4 @@
-/* libFuzzer target: the image readers of cli/io.h on arbitrary bytes.
+/* libFuzzer target: the image readers of cli/io/io_read.h on arbitrary bytes.
  *
  * Each input is written to a file (OpenImageIO reads paths) and given to cli_io_info and
  * cli_io_read, as `nprfx info` and a graph's read node do. Beyond the sanitizers' findings, a
