@@ -6,7 +6,6 @@
 
 #include <stdint.h>
 
-#include "frame_pool.h"
 #include "graph.h"
 #include "nprfx/nprfx.h"
 

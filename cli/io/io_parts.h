@@ -57,15 +57,22 @@ struct failure {
     std::string message;
 };
 
+/* OIIO's per-thread error string, taken (and cleared). */
 std::string oiio_error(const ImageInput *in);
 std::string oiio_error(const ImageOutput *out);
+/* A part as messages name it: its index and, when it has one, its name. */
 std::string part_label(const part &p);
+/* A spec's data and display windows. */
 nprfx_rect data_rect(const ImageSpec &s);
 nprfx_rect display_rect(const ImageSpec &s);
+/* Open path and describe every part and the file's views into h. */
 nprfx_result scan(nprfx_context *ctx, const char *path, std::unique_ptr<ImageInput> &in, header &h);
+/* Choose the parts and view a read takes (docs/design.md §2.3). */
 failure choose(const char *path, const header &h, const cli_read_options &o, choice &ch);
+/* malloc'd copies for the C side (NULL on no memory). */
 char *dup_cstr(const std::string &s);
 char **dup_names(const std::vector<std::string> &v);
+/* s into a fixed-size field, truncated and terminated. */
 void copy_field(char *dst, size_t n, const std::string &s);
 
 } // namespace cli_io
