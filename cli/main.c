@@ -5,7 +5,7 @@
 #include <malloc.h>
 #endif
 
-#include "commands.h"
+#include "commands/commands.h"
 #include "flow_opencv.h"
 #include "nprfx/nprfx.h"
 
@@ -16,25 +16,25 @@ typedef struct command {
 } command;
 
 static const command commands[] = {
-    {"list", nprfx_cmd_list, "list the nodes (ids, groups, one-line help)"},
-    {"help", nprfx_cmd_help, "document a node: inputs, expected AOVs, params, defaults, ranges"},
-    {"run", nprfx_cmd_run, "render a JSON node graph over a frame range"},
-    {"info", nprfx_cmd_info, "print a plate's size, layers and channels (like iinfo)"},
-    {"diff", nprfx_cmd_diff,
+    {"list", cli_cmd_list, "list the nodes (ids, groups, one-line help)"},
+    {"help", cli_cmd_help, "document a node: inputs, expected AOVs, params, defaults, ranges"},
+    {"run", cli_cmd_run, "render a JSON node graph over a frame range"},
+    {"info", cli_cmd_info, "print a plate's size, layers and channels (like iinfo)"},
+    {"diff", cli_cmd_diff,
      "compare two images or sequences (idiff-style thresholds and exit codes)"},
-    {"synth", nprfx_cmd_synth, "write analytic test plates with exact AOVs"},
-    {"measure", nprfx_cmd_measure,
+    {"synth", cli_cmd_synth, "write analytic test plates with exact AOVs"},
+    {"measure", cli_cmd_measure,
      "measure a look over its shot: warp error along the motion, background, tone curve"},
-    {"bench", nprfx_cmd_bench, "time a node: Mpixel/s, ms per frame, peak memory"},
-    {"bench-graph", nprfx_cmd_bench_graph,
+    {"bench", cli_cmd_bench, "time a node: Mpixel/s, ms per frame, peak memory"},
+    {"bench-graph", cli_cmd_bench_graph,
      "time a whole graph per frame on synthetic plates: compute and I/O apart, peak memory"},
-    {"docs", nprfx_cmd_docs, "write the node reference (Markdown) generated from the descriptors"},
-    {"host-project", nprfx_cmd_host_project,
+    {"docs", cli_cmd_docs, "write the node reference (Markdown) generated from the descriptors"},
+    {"host-project", cli_cmd_host_project,
      "write a graph as a Natron project, Natron script and Nuke script (OpenFX nodes)"},
-    {"ivs", nprfx_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
-    {"pam", nprfx_cmd_pam,
+    {"ivs", cli_cmd_ivs, "generate or check the stipple node's dot sequence file (IVS)"},
+    {"pam", cli_cmd_pam,
      "painterly art maps: build one from brushstroke samples, check one, paint samples"},
-    {"farm", nprfx_cmd_farm,
+    {"farm", cli_cmd_farm,
      "render a shot in frame chunks on a farm (Slurm array job), check every frame arrived"},
 };
 

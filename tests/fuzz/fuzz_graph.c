@@ -1,11 +1,11 @@
-/* libFuzzer target: the graph loader (cli/graph_load.c and the name, cycle and reference checks
- * it calls) on arbitrary text, without rendering: parse, the frame list, the outputs' description
- * and free. Seeds: tests/graphs/ and samples/graphs/. See tests/fuzz/README.md. */
+/* libFuzzer target: the graph loader (cli/graph/graph_load.c and the name, cycle and reference
+ * checks it calls) on arbitrary text, without rendering: parse, the frame list, the outputs'
+ * description and free. Seeds: tests/graphs/ and samples/graphs/. See tests/fuzz/README.md. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "graph.h"
+#include "graph/graph.h"
 
 static nprfx_context *ctx;
 

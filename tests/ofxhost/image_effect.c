@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli_util.h"
+#include "util/cli_util.h"
 #include "ofx_host_internal.h"
 
 heffect *internal_effect_of(const void *h)

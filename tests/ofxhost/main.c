@@ -1,12 +1,12 @@
 /* nprfx-ofxtest — the OpenFX test host's command line: `nprfx-ofxtest run GRAPH.json --ofx BUNDLE
- * [options of nprfx run]` is the runner's own run command (cli/cmd_run.c, from the nprfx_runner
- * library) with a render hook that drives every node through the plug-ins of BUNDLE, so the two
- * programs differ only in how nodes render (tests/cli/ofx.sh requires the same pixels). A test
- * program, kept out of the shipped runner and never installed. */
+ * [options of nprfx run]` is the runner's own run command (cli/commands/cmd_run.c, from the
+ * nprfx_runner library) with a render hook that drives every node through the plug-ins of BUNDLE,
+ * so the two programs differ only in how nodes render (tests/cli/ofx.sh requires the same pixels).
+ * A test program, kept out of the shipped runner and never installed. */
 #include <stdio.h>
 #include <string.h>
 
-#include "commands.h"
+#include "commands/commands.h"
 #include "ofx_host.h"
 
 typedef struct ofx_run {

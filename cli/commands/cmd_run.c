@@ -1,0 +1,355 @@
+/* nprfx run — render a node graph over a frame range, with progress. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cmd_shared.h"
+#include "commands.h"
+#include "graph/graph.h"
+#include "io/output_lock.h"
+#include "util/cli_util.h"
+
+static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
+{
+    /* The nodes that render by rows, from their descriptors. */
+    char rows[512] = "";
+    for (int i = 0, n = 0; i < nprfx_node_count(); i++) {
+        const nprfx_node_desc *d = nprfx_node_at(i);
+        if (!(d->flags & NPRFX_NODE_ROWS)) continue;
+        size_t len = strlen(rows);
+        snprintf(rows + len, sizeof rows - len, "%s%s", n++ ? ", " : "", d->id);
+    }
+    fprintf(
+        f,
+        "usage: %s run GRAPH.json [GRAPH.json ...] [options]\n\n"
+        "Renders a node graph: every write node's sequence over the frames. Several graphs\n"
+        "render one after the other with the same options (a --set applies to the graphs\n"
+        "that have the node); the status is the worst of them.\n\n"
+        "options:\n"
+        "  --frames SPEC       frames to render: 12, 1-24, 1-24x2, 24-1, 1,5,9-12 (default:\n"
+        "                      the graph's \"frames\"; temporal nodes still see the whole shot)\n"
+        "  --shot SPEC         the shot: replaces the graph's \"frames\" (what temporal nodes\n"
+        "                      see, and what is rendered without --frames), e.g. 1-100 for a\n"
+        "                      longer shot than the graph was written for\n"
+        "  --set N.P=VALUE     override param P of node N (repeatable), e.g. --set "
+        "blend.opacity=0.5\n"
+        "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
+        "  --output-dir DIR    put relative write paths under DIR\n"
+        "  --cache-mb N        memory for cached node results and idle frame buffers\n"
+        "                      (default 2048)\n"
+        "  --mem-limit SIZE    the most memory the graph's frames may take, e.g. 8G, 512M\n"
+        "                      (0: none; default $NPRFX_READ_LIMIT, else half the physical\n"
+        "                      memory). A graph whose estimated peak is above it fails before\n"
+        "                      the first frame, and every frame is checked before it is\n"
+        "                      allocated; the message names the node and the sizes. The same\n"
+        "                      limit refuses plates and synth sizes too large to hold\n"
+        "  --stats             after the run, print per node ms/frame and bytes allocated,\n"
+        "                      then the most frames and caches held, the plan's estimate and\n"
+        "                      the process's peak resident size\n"
+        "  --no-pool           no frame-buffer pool and no memory plan (every frame calloc'd\n"
+        "                      and freed, plates whole, results kept until --cache-mb evicts\n"
+        "                      them): the pixels are the same, for checking that\n"
+        "  --strip-rows N      render a write whose whole chain renders by rows (EXR reads,\n"
+        "                      and nodes %s) N rows at a time,\n"
+        "                      reading and writing only those rows (plus the margins the\n"
+        "                      filters need), so memory follows N, not the frame; the pixels\n"
+        "                      are the same. 0 (default): by strips of 64 rows only when whole\n"
+        "                      frames would pass --mem-limit; -1: never\n"
+        "  --tile N            render nodes in NxN tiles (output is identical; for testing)\n"
+        "  --keep-going        render the remaining frames after a failed one, exit 1\n"
+        "  --wait              when another run is writing one of the graph's sequences,\n"
+        "                      wait for it to finish (default: fail at once, naming it)\n"
+        "  --shared-lock       share the sequences' locks with other --shared-lock runs, which\n"
+        "                      write other frames of them (nprfx farm's chunk tasks); a run\n"
+        "                      without it still excludes them all\n"
+        "%s"
+        "  --quiet             no progress output\n"
+        "  --check             check the graphs (JSON, nodes, params, references, cycles,\n"
+        "                      frames, sizes, the memory plan against --mem-limit) and list\n"
+        "                      what they would write; render nothing\n\n"
+        "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
+        "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
+        "  read:  {\"node\": \"read\", \"path\": \"plates/shot.####.exr\", \"colorspace\": "
+        "\"linear\", \"vectors\": \"blender\",\n"
+        "         \"part\": \"rgba\", \"view\": \"left\"}  (part, view: of multi-part and stereo "
+        "EXRs)\n"
+        "  synth: {\"node\": \"synth\", \"scene\": \"orbit\", \"size\": \"256x256\"}\n"
+        "  write: {\"node\": \"write\", \"inputs\": {\"image\": REF}, \"path\": "
+        "\"out/x.####.exr\", \"preview\": \"out/x.####.png\"}\n"
+        "  REF:   \"node\" or \"node:channels\", e.g. \"plate:Depth.Z\", \"plate:Vector.XY\"\n"
+        "Node names are unique; a graph has at most 1,000,000 nodes, in any depth, and no\n"
+        "cycles (an error names the nodes on one).\n"
+        "Read paths are relative to the graph file, write paths to the current directory.\n"
+        "Files are written under a temporary name and renamed, so a failed frame never leaves\n"
+        "a partial file. A run locks every sequence it writes (a hidden .NAME.nprfx-lock file\n"
+        "beside it; across hosts only where the file system supports locks, e.g. NFSv4) and\n"
+        "removes what a killed run left there. See 'nprfx list' and 'nprfx help NODE' for the\n"
+        "node types.\n",
+        prog, rows, ext && ext->options_usage ? ext->options_usage : "");
+}
+
+/* What `run` applies to every graph it renders. */
+typedef struct run_opts {
+    const char *prog, *frames, *shot;
+    const char *const *sets;
+    int nsets, keep_going, quiet, several, wait, stats, check, shared_lock;
+} run_opts;
+
+/* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
+ * them have. */
+static int graph_has_node_of(nprfx_graph *g, const char *assignment)
+{
+    const char *dot = strchr(assignment, '.');
+    char name[256];
+    if (!dot) return 1;
+    snprintf(name, sizeof name, "%.*s", (int)(dot - assignment), assignment);
+    return nprfx_graph_has_node(g, name);
+}
+
+static void lock_notice(void *user, const char *message)
+{
+    const run_opts *ro = user;
+    if (!ro->quiet) fprintf(stderr, "%s run: %s\n", ro->prog, message);
+}
+
+/* A read's note on the parts and views it took: warnings always, notes unless --quiet. */
+static void graph_notice(void *user, const char *message)
+{
+    const run_opts *ro = user;
+    if (!ro->quiet || !strncmp(message, "warning", 7))
+        fprintf(stderr, "%s run: %s\n", ro->prog, message);
+}
+
+/* Lock every sequence g writes before its first frame (output_lock.h). */
+static nprfx_result lock_outputs(nprfx_context *ctx, nprfx_graph *g, const char *graph_path,
+                                 const run_opts *ro, cli_output_locks **locks)
+{
+    char **paths;
+    int n;
+    nprfx_result r = nprfx_graph_output_patterns(g, &paths, &n);
+    if (r) return r;
+    r = (ro->shared_lock ? cli_output_locks_take_shared : cli_output_locks_take)(
+        ctx, (const char *const *)paths, n, graph_path, ro->wait, lock_notice, (void *)ro, locks);
+    nprfx_graph_output_patterns_free(paths, n);
+    return r;
+}
+
+/* Load and render one graph; the exit status: 0 ok, 1 frames failed, 2 not rendered. */
+static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char *graph_path,
+                     const run_opts *ro)
+{
+    cli_env env = *envp;
+    nprfx_graph_options opt = *optp;
+    const char *prog = ro->prog, *frames = ro->frames, *shot = ro->shot;
+    const char *const *sets = ro->sets;
+    int nsets = ro->nsets, keep_going = ro->keep_going, quiet = ro->quiet;
+    nprfx_graph *g = NULL;
+    nprfx_frame_list fl = {NULL, 0};
+    cli_output_locks *locks = NULL;
+    int status = 0;
+    if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    if (!nprfx_graph_write_count(g)) {
+        fprintf(stderr, "%s run: %s: the graph has no write node, so it would produce nothing\n",
+                prog, graph_path);
+        status = 2;
+        goto done;
+    }
+    if (shot && nprfx_graph_set_shot(g, shot)) {
+        fprintf(stderr, "%s run: --shot: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    for (int i = 0; i < nsets; i++)
+        if ((!ro->several || graph_has_node_of(g, sets[i])) && nprfx_graph_set(g, sets[i])) {
+            fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+            status = 2;
+            goto done;
+        }
+    if (nprfx_graph_frames(g, frames, &fl)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    /* The memory plan's estimate, before anything is locked or rendered: a graph that cannot
+     * fit fails here with the node and the sizes, never in the OOM killer at frame 40. */
+    nprfx_graph_plan_info plan;
+    memset(&plan, 0, sizeof plan);
+    if (fl.count > 0 && nprfx_graph_plan(g, fl.frames[0], &plan)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    if (ro->check) {
+        /* --check: everything a render would refuse up front (the memory plan above reads
+         * plate headers, no pixel, and allocates no frame), and nothing read or written. */
+        char buf[4096];
+        nprfx_graph_describe_outputs(g, buf, sizeof buf);
+        printf("%s: ok: %d frame%s would write:\n%s", graph_path, fl.count,
+               fl.count == 1 ? "" : "s", buf);
+        goto done;
+    }
+    if (lock_outputs(env.ctx, g, graph_path, ro, &locks)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    {
+        char why[2048];
+        if (nprfx_graph_cost_warnings(g, fl.count, why, sizeof why) > 0)
+            fprintf(stderr, "%s run: warning: %s: this may take hours:\n%s", prog, graph_path, why);
+    }
+    int tty = isatty(STDERR_FILENO) && !quiet;
+    double t0 = cli_now();
+    int warned_eta = 0;
+    int failed = 0, files = 0;
+    for (int k = 0; k < fl.count; k++) {
+        double tf = cli_now();
+        int written = 0;
+        if (nprfx_graph_render_frame(g, fl.frames[k], &written)) {
+            if (tty) fputc('\n', stderr);
+            fprintf(stderr, "%s run: frame %d failed: %s\n", prog, fl.frames[k],
+                    nprfx_cli_message(env.ctx));
+            failed++;
+            if (!keep_going) break;
+            continue;
+        }
+        files += written;
+        double el = cli_now() - t0, fps = (k + 1) / (el > 0 ? el : 1e-9);
+        double eta = (fl.count - k - 1) / fps;
+        /* Measured, after the first frames (the first alone includes a temporal warm-up). */
+        if (!warned_eta && k == (fl.count > 2 ? 1 : 0) && eta > 3600.0) {
+            warned_eta = 1;
+            if (tty) fputc('\n', stderr);
+            fprintf(stderr,
+                    "%s run: warning: %.2f s a frame so far: the remaining %d frames take about "
+                    "%.1f hours\n",
+                    prog, el / (k + 1), fl.count - k - 1, eta / 3600.0);
+        }
+        if (tty)
+            fprintf(stderr, "\r[%d/%d] frame %d  %.2f fps  ETA %.0f s   ", k + 1, fl.count,
+                    fl.frames[k], fps, eta);
+        else if (!quiet)
+            fprintf(stderr, "frame %d (%d/%d) %.3f s\n", fl.frames[k], k + 1, fl.count,
+                    cli_now() - tf);
+    }
+    if (tty) fputc('\n', stderr);
+    if (failed) {
+        status = 1;
+        fprintf(stderr, "%s run: %d of %d frames failed\n", prog, failed, fl.count);
+    }
+    if (files && !quiet) {
+        char buf[4096];
+        nprfx_graph_describe_outputs(g, buf, sizeof buf);
+        printf("wrote %d frame%s in %.1f s:\n%s", fl.count - failed,
+               fl.count - failed == 1 ? "" : "s", cli_now() - t0, buf);
+    }
+    if (ro->stats) cli_print_stats(stdout, g, fl.count, &plan);
+done:
+    cli_output_locks_release(locks);
+    nprfx_seq_frames_free(&fl);
+    nprfx_graph_free(g);
+    return status;
+}
+
+int cli_cmd_run(int argc, char **argv)
+{
+    return nprfx_cmd_run_extended(argc, argv, NULL);
+}
+
+int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext)
+{
+    const char *prog = ext && ext->program ? ext->program : "nprfx";
+    const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
+    int ngraphs = 0;
+    const char *sets[256];
+    int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
+    int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0;
+    const char *mem_limit = NULL;
+    long cache_mb = 2048;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        int has = i + 1 < argc, took = 0;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout, prog, ext);
+            return 0;
+        } else if (!strcmp(a, "--frames") && has)
+            frames = argv[++i];
+        else if (!strcmp(a, "--shot") && has)
+            shot = argv[++i];
+        else if (!strcmp(a, "--set") && has && nsets < 256)
+            sets[nsets++] = argv[++i];
+        else if (!strcmp(a, "--threads") && has)
+            threads = atoi(argv[++i]);
+        else if (!strcmp(a, "--tile") && has)
+            tile = atoi(argv[++i]);
+        else if (!strcmp(a, "--strip-rows") && has)
+            strip_rows = atoi(argv[++i]);
+        else if (!strcmp(a, "--cache-mb") && has)
+            cache_mb = atol(argv[++i]);
+        else if (!strcmp(a, "--output-dir") && has)
+            outdir = argv[++i];
+        else if (!strcmp(a, "--mem-limit") && has)
+            mem_limit = argv[++i];
+        else if (!strcmp(a, "--stats"))
+            stats = 1;
+        else if (!strcmp(a, "--no-pool"))
+            no_pool = 1;
+        else if (!strcmp(a, "--keep-going"))
+            keep_going = 1;
+        else if (!strcmp(a, "--wait"))
+            wait = 1;
+        else if (!strcmp(a, "--check"))
+            check = 1;
+        else if (!strcmp(a, "--shared-lock"))
+            shared_lock = 1;
+        else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
+            quiet = 1;
+        else if (a[0] != '-' && ngraphs < 64)
+            graphs[ngraphs++] = a;
+        else if (ext && ext->option &&
+                 (took = ext->option(ext->user, a, has ? argv[i + 1] : NULL)) > 0)
+            i += took - 1;
+        else {
+            fprintf(stderr, "%s run: unexpected argument '%s'\n\n", prog, a);
+            usage(stderr, prog, ext);
+            return 2;
+        }
+    }
+    if (!ngraphs) {
+        usage(stderr, prog, ext);
+        return 2;
+    }
+    if (cache_mb < 16) cache_mb = 16;
+    if (mem_limit && cli_set_mem_limit(prog, "run", mem_limit)) return 2;
+    cli_env env;
+    if (cli_env_init(&env, threads)) return 1;
+    nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
+    opt.progress = !quiet;
+    opt.no_pool = no_pool;
+    opt.strip_rows = strip_rows;
+    int status = 0;
+    run_opts ro = {prog,  frames,      shot, sets,  nsets, keep_going,
+                   quiet, ngraphs > 1, wait, stats, check, shared_lock};
+    opt.notice = graph_notice;
+    opt.notice_user = &ro;
+    if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
+        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    for (int i = 0; i < ngraphs; i++) {
+        int st = run_graph(&env, &opt, graphs[i], &ro);
+        if (st > status) status = st;
+        if (st == 2 && ngraphs > 1) fprintf(stderr, "%s run: %s: not rendered\n", prog, graphs[i]);
+    }
+done:
+    if (ext && ext->close) ext->close(ext->user); /* after the graph, which releases the hook */
+    cli_env_free(&env);
+    return status;
+}

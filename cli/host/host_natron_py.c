@@ -1,0 +1,211 @@
+/* nprfx host-project --natron-script: the graph as a Natron 2 Python script that builds the
+ * project in the running Natron (Natron -t SCRIPT, or the Script Editor). Natron runs scripts
+ * without __file__, so the script finds its folder from __file__ when there is one, else from
+ * $NPRFX_SAMPLES or the current folder, by looking for the first plate. Params are set by
+ * script name with the graph's values; inputs are connected by clip label. */
+#include <string.h>
+
+#include "graph/graph_model.h"
+#include "host_natron_py.h"
+#include "host_project.h"
+#include "ofx_names.h"
+
+static void py_string(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        if (*s == '"' || *s == '\\') fputc('\\', f);
+        fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
+/* The parent folder's and the script folder's names: where the script sits below the samples. */
+static void folder_names(const char *out_file, char *parent, char *dir, size_t n)
+{
+    char buf[4096];
+    snprintf(buf, sizeof buf, "%s", out_file);
+    char *s = strrchr(buf, '/');
+    snprintf(dir, n, ".");
+    snprintf(parent, n, ".");
+    if (!s) return;
+    *s = 0;
+    s = strrchr(buf, '/');
+    snprintf(dir, n, "%s", s ? s + 1 : buf);
+    if (!s) return;
+    *s = 0;
+    s = strrchr(buf, '/');
+    snprintf(parent, n, "%s", s ? s + 1 : buf);
+}
+
+static const char prelude[] =
+    "import os\n\n"
+    "import NatronEngine  # noqa: F401  (provided by Natron)\n\n\n"
+    "def here():\n"
+    "    \"\"\"The folder paths below are relative to: this script's.\"\"\"\n"
+    "    try:\n"
+    "        return os.path.dirname(os.path.abspath(__file__))\n"
+    "    except NameError:  # Natron runs scripts without __file__\n"
+    "        pass\n"
+    "    tries = []\n"
+    "    if os.environ.get(\"NPRFX_SAMPLES\"):\n"
+    "        tries.append(os.path.join(os.environ[\"NPRFX_SAMPLES\"], SCRIPT_DIR))\n"
+    "    tries += [os.path.join(os.getcwd(), SAMPLES_DIR, SCRIPT_DIR),\n"
+    "              os.path.join(os.getcwd(), SCRIPT_DIR), os.getcwd()]\n"
+    "    for t in tries:\n"
+    "        if os.path.exists(os.path.join(t, FIRST_PLATE)):\n"
+    "            return t\n"
+    "    print(\"nprfx: %s not found from %s; set NPRFX_SAMPLES\" % (FIRST_PLATE, tries))\n"
+    "    return os.getcwd()\n\n\n"
+    "def choose(param, label):\n"
+    "    \"\"\"Set a choice param to the option called label (or ending with it).\"\"\"\n"
+    "    options = [param.getOption(i) for i in range(param.getNumOptions())]\n"
+    "    for i, o in enumerate(options):\n"
+    "        if o == label or o.endswith(\".\" + label):\n"
+    "            param.setValue(i)\n"
+    "            return\n"
+    "    print(\"nprfx: %s has no option %s among %s\" % (param.getScriptName(), label, "
+    "options))\n\n\n"
+    "def connect(node, label, src):\n"
+    "    \"\"\"Connect src to the input whose label is label (the clip's).\"\"\"\n"
+    "    for i in range(node.getMaxInputCount()):\n"
+    "        if node.getInputLabel(i) == label:\n"
+    "            node.connectInput(i, src)\n"
+    "            return\n"
+    "    print(\"nprfx: %s has no input %s\" % (node.getScriptName(), label))\n\n\n"
+    "def create(app, plugin, name):\n"
+    "    node = app.createNode(plugin)\n"
+    "    node.setScriptName(name)\n"
+    "    return node\n\n\n";
+
+static void param_line(FILE *f, const gnode *n, const char *var, int i)
+{
+    const nprfx_param_desc *p = &n->desc->params[i];
+    const nprfx_value *v = &n->params[i];
+    char a[64], b[64], c[64], d[64];
+    fprintf(f, "    ");
+    switch (p->type) {
+    case NPRFX_PARAM_DOUBLE:
+        /* a float literal for a double param, also for whole numbers */
+        host_double(v->v[0], a, sizeof a);
+        if (!strpbrk(a, ".eni")) strcat(a, ".0");
+        fprintf(f, "%s.getParam(\"%s\").setValue(%s)\n", var, p->name, a);
+        break;
+    case NPRFX_PARAM_INT:
+        fprintf(f, "%s.getParam(\"%s\").setValue(%d)\n", var, p->name, (int)v->v[0]);
+        break;
+    case NPRFX_PARAM_BOOL:
+        fprintf(f, "%s.getParam(\"%s\").setValue(%s)\n", var, p->name,
+                v->v[0] != 0 ? "True" : "False");
+        break;
+    case NPRFX_PARAM_CHOICE:
+        fprintf(f, "choose(%s.getParam(\"%s\"), \"%s\")\n", var, p->name, p->choices[(int)v->v[0]]);
+        break;
+    case NPRFX_PARAM_COLOR:
+        fprintf(f, "%s.getParam(\"%s\").set(%s, %s, %s, %s)\n", var, p->name,
+                host_double(v->v[0], a, sizeof a), host_double(v->v[1], b, sizeof b),
+                host_double(v->v[2], c, sizeof c), host_double(v->v[3], d, sizeof d));
+        break;
+    case NPRFX_PARAM_STRING:
+        fprintf(f, "%s.getParam(\"%s\").setValue(", var, p->name);
+        py_string(f, v->s ? v->s : "");
+        fprintf(f, ")\n");
+        break;
+    }
+}
+
+nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *out_file)
+{
+    char parent[4096], dir[4096], first[4096];
+    folder_names(out_file, parent, dir, sizeof dir);
+    fprintf(f, "# Generated by `nprfx host-project %s` from the graph: do not edit, regenerate.\n",
+            hp->graph_path);
+    fprintf(f,
+            "# Builds the graph in Natron 2 from the nprfx OpenFX plug-ins:\n"
+            "#   OFX_PLUGIN_PATH=build/plugins/ofx Natron -t %s\n"
+            "# OpenFX clips carry RGBA only: each set of plate channels a node reads is "
+            "shuffled\n# into RGBA and the node's <input>Channels selector picks them.\n\n",
+            out_file);
+    fprintf(f, "SAMPLES_DIR = ");
+    py_string(f, parent);
+    fprintf(f, "\nSCRIPT_DIR = ");
+    py_string(f, dir);
+    nprfx_seq_expand(NULL, hp->reads[0].path, hp->first_frame, first, sizeof first);
+    fprintf(f, "\nFIRST_PLATE = ");
+    py_string(f, first);
+    fprintf(f, "\n\n%s", prelude);
+    fprintf(f, "def build(app):\n    base = here()\n");
+    fprintf(f, "    app.getProjectParam(\"frameRange\").set(%d, %d)\n", hp->first_frame,
+            hp->last_frame);
+    fprintf(f, "    app.addFormat(\"%s %dx%d 1\")\n", hp->format_name, hp->width, hp->height);
+    fprintf(f, "    choose(app.getProjectParam(\"outputFormat\"), \"%s\")\n", hp->format_name);
+    for (int i = 0; i < hp->nreads; i++) {
+        fprintf(f, "    %s = app.createReader(os.path.join(base, ", hp->reads[i].name);
+        py_string(f, hp->reads[i].path);
+        fprintf(f, "))\n    %s.setScriptName(\"%s\")\n", hp->reads[i].name, hp->reads[i].name);
+    }
+    for (int i = 0; i < hp->nsets; i++) {
+        const host_chanset *cs = &hp->sets[i];
+        const char *rname = NULL;
+        for (int r = 0; r < hp->nreads; r++)
+            if (hp->reads[r].n == &hp->g->nodes[cs->read]) rname = hp->reads[r].name;
+        fprintf(f, "    %s = create(app, \"net.sf.openfx.ShufflePlugin\", \"%s\")\n", cs->shuffle,
+                cs->shuffle);
+        fprintf(f, "    %s.connectInput(0, %s)\n", cs->shuffle, rname);
+        static const char *const outs[4] = {"outputR", "outputG", "outputB", "outputA"};
+        for (int c = 0; c < cs->count; c++)
+            fprintf(f, "    choose(%s.getParam(\"%s\"), \"%s\")\n", cs->shuffle, outs[c],
+                    cs->chan[c]);
+        if (!cs->has_sign) continue;
+        char s[4][64];
+        for (int c = 0; c < 4; c++)
+            host_double(c < cs->count ? cs->sign[c] : 1, s[c], sizeof s[c]);
+        fprintf(f, "    # the runner's vectors convention: ");
+        for (int c = 0; c < cs->count; c++)
+            fprintf(f, "%s%s = %s * %s", c ? ", " : "", cs->want[c], s[c], cs->chan[c]);
+        fprintf(f, "\n    %s = create(app, \"net.sf.openfx.MultiplyPlugin\", \"%s\")\n",
+                cs->multiply, cs->multiply);
+        fprintf(f, "    %s.connectInput(0, %s)\n", cs->multiply, cs->shuffle);
+        fprintf(f, "    %s.getParam(\"value\").set(%s, %s, %s, %s)\n", cs->multiply, s[0], s[1],
+                s[2], s[3]);
+        if (cs->count > 3 && cs->sign[3] != 1)
+            fprintf(f, "    %s.getParam(\"a\").setValue(True)\n", cs->multiply);
+    }
+    for (int i = 0; i < hp->nnodes; i++) {
+        const host_node *hn = &hp->nodes[i];
+        const gnode *n = hn->n;
+        const nprfx_node_desc *d = n->desc;
+        fprintf(f, "    %s = create(app, \"%s\", \"%s\")\n", hn->name, hn->plugin_id, hn->name);
+        for (int c = 0; c < hn->nclips; c++) {
+            int k = hn->clips[c];
+            if (!hn->links[k].src) continue;
+            char clip[NPRFX_OFX_NAME_MAX], sel[NPRFX_OFX_NAME_MAX];
+            nprfx_ofx_clip_name(d, k, clip, sizeof clip);
+            nprfx_ofx_selector_name(d, k, sel, sizeof sel);
+            fprintf(f, "    connect(%s, \"%s\", %s)\n", hn->name,
+                    d->inputs[k].label ? d->inputs[k].label : clip, hn->links[k].src);
+            fprintf(f, "    choose(%s.getParam(\"%s\"), \"%s\")\n", hn->name, sel,
+                    hn->links[k].label);
+        }
+        for (int p = 0; p < d->num_params; p++)
+            if (host_param_changed(n, p)) param_line(f, n, hn->name, p);
+    }
+    for (int i = 0; i < hp->nwrites; i++) {
+        const host_write *w = &hp->writes[i];
+        fprintf(f, "    %s = app.createWriter(", w->name);
+        if (w->path[0] == '/')
+            py_string(f, w->path);
+        else {
+            fprintf(f, "os.path.join(base, ");
+            py_string(f, w->path);
+            fprintf(f, ")");
+        }
+        fprintf(f, ")\n    %s.setScriptName(\"%s\")\n", w->name, w->name);
+        fprintf(f, "    %s.connectInput(0, %s)\n", w->name, w->src);
+        fprintf(f, "    choose(%s.getParam(\"formatType\"), \"Input Stream Format\")\n", w->name);
+    }
+    fprintf(f, "    # PNG previews are left to the runner (nprfx run): they go through its display "
+               "transform\n\n\n");
+    fprintf(f, "build(app)  # noqa: F821  (`app` is the project Natron runs the script in)\n");
+    return ferror(f) ? nprfx_error(hp->g->ctx, NPRFX_ERR_IO, "write error") : NPRFX_OK;
+}

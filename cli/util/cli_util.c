@@ -1,0 +1,149 @@
+/* nprfx CLI — the runner's lowest layer: the context commands run with, the clocks, strdup,
+ * peak memory and a parallel byte copy. Includes nothing of the runner's other folders. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli_util.h"
+#include "flow_opencv.h"
+
+/* Threads from --threads (when > 0), else $NPRFX_THREADS, else all cores. */
+static int cli_threads(int requested)
+{
+    if (requested > 0) return requested;
+    const char *env = getenv("NPRFX_THREADS");
+    if (env && *env) {
+        int n = atoi(env);
+        if (n > 0) return n;
+        fprintf(stderr, "nprfx: ignoring NPRFX_THREADS='%s' (not a positive number)\n", env);
+    }
+    return 0; /* all cores */
+}
+
+/* The data directory (the stipple node's ivs.bin): $NPRFX_DATA_DIR when set (empty: none), else
+ * share/nprfx beside the executable (the build tree) or ../share/nprfx (an install), the first
+ * holding ivs.bin; NULL when there is none (the data is then generated when needed). */
+static const char *cli_data_dir(char *buf, size_t size)
+{
+    const char *env = getenv("NPRFX_DATA_DIR");
+    if (env) {
+        if (!*env || strlen(env) >= size) return NULL;
+        memcpy(buf, env, strlen(env) + 1);
+        return buf;
+    }
+    char exe[4096];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n <= 0) return NULL;
+    exe[n] = 0;
+    char *slash = strrchr(exe, '/');
+    if (!slash) return NULL;
+    *slash = 0;
+    static const char *const rel[] = {"/share/nprfx", "/../share/nprfx"};
+    for (size_t i = 0; i < sizeof rel / sizeof rel[0]; i++) {
+        char file[4200];
+        snprintf(file, sizeof file, "%s%s/ivs.bin", exe, rel[i]);
+        if (access(file, R_OK) == 0 && (size_t)snprintf(buf, size, "%s%s", exe, rel[i]) < size)
+            return buf;
+    }
+    return NULL;
+}
+
+int cli_env_init(cli_env *env, int threads)
+{
+    memset(env, 0, sizeof *env);
+    if (nprfx_pool_create(cli_threads(threads), &env->pool)) {
+        fprintf(stderr, "nprfx: cannot start worker threads\n");
+        return 1;
+    }
+    nprfx_context_init init = NPRFX_CONTEXT_INIT_DEFAULT;
+    init.executor = nprfx_pool_executor(env->pool);
+    char dir[4096];
+    init.data_dir = cli_data_dir(dir, sizeof dir);
+    init.flow = nprfx_flow_opencv(); /* NULL without OpenCV: the flow node says so */
+    if (nprfx_context_create(&init, &env->ctx)) {
+        nprfx_pool_destroy(env->pool);
+        fprintf(stderr, "nprfx: out of memory\n");
+        return 1;
+    }
+    return 0;
+}
+
+void cli_env_free(cli_env *env)
+{
+    nprfx_context_destroy(env->ctx);
+    nprfx_pool_destroy(env->pool);
+    memset(env, 0, sizeof *env);
+}
+
+const char *nprfx_cli_message(const nprfx_context *ctx)
+{
+    static _Thread_local char buf[2048];
+    nprfx_context_last_error(ctx, buf, sizeof buf);
+    return buf;
+}
+
+double cli_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+double cli_cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+char *cli_strdup(const char *s)
+{
+    if (!s) return NULL;
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d) memcpy(d, s, n);
+    return d;
+}
+
+double cli_peak_mib(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+    return (double)ru.ru_maxrss / 1024.0; /* Linux reports KiB */
+}
+
+typedef struct bytes_job {
+    const unsigned char *src; /* NULL: zero */
+    unsigned char *dst;
+    size_t bytes;
+    int parts;
+} bytes_job;
+
+static void bytes_parts(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const bytes_job *j = user;
+    for (int p = begin; p < end; p++) {
+        size_t a = j->bytes * (size_t)p / (size_t)j->parts;
+        size_t b = j->bytes * (size_t)(p + 1) / (size_t)j->parts;
+        if (j->src)
+            memcpy(j->dst + a, j->src + a, b - a);
+        else
+            memset(j->dst + a, 0, b - a);
+    }
+}
+
+void cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
+                        int parts)
+{
+    bytes_job j = {src, dst, bytes, parts > 0 ? parts : 1};
+    if (j.parts == 1 || !ex) {
+        bytes_parts(&j, 0, j.parts, 0);
+        return;
+    }
+    nprfx_parallel_for(ex, j.parts, 1, bytes_parts, &j);
+}
