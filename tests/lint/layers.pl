@@ -24,8 +24,11 @@ $root =~ s{/+$}{};
 # pam, whose pam-splat scatters its strokes with gabor-splat's anchored points
 # (core/gabor/internal_scatter.h). Node descriptors use the families and their support code;
 # the front ends (the runner, the OpenFX adapter) use the descriptors' public API, common/, and
-# never each other. Inside the runner, lower folders never include higher ones.
+# never each other. Inside the runner, lower folders never include higher ones: util, io, the
+# graph engine, farm and host projects, commands, main.c.
 my @FAMILIES = qw(noise gabor stipple pam looks motion);
+# The runner's folders, lowest first: each includes only those before it (main.c all of them).
+my @CLI = qw(cli/util cli/io cli/graph cli/farm cli/host cli/commands);
 my %LAYERS = (
     'include/nprfx'   => ['public', []],
     'core/base'       => ['base', ['public']],
@@ -39,7 +42,13 @@ my %LAYERS = (
     'plugins'         => ['nodes', ['public', 'base', @FAMILIES, 'support']],
     'common'          => ['common', ['public']],
     'plugins/ofx'     => ['ofx', ['public', 'support', 'common']],
-    'cli'             => ['cli', ['public', 'common']],
+    'cli'             => ['cli', ['public', 'common', @CLI]],
+    'cli/util'        => ['cli/util', ['public', 'common']],
+    'cli/io'          => ['cli/io', ['public', 'common', 'cli/util']],
+    'cli/graph'       => ['cli/graph', ['public', 'common', 'cli/util', 'cli/io']],
+    'cli/farm'        => ['cli/farm', ['public', 'common', 'cli/util', 'cli/io', 'cli/graph']],
+    'cli/host'        => ['cli/host', ['public', 'common', 'cli/util', 'cli/io', 'cli/graph']],
+    'cli/commands'    => ['cli/commands', ['public', 'common', @CLI[0 .. 4]]],
 );
 # Roots a quoted include is looked up under after the including file's own folder.
 my @ROOTS = ('include', 'core', 'plugins', 'common', 'cli');

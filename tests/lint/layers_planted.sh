@@ -3,6 +3,7 @@
 # it is, then fails on each planted fault, naming the file, the line and the rule:
 #   - a wrong-way include (core/base includes a family's internal header),
 #   - one front end including the other (the runner includes the OpenFX adapter),
+#   - the runner's I/O including its graph engine (a lower folder including a higher one),
 #   - a loop between two files of one folder,
 #   - an include that resolves to no file.
 set -u
@@ -38,6 +39,10 @@ fresh
 main=$(cd "$W/tree" && ls cli/main.c)
 plant "$main" '#include "ofx/ofx_api.h"'
 check "front end into front end" 1 "includes plugins/ofx/ofx_api.h: layer 'cli' may not include layer 'ofx'"
+
+fresh
+plant cli/io/io.h '#include "graph/graph.h"'
+check "runner: lower folder includes a higher one" 1 "cli/io/io.h:$(wc -l <"$W/tree/cli/io/io.h"): includes cli/graph/graph.h: layer 'cli/io' may not include layer 'cli/graph'"
 
 fresh
 plant core/base/internal_simd.h '#include "internal_state.h"'
