@@ -76,7 +76,7 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "--version")) {
         printf("nprfx %s\n", NPRFX_VERSION_STRING);
         /* what the flow node computes with (tests skip footage without it) */
-        const nprfx_flow_provider *fp = nprfx_flow_opencv();
+        const nprfx_flow_provider *fp = flow_opencv_provider();
         if (fp)
             printf("optical flow: %s\n", fp->name);
         else

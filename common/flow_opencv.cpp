@@ -88,14 +88,14 @@ const nprfx_flow_provider dis_provider = {sizeof(nprfx_flow_provider), "OpenCV "
 
 } // namespace
 
-const nprfx_flow_provider *nprfx_flow_opencv(void)
+const nprfx_flow_provider *flow_opencv_provider(void)
 {
     return &dis_provider;
 }
 
 #else
 
-const nprfx_flow_provider *nprfx_flow_opencv(void)
+const nprfx_flow_provider *flow_opencv_provider(void)
 {
     return nullptr;
 }

@@ -12,7 +12,7 @@ extern "C" {
 
 /* The provider to put in nprfx_context_init.flow (static: valid for the whole process), or NULL
  * when nprfx was built without OpenCV (NPRFX_WITH_OPENCV). */
-const nprfx_flow_provider *nprfx_flow_opencv(void);
+const nprfx_flow_provider *flow_opencv_provider(void);
 
 #ifdef __cplusplus
 }

@@ -18,7 +18,7 @@
 #define NPRFX_OFX_NAME_MAX 128
 
 /* "coherent-noise" -> "org.nprfx.CoherentNoise". */
-static inline void nprfx_ofx_plugin_id(const nprfx_node_desc *d, char *buf, size_t n)
+static inline void ofx_names_plugin_id(const nprfx_node_desc *d, char *buf, size_t n)
 {
     size_t k = (size_t)snprintf(buf, n, "%s", NPRFX_OFX_ID_PREFIX);
     int up = 1;
@@ -35,7 +35,7 @@ static inline void nprfx_ofx_plugin_id(const nprfx_node_desc *d, char *buf, size
 
 /* The input OFX calls "Source": the one flagged NPRFX_INPUT_MAIN, else the one labelled
  * "Source" (coherent-noise's clip to make coherent), else the first; -1 without inputs. */
-static inline int nprfx_ofx_main_input(const nprfx_node_desc *d)
+static inline int ofx_names_main_input(const nprfx_node_desc *d)
 {
     for (int k = 0; k < d->num_inputs; k++)
         if (d->inputs[k].flags & NPRFX_INPUT_MAIN) return k;
@@ -45,14 +45,14 @@ static inline int nprfx_ofx_main_input(const nprfx_node_desc *d)
 }
 
 /* Only a node that modifies an image (NPRFX_INPUT_MAIN) gets the Mask clip and mix params. */
-static inline int nprfx_ofx_maskable(const nprfx_node_desc *d)
+static inline int ofx_names_maskable(const nprfx_node_desc *d)
 {
     for (int k = 0; k < d->num_inputs; k++)
         if (d->inputs[k].flags & NPRFX_INPUT_MAIN) return 1;
     return 0;
 }
 
-static inline int nprfx_ofx_reserved_clip(const char *s)
+static inline int ofx_names_reserved_clip(const char *s)
 {
     return !strcmp(s, NPRFX_OFX_OUTPUT_CLIP) || !strcmp(s, NPRFX_OFX_SOURCE_CLIP) ||
            !strcmp(s, NPRFX_OFX_MASK_CLIP);
@@ -61,9 +61,9 @@ static inline int nprfx_ofx_reserved_clip(const char *s)
 /* Clip name of input k: "Source" for the main input, else its label without spaces or
  * punctuation ("Z Velocity" -> "ZVelocity"); a clash with a reserved name gets the input's
  * name appended, so every clip name stays unique. */
-static inline void nprfx_ofx_clip_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
+static inline void ofx_names_clip_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
 {
-    if (k == nprfx_ofx_main_input(d)) {
+    if (k == ofx_names_main_input(d)) {
         snprintf(buf, n, "%s", NPRFX_OFX_SOURCE_CLIP);
         return;
     }
@@ -79,7 +79,7 @@ static inline void nprfx_ofx_clip_name(const nprfx_node_desc *d, int k, char *bu
         up = 0;
     }
     buf[j] = 0;
-    if (!j || nprfx_ofx_reserved_clip(buf)) {
+    if (!j || ofx_names_reserved_clip(buf)) {
         size_t len = strlen(buf);
         snprintf(buf + len, n - len, "_%s", d->inputs[k].name);
     }
@@ -87,7 +87,7 @@ static inline void nprfx_ofx_clip_name(const nprfx_node_desc *d, int k, char *bu
 
 /* Param names the adapter adds beside the descriptor's own; a clash with a descriptor param
  * (whose names are snake_case) gets an "ofx" prefix. */
-static inline void nprfx_ofx_extra_param(const nprfx_node_desc *d, const char *want, char *buf,
+static inline void ofx_names_extra_param(const nprfx_node_desc *d, const char *want, char *buf,
                                          size_t n)
 {
     int len = nprfx_node_param_index(d, want) < 0
@@ -100,7 +100,7 @@ static inline void nprfx_ofx_extra_param(const nprfx_node_desc *d, const char *w
  * ("depth" -> "depthChannels", "motion_prev" -> "motionPrevChannels", "uv" -> "uvChannels",
  * "object_id" -> "objectIdChannels"). The input's name, not its clip's: the main clip is
  * always "Source", and a knob called sourceChannels under a clip labelled Tone reads oddly. */
-static inline void nprfx_ofx_selector_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
+static inline void ofx_names_selector_name(const nprfx_node_desc *d, int k, char *buf, size_t n)
 {
     char want[NPRFX_OFX_NAME_MAX];
     size_t j = 0;
@@ -114,55 +114,55 @@ static inline void nprfx_ofx_selector_name(const nprfx_node_desc *d, int k, char
         up = 0;
     }
     snprintf(want + j, sizeof want - j, "Channels");
-    nprfx_ofx_extra_param(d, want, buf, n);
+    ofx_names_extra_param(d, want, buf, n);
 }
 
 /* Host images carry RGBA or Alpha only, so an input's channels are a contiguous run of the
  * RGBA components, picked by its selector (openfx-misc style). */
-typedef struct nprfx_ofx_chan_option {
+typedef struct ofx_names_chan_option {
     const char *label;
     int first, count; /* components first .. first+count-1 of R,G,B,A */
-} nprfx_ofx_chan_option;
+} ofx_names_chan_option;
 
-static const nprfx_ofx_chan_option nprfx_ofx_chan_options[] = {
+static const ofx_names_chan_option ofx_names_chan_options[] = {
     {"RGBA", 0, 4}, {"RGB", 0, 3}, {"GBA", 1, 3}, {"RG", 0, 2}, {"GB", 1, 2},
     {"BA", 2, 2},   {"R", 0, 1},   {"G", 1, 1},   {"B", 2, 1},  {"A", 3, 1},
 };
 #define NPRFX_OFX_CHAN_OPTIONS                                                                     \
-    ((int)(sizeof nprfx_ofx_chan_options / sizeof nprfx_ofx_chan_options[0]))
+    ((int)(sizeof ofx_names_chan_options / sizeof ofx_names_chan_options[0]))
 
-/* The selector's options for an input (indices into nprfx_ofx_chan_options): those with the
+/* The selector's options for an input (indices into ofx_names_chan_options): those with the
  * input's exact channel count, or all of them for "any count from 1 to 4". Returns how many. */
-static inline int nprfx_ofx_selector_options(const nprfx_input_desc *in, int *opts)
+static inline int ofx_names_selector_options(const nprfx_input_desc *in, int *opts)
 {
     int n = 0;
     for (int i = 0; i < NPRFX_OFX_CHAN_OPTIONS; i++)
-        if (in->channels <= 0 || nprfx_ofx_chan_options[i].count == in->channels) opts[n++] = i;
+        if (in->channels <= 0 || ofx_names_chan_options[i].count == in->channels) opts[n++] = i;
     return n;
 }
 
 /* Position among the input's options of (first, count); -1 when it has none such. */
-static inline int nprfx_ofx_selector_find(const nprfx_input_desc *in, int first, int count)
+static inline int ofx_names_selector_find(const nprfx_input_desc *in, int first, int count)
 {
     int opts[NPRFX_OFX_CHAN_OPTIONS];
-    int n = nprfx_ofx_selector_options(in, opts);
+    int n = ofx_names_selector_options(in, opts);
     for (int i = 0; i < n; i++)
-        if (nprfx_ofx_chan_options[opts[i]].first == first &&
-            nprfx_ofx_chan_options[opts[i]].count == count)
+        if (ofx_names_chan_options[opts[i]].first == first &&
+            ofx_names_chan_options[opts[i]].count == count)
             return i;
     return -1;
 }
 
 /* Default option: the first R/G/B/A single-letter alternative of the input's AOV hint (a
  * coverage input that looks for "coverage|Coverage|A" reads A), else the first option. */
-static inline int nprfx_ofx_selector_default(const nprfx_input_desc *in)
+static inline int ofx_names_selector_default(const nprfx_input_desc *in)
 {
     const char *s = in->aov;
     while (s && *s) {
         const char *e = strchr(s, '|');
         size_t len = e ? (size_t)(e - s) : strlen(s);
         if (len == 1 && strchr("RGBA", *s)) {
-            int i = nprfx_ofx_selector_find(in, (int)(strchr("RGBA", *s) - "RGBA"), 1);
+            int i = ofx_names_selector_find(in, (int)(strchr("RGBA", *s) - "RGBA"), 1);
             if (i >= 0) return i;
         }
         s = e ? e + 1 : NULL;

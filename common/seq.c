@@ -13,7 +13,7 @@
 /* A runaway spec ("1-2000000000") should be an error, not an allocation of gigabytes. */
 #define SEQ_MAX_FRAMES 1000000
 
-void nprfx_seq_frames_free(nprfx_frame_list *list)
+void seq_frames_free(nprfx_frame_list *list)
 {
     if (!list) return;
     free(list->frames);
@@ -48,7 +48,7 @@ static int parse_int(const char **p, long *v)
     return 1;
 }
 
-nprfx_result nprfx_seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_frame_list *out)
+nprfx_result seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_frame_list *out)
 {
     out->frames = NULL;
     out->count = 0;
@@ -76,14 +76,14 @@ nprfx_result nprfx_seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_
         if (*p != ',' && *p != '\0') goto bad;
         long n = (a <= b ? b - a : a - b) / step + 1;
         if (n > SEQ_MAX_FRAMES - out->count) {
-            nprfx_seq_frames_free(out);
+            seq_frames_free(out);
             return nprfx_error(ctx, NPRFX_ERR_PARSE, "frame range '%s' has more than %d frames",
                                spec, SEQ_MAX_FRAMES);
         }
         for (long i = 0; i < n; i++) {
             long f = a <= b ? a + i * step : a - i * step;
             if (!push_frame(out, &cap, (int)f)) {
-                nprfx_seq_frames_free(out);
+                seq_frames_free(out);
                 return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory for frame list");
             }
         }
@@ -91,7 +91,7 @@ nprfx_result nprfx_seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_
         p++; /* ',' */
         continue;
     bad:
-        nprfx_seq_frames_free(out);
+        seq_frames_free(out);
         return nprfx_error(ctx, NPRFX_ERR_PARSE,
                            "bad frame range '%s' near '%s' (expected e.g. 1-24, 1-24x2 or 1,3,5-7)",
                            spec, item);
@@ -140,7 +140,7 @@ static const char *basename_of(const char *path)
     return slash ? slash + 1 : path;
 }
 
-int nprfx_seq_has_pattern(const char *path)
+int seq_has_pattern(const char *path)
 {
     int len, width;
     char pad;
@@ -189,11 +189,11 @@ static int expand(const char *pattern, int frame, int stop_at_token, char *out, 
     return 1;
 }
 
-nprfx_result nprfx_seq_expand(nprfx_context *ctx, const char *pattern, int frame, char *out,
+nprfx_result seq_expand(nprfx_context *ctx, const char *pattern, int frame, char *out,
                               size_t size)
 {
     if (!pattern || !out || !size)
-        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_seq_expand: NULL argument");
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "seq_expand: NULL argument");
     if (!expand(pattern, frame, 0, out, size))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "path '%s' for frame %d is longer than %zu bytes", pattern, frame,
@@ -207,11 +207,11 @@ static int cmp_int(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-int nprfx_seq_match(const char *pattern, const char *name, int *frame)
+int seq_match(const char *pattern, const char *name, int *frame)
 {
     const char *base = basename_of(pattern);
     char prefix[4096], again[4096];
-    if (!nprfx_seq_has_pattern(base)) return !strcmp(base, name);
+    if (!seq_has_pattern(base)) return !strcmp(base, name);
     if (!expand(base, 0, 1, prefix, sizeof prefix)) return 0;
     size_t plen = strlen(prefix);
     if (strncmp(name, prefix, plen)) return 0;
@@ -226,7 +226,7 @@ int nprfx_seq_match(const char *pattern, const char *name, int *frame)
     return 1;
 }
 
-nprfx_result nprfx_seq_canonical(nprfx_context *ctx, const char *pattern, char *out, size_t size)
+nprfx_result seq_canonical(nprfx_context *ctx, const char *pattern, char *out, size_t size)
 {
     size_t o = 0;
     int len, width;
@@ -256,11 +256,11 @@ nprfx_result nprfx_seq_canonical(nprfx_context *ctx, const char *pattern, char *
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame_list *out)
+nprfx_result seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame_list *out)
 {
     out->frames = NULL;
     out->count = 0;
-    if (!nprfx_seq_has_pattern(pattern))
+    if (!seq_has_pattern(pattern))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "'%s' has no frame number pattern (####, @, %%04d)", pattern);
     const char *base = basename_of(pattern);
@@ -285,10 +285,10 @@ nprfx_result nprfx_seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame
     struct dirent *e;
     while ((e = readdir(d))) {
         int f;
-        if (strncmp(e->d_name, prefix, plen) || !nprfx_seq_match(base, e->d_name, &f)) continue;
+        if (strncmp(e->d_name, prefix, plen) || !seq_match(base, e->d_name, &f)) continue;
         if (!push_frame(out, &cap, f)) {
             closedir(d);
-            nprfx_seq_frames_free(out);
+            seq_frames_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory listing '%s'", pattern);
         }
     }

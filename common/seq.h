@@ -20,36 +20,36 @@ extern "C" {
 #endif
 
 typedef struct nprfx_frame_list {
-    int *frames; /* in the order given; for nprfx_seq_list: ascending */
+    int *frames; /* in the order given; for seq_list: ascending */
     int count;
 } nprfx_frame_list;
 
-/* Parse a frame-list spec into out (free with nprfx_seq_frames_free). */
-nprfx_result nprfx_seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_frame_list *out);
-void nprfx_seq_frames_free(nprfx_frame_list *list);
+/* Parse a frame-list spec into out (free with seq_frames_free). */
+nprfx_result seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_frame_list *out);
+void seq_frames_free(nprfx_frame_list *list);
 
 /* 1 when the file name of path holds a frame token (see above), else 0. */
-int nprfx_seq_has_pattern(const char *path);
+int seq_has_pattern(const char *path);
 
 /* Write pattern with every frame token replaced by `frame` into out (size bytes). A path with no
  * token is copied unchanged. */
-nprfx_result nprfx_seq_expand(nprfx_context *ctx, const char *pattern, int frame, char *out,
+nprfx_result seq_expand(nprfx_context *ctx, const char *pattern, int frame, char *out,
                               size_t size);
 
 /* 1 when name (a file name, no directory) is the file of some frame of pattern's file name, by
- * the same exact re-expansion rule as nprfx_seq_list (*frame receives it; frame may be NULL); a
+ * the same exact re-expansion rule as seq_list (*frame receives it; frame may be NULL); a
  * pattern without a token matches its own file name only. */
-int nprfx_seq_match(const char *pattern, const char *name, int *frame);
+int seq_match(const char *pattern, const char *name, int *frame);
 
 /* pattern's file name with every frame token written one way, so that spellings of one sequence
  * agree: zero padded tokens ("####", "@@@@", "%04d") and "%d" become '#' runs of their width,
  * "%%" becomes '%', space padded "%4d" stays as written (the output locks' names). */
-nprfx_result nprfx_seq_canonical(nprfx_context *ctx, const char *pattern, char *out, size_t size);
+nprfx_result seq_canonical(nprfx_context *ctx, const char *pattern, char *out, size_t size);
 
 /* The frames whose files exist for pattern (ascending, no duplicates; count 0 when none). A name
  * matches only if expanding the pattern with its frame gives that name exactly, so "####" does
  * not pick up "12.exr" or "00012.exr". */
-nprfx_result nprfx_seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame_list *out);
+nprfx_result seq_list(nprfx_context *ctx, const char *pattern, nprfx_frame_list *out);
 
 #ifdef __cplusplus
 }

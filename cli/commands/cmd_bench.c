@@ -119,7 +119,7 @@ int cli_cmd_bench(int argc, char **argv)
     nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL, NULL}; /* plates are big */
     opt.no_pool = no_pool;
     if (nprfx_graph_parse(env.ctx, json, ".", &opt, &g)) {
-        fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx bench: %s\n", cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -127,14 +127,14 @@ int cli_cmd_bench(int argc, char **argv)
         char buf[512];
         snprintf(buf, sizeof buf, "bench.%s", sets[i]);
         if (nprfx_graph_set(g, buf)) {
-            fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
+            fprintf(stderr, "nprfx bench: %s\n", cli_message(env.ctx));
             status = 2;
             goto done;
         }
     }
     nprfx_graph_plan_info plan;
     if (nprfx_graph_plan(g, 1, &plan)) { /* a bench beyond --mem-limit fails before it starts */
-        fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx bench: %s\n", cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -147,7 +147,7 @@ int cli_cmd_bench(int argc, char **argv)
         nprfx_graph_take_render_items(g);
         nprfx_graph_take_render_bytes(g);
         if (nprfx_graph_eval(g, "bench", 1 + f, &out)) {
-            fprintf(stderr, "nprfx bench: %s\n", nprfx_cli_message(env.ctx));
+            fprintf(stderr, "nprfx bench: %s\n", cli_message(env.ctx));
             status = 1;
             goto done;
         }

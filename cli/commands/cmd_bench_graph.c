@@ -105,13 +105,13 @@ int cli_cmd_bench_graph(int argc, char **argv)
     if (nprfx_graph_load(env.ctx, path, &opt, &g) || nprfx_graph_set_shot(g, shot) ||
         (mem_limit && (cli_mem_limit_set(limit_bytes), 0)) ||
         nprfx_graph_synthesize_reads(g, w, h, scene)) {
-        fprintf(stderr, "nprfx bench-graph: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx bench-graph: %s\n", cli_message(env.ctx));
         status = 2;
         goto done;
     }
     for (int i = 0; i < nsets; i++)
         if (nprfx_graph_set(g, sets[i])) {
-            fprintf(stderr, "nprfx bench-graph: %s\n", nprfx_cli_message(env.ctx));
+            fprintf(stderr, "nprfx bench-graph: %s\n", cli_message(env.ctx));
             status = 2;
             goto done;
         }
@@ -121,7 +121,7 @@ int cli_cmd_bench_graph(int argc, char **argv)
         goto done;
     }
     if (nprfx_graph_plan(g, 1, &plan)) {
-        fprintf(stderr, "nprfx bench-graph: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx bench-graph: %s\n", cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -132,7 +132,7 @@ int cli_cmd_bench_graph(int argc, char **argv)
         nprfx_result r =
             write_dir ? nprfx_graph_render_frame(g, f, &written) : nprfx_graph_compute_frame(g, f);
         if (r) {
-            fprintf(stderr, "nprfx bench-graph: frame %d: %s\n", f, nprfx_cli_message(env.ctx));
+            fprintf(stderr, "nprfx bench-graph: frame %d: %s\n", f, cli_message(env.ctx));
             status = 1;
             goto done;
         }

@@ -385,20 +385,20 @@ static int compare_sequence(nprfx_context *ctx, const char *pa, const char *pb,
 {
     nprfx_frame_list frames = {NULL, 0};
     if (o->frames) {
-        if (nprfx_seq_parse_frames(ctx, o->frames, &frames)) return DIFF_USAGE;
+        if (seq_parse_frames(ctx, o->frames, &frames)) return DIFF_USAGE;
     } else {
-        if (nprfx_seq_list(ctx, pa, &frames)) return DIFF_FILE_ERROR;
+        if (seq_list(ctx, pa, &frames)) return DIFF_FILE_ERROR;
         if (!frames.count) {
             fprintf(stderr, "nprfx diff: no frames of '%s' exist\n", pa);
             return DIFF_FILE_ERROR;
         }
     }
-    if (o->out && !nprfx_seq_has_pattern(o->out) && frames.count > 1) {
+    if (o->out && !seq_has_pattern(o->out) && frames.count > 1) {
         fprintf(stderr,
                 "nprfx diff: --out '%s' needs a frame pattern (e.g. diff.####.exr) for a "
                 "sequence\n",
                 o->out);
-        nprfx_seq_frames_free(&frames);
+        seq_frames_free(&frames);
         return DIFF_USAGE;
     }
     int counts[5] = {0};
@@ -412,10 +412,10 @@ static int compare_sequence(nprfx_context *ctx, const char *pa, const char *pb,
         int f = frames.frames[i];
         diff_summary s;
         report rep;
-        if (nprfx_seq_expand(ctx, pa, f, fa, sizeof fa) ||
-            nprfx_seq_expand(ctx, pb, f, fb, sizeof fb) ||
-            (o->out && nprfx_seq_expand(ctx, o->out, f, fo, sizeof fo))) {
-            nprfx_seq_frames_free(&frames);
+        if (seq_expand(ctx, pa, f, fa, sizeof fa) ||
+            seq_expand(ctx, pb, f, fb, sizeof fb) ||
+            (o->out && seq_expand(ctx, o->out, f, fo, sizeof fo))) {
+            seq_frames_free(&frames);
             free(worst_text);
             return DIFF_USAGE;
         }
@@ -450,7 +450,7 @@ static int compare_sequence(nprfx_context *ctx, const char *pa, const char *pb,
     }
     printf("%s\n", status_word(worst.status));
     free(worst_text);
-    nprfx_seq_frames_free(&frames);
+    seq_frames_free(&frames);
     return worst.status;
 }
 
@@ -561,7 +561,7 @@ int cli_cmd_diff(int argc, char **argv)
         return DIFF_FILE_ERROR;
     }
     int rc;
-    int seq_a = nprfx_seq_has_pattern(files[0]), seq_b = nprfx_seq_has_pattern(files[1]);
+    int seq_a = seq_has_pattern(files[0]), seq_b = seq_has_pattern(files[1]);
     if (seq_a != seq_b) {
         fprintf(stderr,
                 "nprfx diff: '%s' is %sa frame pattern but '%s' is %s; give two files or two "

@@ -56,7 +56,7 @@ static int write_one(nprfx_graph *g, const char *graph, out_kind kind, const cha
         snprintf(dir, sizeof dir, ".");
     host_project hp;
     if (host_project_build(g, graph, dir, path, &hp)) {
-        fprintf(stderr, "nprfx host-project: %s\n", nprfx_cli_message(env->ctx));
+        fprintf(stderr, "nprfx host-project: %s\n", cli_message(env->ctx));
         return 2;
     }
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
@@ -72,7 +72,7 @@ static int write_one(nprfx_graph *g, const char *graph, out_kind kind, const cha
     host_project_free(&hp);
     if (fclose(f) || r || rename(tmp, path)) {
         if (r)
-            fprintf(stderr, "nprfx host-project: %s\n", nprfx_cli_message(env->ctx));
+            fprintf(stderr, "nprfx host-project: %s\n", cli_message(env->ctx));
         else
             fprintf(stderr, "nprfx host-project: cannot write %s\n", path);
         remove(tmp);
@@ -121,12 +121,12 @@ int cli_cmd_host_project(int argc, char **argv)
     nprfx_graph *g = NULL;
     int status = 0;
     if (nprfx_graph_load(env.ctx, graph, &opt, &g)) {
-        fprintf(stderr, "nprfx host-project: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx host-project: %s\n", cli_message(env.ctx));
         status = 2;
     }
     for (int i = 0; !status && i < nsets; i++)
         if (nprfx_graph_set(g, sets[i])) {
-            fprintf(stderr, "nprfx host-project: %s\n", nprfx_cli_message(env.ctx));
+            fprintf(stderr, "nprfx host-project: %s\n", cli_message(env.ctx));
             status = 2;
         }
     for (int k = 0; !status && k < 3; k++)

@@ -67,7 +67,7 @@ static int generate(nprfx_context *ctx, long long n, unsigned long long seed, co
     if (nprfx_ivs_generate(ctx, seed, (int)n, xy, NULL) != NPRFX_OK ||
         nprfx_ivs_encode(ctx, seed, (int)n, xy, buf, size) != NPRFX_OK ||
         cli_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
-        fprintf(stderr, "nprfx ivs: %s\n", nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx ivs: %s\n", cli_message(ctx));
         status = IVS_FAILED;
         goto done;
     }
@@ -169,7 +169,7 @@ static int check(nprfx_context *ctx, const char *path)
     nprfx_result r = nprfx_ivs_decode(ctx, buf, size, &seed, &n, &xy);
     free(buf);
     if (r != NPRFX_OK) {
-        fprintf(stderr, "nprfx ivs: %s: %s\n", path, nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx ivs: %s: %s\n", path, cli_message(ctx));
         return IVS_FAILED;
     }
     printf("%s: %d points, seed %llu, %zu bytes, checksum ok\n", path, n, (unsigned long long)seed,

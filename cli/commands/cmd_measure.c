@@ -199,7 +199,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
     if (!truth) truth = g;
     if (!r) r = nprfx_graph_frames(g, o->frames, &frames);
     if (r) {
-        fprintf(stderr, "nprfx measure: %s\n", nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx measure: %s\n", cli_message(ctx));
         status = MEASURE_USAGE;
         goto done;
     }
@@ -299,7 +299,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
     }
     fprintf(stderr, "\n");
     if (r) {
-        fprintf(stderr, "nprfx measure: %s\n", nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx measure: %s\n", cli_message(ctx));
         goto done;
     }
     printf("frames %d\n", frames.count);
@@ -352,7 +352,7 @@ done:
     nprfx_image_free(&paper);
     nprfx_image_free(&full);
     nprfx_image_free(&light);
-    nprfx_seq_frames_free(&frames);
+    seq_frames_free(&frames);
     if (truth != g) nprfx_graph_free(truth);
     nprfx_graph_free(g);
     return status;

@@ -43,7 +43,7 @@ static int load(nprfx_context *ctx, const char *pattern, int frame, cli_plate *p
                 const char *const *names, int n, nprfx_image *views)
 {
     char path[4096];
-    if (nprfx_seq_expand(ctx, pattern, frame, path, sizeof path) || cli_io_read(ctx, path, p))
+    if (seq_expand(ctx, pattern, frame, path, sizeof path) || cli_io_read(ctx, path, p))
         return 1;
     for (int i = 0; i < n; i++) {
         int c = cli_plate_channel(p, names[i]);
@@ -98,7 +98,7 @@ int cli_cmd_measure_flow(int argc, char **argv)
     if (nprfx_context_create(&init, &ctx)) return MF_FAILED;
     nprfx_frame_list fl = {0};
     int status = MF_OK;
-    if (nprfx_seq_parse_frames(ctx, frames, &fl)) {
+    if (seq_parse_frames(ctx, frames, &fl)) {
         nprfx_context_destroy(ctx);
         return MF_USAGE;
     }
@@ -159,7 +159,7 @@ int cli_cmd_measure_flow(int argc, char **argv)
         printf("occlusion_recall %.4f\n", tp + fn ? (double)tp / (double)(tp + fn) : 1.0);
         printf("conf_prev_mean %.4f\n", conf_n ? conf_sum / (double)conf_n : 0.0);
     }
-    nprfx_seq_frames_free(&fl);
+    seq_frames_free(&fl);
     nprfx_context_destroy(ctx);
     return status;
 }

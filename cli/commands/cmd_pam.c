@@ -109,7 +109,7 @@ static int read_sample(nprfx_context *ctx, const char *path, const char *colorsp
 {
     cli_plate pl;
     if (cli_io_read(ctx, path, &pl) != NPRFX_OK) {
-        fprintf(stderr, "nprfx pam build: %s\n", nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx pam build: %s\n", cli_message(ctx));
         return 0;
     }
     int idx[3];
@@ -128,7 +128,7 @@ static int read_sample(nprfx_context *ctx, const char *path, const char *colorsp
     }
     cli_plate_free(&pl);
     if (!ok) {
-        fprintf(stderr, "nprfx pam build: %s\n", nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx pam build: %s\n", cli_message(ctx));
         return 0;
     }
     int srgb = !strcmp(colorspace, "srgb");
@@ -141,7 +141,7 @@ static int read_sample(nprfx_context *ctx, const char *path, const char *colorsp
         }
     }
     if (srgb && cli_io_convert_colorspace(ctx, out, "srgb", "linear", NULL) != NPRFX_OK) {
-        fprintf(stderr, "nprfx pam build: '%s': %s\n", path, nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx pam build: '%s': %s\n", path, cli_message(ctx));
         nprfx_image_free(out);
         return 0;
     }
@@ -192,7 +192,7 @@ static int write_pam(nprfx_context *ctx, const char *path, const nprfx_image *st
         static const char *const names[3] = {"R", "G", "B"};
         cli_write_options wo = {sizeof wo, "zip", half, attrs, 6};
         ok = cli_io_write(ctx, path, strip, names, NULL, &wo) == NPRFX_OK;
-        if (!ok) fprintf(stderr, "nprfx pam build: %s\n", nprfx_cli_message(ctx));
+        if (!ok) fprintf(stderr, "nprfx pam build: %s\n", cli_message(ctx));
     } else {
         fprintf(stderr, "nprfx pam build: out of memory\n");
     }
@@ -318,7 +318,7 @@ static int cmd_build(int argc, char **argv)
     memset(&info, 0, sizeof info);
     info.size = sizeof info;
     if (nprfx_pam_build(env.ctx, &p, samples, nfiles, &strip, &info) != NPRFX_OK) {
-        const char *msg = nprfx_cli_message(env.ctx);
+        const char *msg = cli_message(env.ctx);
         fprintf(stderr, "nprfx pam build: %s\n", msg);
         int idx;
         if (sscanf(strstr(msg, "sample ") ? strstr(msg, "sample ") : "", "sample %d", &idx) == 1 &&
@@ -376,7 +376,7 @@ static int info_one(nprfx_context *ctx, const char *path)
     memset(&pl, 0, sizeof pl);
     if (cli_io_read_attributes(ctx, path, "nprfx:", &names, &values, &na) != NPRFX_OK ||
         cli_io_read(ctx, path, &pl) != NPRFX_OK) {
-        fprintf(stderr, "nprfx pam info: %s\n", nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx pam info: %s\n", cli_message(ctx));
         goto done;
     }
     const char *ver = attr(names, values, na, NPRFX_PAM_ATTR_VERSION);
@@ -407,7 +407,7 @@ static int info_one(nprfx_context *ctx, const char *path)
     memset(&info, 0, sizeof info);
     info.size = sizeof info;
     if (nprfx_pam_describe(ctx, &rgb, &info) != NPRFX_OK) {
-        fprintf(stderr, "nprfx pam info: '%s': %s\n", path, nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx pam info: '%s': %s\n", path, cli_message(ctx));
         goto done;
     }
     const char *cnt = attr(names, values, na, NPRFX_PAM_ATTR_COUNT);
@@ -540,7 +540,7 @@ static int cmd_samples(int argc, char **argv)
         if (nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, size, size), 3, &im) ||
             nprfx_pam_sample_strokes(ctx, tones[i], angles[i], seed + (unsigned)i, &im) ||
             cli_io_write_preview(ctx, path, &im, &po)) {
-            fprintf(stderr, "nprfx pam samples: %s\n", nprfx_cli_message(ctx));
+            fprintf(stderr, "nprfx pam samples: %s\n", cli_message(ctx));
             status = PAM_FAILED;
         } else {
             printf("wrote %s (tone %.2f, strokes at %.0f degrees)\n", path, tones[i], angles[i]);

@@ -11,7 +11,7 @@
 #include "io/output_lock.h"
 #include "util/cli_util.h"
 
-static void usage(FILE *f, const char *prog, const nprfx_run_extension *ext)
+static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
 {
     /* The nodes that render by rows, from their descriptors. */
     char rows[512] = "";
@@ -150,7 +150,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     cli_output_locks *locks = NULL;
     int status = 0;
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
-        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -161,18 +161,18 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         goto done;
     }
     if (shot && nprfx_graph_set_shot(g, shot)) {
-        fprintf(stderr, "%s run: --shot: %s\n", prog, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: --shot: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
     for (int i = 0; i < nsets; i++)
         if ((!ro->several || graph_has_node_of(g, sets[i])) && nprfx_graph_set(g, sets[i])) {
-            fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+            fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
             status = 2;
             goto done;
         }
     if (nprfx_graph_frames(g, frames, &fl)) {
-        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -181,7 +181,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     nprfx_graph_plan_info plan;
     memset(&plan, 0, sizeof plan);
     if (fl.count > 0 && nprfx_graph_plan(g, fl.frames[0], &plan)) {
-        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -195,7 +195,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         goto done;
     }
     if (lock_outputs(env.ctx, g, graph_path, ro, &locks)) {
-        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -214,7 +214,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         if (nprfx_graph_render_frame(g, fl.frames[k], &written)) {
             if (tty) fputc('\n', stderr);
             fprintf(stderr, "%s run: frame %d failed: %s\n", prog, fl.frames[k],
-                    nprfx_cli_message(env.ctx));
+                    cli_message(env.ctx));
             failed++;
             if (!keep_going) break;
             continue;
@@ -252,17 +252,17 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     if (ro->stats) cli_print_stats(stdout, g, fl.count, &plan);
 done:
     cli_output_locks_release(locks);
-    nprfx_seq_frames_free(&fl);
+    seq_frames_free(&fl);
     nprfx_graph_free(g);
     return status;
 }
 
 int cli_cmd_run(int argc, char **argv)
 {
-    return nprfx_cmd_run_extended(argc, argv, NULL);
+    return cli_cmd_run_extended(argc, argv, NULL);
 }
 
-int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext)
+int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
 {
     const char *prog = ext && ext->program ? ext->program : "nprfx";
     const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
@@ -339,7 +339,7 @@ int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
-        fprintf(stderr, "%s run: %s\n", prog, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }

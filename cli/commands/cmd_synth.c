@@ -193,7 +193,7 @@ int cli_cmd_synth(int argc, char **argv)
     /* Refused before anything is allocated, with the size and the limit (NPRFX_READ_LIMIT). */
     if (cli_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
                               nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0), 0)) {
-        fprintf(stderr, "%s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "%s\n", cli_message(env.ctx));
         cli_env_free(&env);
         return SYNTH_USAGE;
     }
@@ -204,12 +204,12 @@ int cli_cmd_synth(int argc, char **argv)
         bnames[c] = blender_layout[c].name;
     bnames[BLENDER_CHANNELS] = NULL;
     int status = SYNTH_OK;
-    if (nprfx_seq_parse_frames(env.ctx, frames_spec, &frames) != NPRFX_OK) {
-        fprintf(stderr, "nprfx synth: --frames: %s\n", nprfx_cli_message(env.ctx));
+    if (seq_parse_frames(env.ctx, frames_spec, &frames) != NPRFX_OK) {
+        fprintf(stderr, "nprfx synth: --frames: %s\n", cli_message(env.ctx));
         status = SYNTH_USAGE;
         goto done;
     }
-    if (frames.count > 1 && !nprfx_seq_has_pattern(out)) {
+    if (frames.count > 1 && !seq_has_pattern(out)) {
         fprintf(stderr,
                 "nprfx synth: %d frames but '%s' has no frame token; use e.g. "
                 "name.####.exr\n",
@@ -219,12 +219,12 @@ int cli_cmd_synth(int argc, char **argv)
     }
     if (nprfx_image_alloc(env.ctx, nprfx_rect_make(0, 0, w, h), nprfx_synth_channel_count(), &im) !=
         NPRFX_OK) {
-        fprintf(stderr, "nprfx synth: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx synth: %s\n", cli_message(env.ctx));
         status = SYNTH_FAILED;
         goto done;
     }
     if (blender && nprfx_image_alloc(env.ctx, im.bounds, BLENDER_CHANNELS, &packed) != NPRFX_OK) {
-        fprintf(stderr, "nprfx synth: %s\n", nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx synth: %s\n", cli_message(env.ctx));
         status = SYNTH_FAILED;
         goto done;
     }
@@ -234,11 +234,11 @@ int cli_cmd_synth(int argc, char **argv)
     for (int i = 0; i < frames.count; i++) {
         int frame = frames.frames[i];
         char path[4096];
-        if (nprfx_seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
+        if (seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
             nprfx_synth_render(env.ctx, scene, frame, &im) != NPRFX_OK ||
             (blender && (to_blender(&im, &packed), 0)) ||
             cli_io_write(env.ctx, path, written, names, NULL, &opt) != NPRFX_OK) {
-            fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, nprfx_cli_message(env.ctx));
+            fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, cli_message(env.ctx));
             status = SYNTH_FAILED;
             goto done;
         }
@@ -249,7 +249,7 @@ int cli_cmd_synth(int argc, char **argv)
 done:
     nprfx_image_free(&im);
     nprfx_image_free(&packed);
-    nprfx_seq_frames_free(&frames);
+    seq_frames_free(&frames);
     cli_env_free(&env);
     return status;
 }

@@ -27,7 +27,7 @@ int cli_cmd_farm(int argc, char **argv);
 /* What a program built on the runner adds to `run` (the OpenFX test host of tests/ofxhost/ gives
  * every node a render hook that drives the plug-ins): options of its own and a render hook for
  * the graph. Members may be NULL. */
-typedef struct nprfx_run_extension {
+typedef struct cli_run_extension {
     const char *program;       /* names the command in usage and messages (NULL: "nprfx") */
     const char *options_usage; /* lines added to the options of --help */
     /* Offered each argument `run` does not take, with the next one (NULL: none); returns how many
@@ -40,10 +40,10 @@ typedef struct nprfx_run_extension {
      * releases the hook's instances); also when open failed. */
     void (*close)(void *user);
     void *user;
-} nprfx_run_extension;
+} cli_run_extension;
 
 /* `run` with an extension (NULL: cli_cmd_run). */
-int nprfx_cmd_run_extended(int argc, char **argv, const nprfx_run_extension *ext);
+int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext);
 
 #ifdef __cplusplus
 }

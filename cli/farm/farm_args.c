@@ -111,16 +111,16 @@ static int check_reads(nprfx_graph *g, nprfx_context *ctx, const char *cmd,
     const char **nodes;
     int n;
     if (nprfx_graph_read_patterns(g, &paths, &nodes, &n)) {
-        fprintf(stderr, "nprfx %s: %s\n", cmd, nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx %s: %s\n", cmd, cli_message(ctx));
         return 2;
     }
     int status = 0;
     for (int i = 0; i < n && !status; i++) {
         int missing = 0, first = 0, err = 0;
         char file[4096], first_file[4096] = "";
-        int frames = nprfx_seq_has_pattern(paths[i]) ? fl->count : (fl->count > 0);
+        int frames = seq_has_pattern(paths[i]) ? fl->count : (fl->count > 0);
         for (int k = 0; k < frames; k++) {
-            if (nprfx_seq_expand(ctx, paths[i], fl->frames[k], file, sizeof file)) {
+            if (seq_expand(ctx, paths[i], fl->frames[k], file, sizeof file)) {
                 snprintf(file, sizeof file, "%s", paths[i]);
             }
             if (access(file, R_OK) == 0) continue;
@@ -185,7 +185,7 @@ int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int ch
     }
     nprfx_graph_options opt = {sizeof opt, (size_t)64 << 20, 0, a->output_dir, NULL};
     if (nprfx_graph_load(ctx, a->graph, &opt, &g)) {
-        fprintf(stderr, "nprfx %s: %s\n", cmd, nprfx_cli_message(ctx));
+        fprintf(stderr, "nprfx %s: %s\n", cmd, cli_message(ctx));
         goto done;
     }
     if (!nprfx_graph_write_count(g)) {
@@ -228,9 +228,9 @@ int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int ch
     status = check_reads(g, ctx, cmd, &fl, job->frames);
     goto done;
 fail:
-    fprintf(stderr, "nprfx %s: %s: %s\n", cmd, a->graph, nprfx_cli_message(ctx));
+    fprintf(stderr, "nprfx %s: %s: %s\n", cmd, a->graph, cli_message(ctx));
 done:
-    nprfx_seq_frames_free(&fl);
+    seq_frames_free(&fl);
     if (status) {
         farm_job_free(job);
         nprfx_graph_free(g);

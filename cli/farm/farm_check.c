@@ -62,7 +62,7 @@ static const char *fault(nprfx_context *ctx, const char *path, char *why, size_t
     if (!is_image(path)) return NULL;
     cli_plate pl;
     if (cli_io_read(ctx, path, &pl)) {
-        snprintf(why, n, "damaged: %s", nprfx_cli_message(ctx));
+        snprintf(why, n, "damaged: %s", cli_message(ctx));
         return why;
     }
     cli_plate_free(&pl);
@@ -115,7 +115,7 @@ int farm_check(int argc, char **argv)
     if (status) goto done;
     if (nprfx_graph_frames(g, ga.frames, &fl) ||
         nprfx_graph_output_patterns(g, &patterns, &npatterns)) {
-        fprintf(stderr, "nprfx farm check: %s: %s\n", ga.graph, nprfx_cli_message(env.ctx));
+        fprintf(stderr, "nprfx farm check: %s: %s\n", ga.graph, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -125,7 +125,7 @@ int farm_check(int argc, char **argv)
     if (cli_output_locks_take(env.ctx, (const char *const *)patterns, npatterns, job.graph, 0,
                               lock_notice, NULL, &locks))
         fprintf(stderr, "nprfx farm check: warning: temporary files not cleared: %s\n",
-                nprfx_cli_message(env.ctx));
+                cli_message(env.ctx));
     cli_output_locks_release(locks);
     int *bad = malloc((size_t)fl.count * sizeof *bad), nbad = 0, files = 0;
     if (!bad) {
@@ -138,8 +138,8 @@ int farm_check(int argc, char **argv)
         for (int p = 0; p < npatterns; p++) {
             char path[4096], why[2048], single[32];
             /* a pattern without a frame token is one file, checked once */
-            if (!nprfx_seq_has_pattern(patterns[p]) && k > 0) continue;
-            if (nprfx_seq_expand(env.ctx, patterns[p], fl.frames[k], path, sizeof path))
+            if (!seq_has_pattern(patterns[p]) && k > 0) continue;
+            if (seq_expand(env.ctx, patterns[p], fl.frames[k], path, sizeof path))
                 snprintf(path, sizeof path, "%s", patterns[p]);
             files++;
             const char *f = fault(env.ctx, path, why, sizeof why);
@@ -165,7 +165,7 @@ int farm_check(int argc, char **argv)
     free(bad);
 done:
     nprfx_graph_output_patterns_free(patterns, npatterns);
-    nprfx_seq_frames_free(&fl);
+    seq_frames_free(&fl);
     nprfx_graph_free(g);
     farm_job_free(&job); /* after farm_prepare, even a failed one: idempotent */
     cli_env_free(&env);

@@ -115,7 +115,7 @@ nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment);
  * default), e.g. for a shot longer or shorter than the graph was written for (--shot). */
 nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames);
 /* The shot's frames from the graph's "frames" entry (or `override`, e.g. from --frames, which
- * must lie inside the shot when the graph declares one). Free with nprfx_seq_frames_free. */
+ * must lie inside the shot when the graph declares one). Free with seq_frames_free. */
 nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_frame_list *out);
 
 /* Evaluate every write node at `frame`; *written receives the number of files written. */

@@ -310,7 +310,7 @@ static nprfx_result link_graph(nprfx_graph *g)
 static nprfx_result shot_range(nprfx_graph *g)
 {
     nprfx_frame_list fl;
-    nprfx_result r = nprfx_seq_parse_frames(g->ctx, g->frames_text, &fl);
+    nprfx_result r = seq_parse_frames(g->ctx, g->frames_text, &fl);
     if (r) return r;
     g->first_frame = INT_MAX;
     g->last_frame = INT_MIN;
@@ -318,7 +318,7 @@ static nprfx_result shot_range(nprfx_graph *g)
         if (fl.frames[k] < g->first_frame) g->first_frame = fl.frames[k];
         if (fl.frames[k] > g->last_frame) g->last_frame = fl.frames[k];
     }
-    nprfx_seq_frames_free(&fl);
+    seq_frames_free(&fl);
     return NPRFX_OK;
 }
 
@@ -628,7 +628,7 @@ nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames)
 nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_frame_list *out)
 {
     const char *text = override ? override : g->frames_text ? g->frames_text : "1";
-    nprfx_result r = nprfx_seq_parse_frames(g->ctx, text, out);
+    nprfx_result r = seq_parse_frames(g->ctx, text, out);
     if (r) return r;
     if (!g->frames_text && out->count > 0) {
         /* No shot range in the graph: the frames asked for are the shot temporal nodes see. */
@@ -642,7 +642,7 @@ nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override, nprfx_fram
         for (int k = 0; k < out->count; k++)
             if (out->frames[k] < g->first_frame || out->frames[k] > g->last_frame) {
                 int f = out->frames[k];
-                nprfx_seq_frames_free(out);
+                seq_frames_free(out);
                 return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
                                    "frame %d is outside the graph's frames %s", f, g->frames_text);
             }

@@ -23,7 +23,7 @@ void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const ch
                                  int frame, char *buf, size_t n)
 {
     char expanded[4096];
-    if (nprfx_seq_expand(NULL, pattern, frame, expanded, sizeof expanded))
+    if (seq_expand(NULL, pattern, frame, expanded, sizeof expanded))
         snprintf(expanded, sizeof expanded, "%s", pattern);
     if (expanded[0] == '/' || !dir || !dir[0] || !strcmp(dir, "."))
         snprintf(buf, n, "%s", expanded);

@@ -340,11 +340,11 @@ static void ofx_node(ntp *w, const host_node *hn)
         int k = hn->clips[c];
         if (!hn->links[k].src) continue;
         char sel[NPRFX_OFX_NAME_MAX];
-        nprfx_ofx_selector_name(d, k, sel, sizeof sel);
+        ofx_names_selector_name(d, k, sel, sizeof sel);
         knob_int(w, sel, "Choice", 0, hn->links[k].option,
-                 nprfx_ofx_selector_default(&d->inputs[k]), hn->links[k].label);
+                 ofx_names_selector_default(&d->inputs[k]), hn->links[k].label);
         /* Natron names inputs after the clip's label, which the adapter takes from the input */
-        nprfx_ofx_clip_name(d, k, clip[nin], sizeof clip[nin]);
+        ofx_names_clip_name(d, k, clip[nin], sizeof clip[nin]);
         labels[nin] = d->inputs[k].label ? d->inputs[k].label : clip[nin];
         srcs[nin++] = hn->links[k].src;
     }

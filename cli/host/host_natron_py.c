@@ -130,7 +130,7 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
     py_string(f, parent);
     fprintf(f, "\nSCRIPT_DIR = ");
     py_string(f, dir);
-    nprfx_seq_expand(NULL, hp->reads[0].path, hp->first_frame, first, sizeof first);
+    seq_expand(NULL, hp->reads[0].path, hp->first_frame, first, sizeof first);
     fprintf(f, "\nFIRST_PLATE = ");
     py_string(f, first);
     fprintf(f, "\n\n%s", prelude);
@@ -180,8 +180,8 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
             int k = hn->clips[c];
             if (!hn->links[k].src) continue;
             char clip[NPRFX_OFX_NAME_MAX], sel[NPRFX_OFX_NAME_MAX];
-            nprfx_ofx_clip_name(d, k, clip, sizeof clip);
-            nprfx_ofx_selector_name(d, k, sel, sizeof sel);
+            ofx_names_clip_name(d, k, clip, sizeof clip);
+            ofx_names_selector_name(d, k, sel, sizeof sel);
             fprintf(f, "    connect(%s, \"%s\", %s)\n", hn->name,
                     d->inputs[k].label ? d->inputs[k].label : clip, hn->links[k].src);
             fprintf(f, "    choose(%s.getParam(\"%s\"), \"%s\")\n", hn->name, sel,

@@ -153,13 +153,13 @@ nprfx_result host_write_nuke(const host_project *hp, FILE *f)
             int k = hn->clips[c];
             if (!hn->links[k].src) continue;
             char sel[NPRFX_OFX_NAME_MAX];
-            nprfx_ofx_selector_name(d, k, sel, sizeof sel);
+            ofx_names_selector_name(d, k, sel, sizeof sel);
             fprintf(f, " %s %s\n", sel, hn->links[k].label);
         }
         fprintf(f, " name %s\n label \"inputs:", hn->name);
         for (int c = 0; c <= last; c++) {
             char clip[NPRFX_OFX_NAME_MAX];
-            nprfx_ofx_clip_name(d, hn->clips[c], clip, sizeof clip);
+            ofx_names_clip_name(d, hn->clips[c], clip, sizeof clip);
             fprintf(f, " %d %s", c, clip);
         }
         fprintf(f, "\"\n}\nset N%s [stack 0]\n", hn->name);

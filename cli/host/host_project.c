@@ -239,15 +239,15 @@ static nprfx_result link_input(builder *b, host_node *hn, int k)
         for (int i = 0; i < b->hp->nnodes; i++)
             if (b->hp->nodes[i].n == &g->nodes[src]) l->src = b->hp->nodes[i].name;
     }
-    l->option = nprfx_ofx_selector_find(in, first, count);
+    l->option = ofx_names_selector_find(in, first, count);
     if (l->option < 0)
         return nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
                            "node '%s': input '%s' has no channel selector option for %d "
                            "channel%s from component %d",
                            n->name, in->name, count, count > 1 ? "s" : "", first);
     int opts[NPRFX_OFX_CHAN_OPTIONS];
-    nprfx_ofx_selector_options(in, opts);
-    l->label = nprfx_ofx_chan_options[opts[l->option]].label;
+    ofx_names_selector_options(in, opts);
+    l->label = ofx_names_chan_options[opts[l->option]].label;
     return NPRFX_OK;
 }
 
@@ -275,11 +275,11 @@ static nprfx_result visit(builder *b, int gi)
         host_node hn;
         memset(&hn, 0, sizeof hn);
         hn.n = n;
-        nprfx_ofx_plugin_id(d, hn.plugin_id, sizeof hn.plugin_id);
+        ofx_names_plugin_id(d, hn.plugin_id, sizeof hn.plugin_id);
         host_name(hn.name, sizeof hn.name, n->name, NULL);
         hn.links = calloc((size_t)d->num_inputs + 1, sizeof *hn.links);
         if (!hn.links) return oom(b);
-        int main_in = nprfx_ofx_main_input(d), ch[64] = {0};
+        int main_in = ofx_names_main_input(d), ch[64] = {0};
         if (main_in >= 0) hn.clips[hn.nclips++] = main_in;
         for (int k = 0; k < d->num_inputs && hn.nclips < 32; k++)
             if (k != main_in) hn.clips[hn.nclips++] = k;
@@ -371,7 +371,7 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
     hp->first_frame = g->first_frame;
     hp->last_frame = g->last_frame;
     if (!g->frames_text && fl.count) hp->first_frame = hp->last_frame = fl.frames[0];
-    nprfx_seq_frames_free(&fl);
+    seq_frames_free(&fl);
     /* the project format's name: the output file's, without folder and extension */
     const char *leaf = strrchr(out_file, '/');
     char stem[64];

@@ -32,7 +32,7 @@ typedef struct host_chanset {
 /* Input k of an OpenFX node: its source and the selector option that picks its channels. */
 typedef struct host_link {
     const char *src;   /* host node name, NULL: not connected */
-    int option;        /* position among nprfx_ofx_selector_options */
+    int option;        /* position among ofx_names_selector_options */
     const char *label; /* that option's label ("RG") */
 } host_link;
 

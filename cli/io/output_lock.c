@@ -63,7 +63,7 @@ static nprfx_result entry_init(nprfx_context *ctx, const char *pattern, lock_ent
         snprintf(e->dir, sizeof e->dir, "/");
     else
         snprintf(e->dir, sizeof e->dir, "%.*s", (int)(slash - pattern), pattern);
-    nprfx_result r = nprfx_seq_canonical(ctx, base, canon, sizeof canon);
+    nprfx_result r = seq_canonical(ctx, base, canon, sizeof canon);
     if (r) return r;
     if (make_dirs(e->dir) || !realpath(e->dir, real))
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s", e->dir,
@@ -218,7 +218,7 @@ static int is_temp_of(const char *base, const char *name)
         int has_ext = dot && dot != target && strcmp(target, "..");
         /* the split of target must give back this stem and extension */
         if (*ext ? dot != target + stem : has_ext) continue;
-        if (nprfx_seq_match(base, target, NULL)) return 1;
+        if (seq_match(base, target, NULL)) return 1;
     }
     return 0;
 }

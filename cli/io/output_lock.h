@@ -2,7 +2,7 @@
  *
  * Before its first frame a run takes an exclusive advisory lock (flock) on a lock file beside
  * each sequence it writes: ".<file pattern>.nprfx-lock" in the sequence's folder, the pattern's
- * frame tokens written as '#' runs (nprfx_seq_canonical), so "x.####.exr" and "x.%04d.exr" share
+ * frame tokens written as '#' runs (seq_canonical), so "x.####.exr" and "x.%04d.exr" share
  * one lock. The file holds the holder's pid, host, graph and start time, for the message another
  * run gets. The OS drops the lock when the holder dies, even by kill -9, so a lock is never
  * stale; the next holder then removes the temporary files the dead run left for that sequence

@@ -63,7 +63,7 @@ int cli_env_init(cli_env *env, int threads)
     init.executor = nprfx_pool_executor(env->pool);
     char dir[4096];
     init.data_dir = cli_data_dir(dir, sizeof dir);
-    init.flow = nprfx_flow_opencv(); /* NULL without OpenCV: the flow node says so */
+    init.flow = flow_opencv_provider(); /* NULL without OpenCV: the flow node says so */
     if (nprfx_context_create(&init, &env->ctx)) {
         nprfx_pool_destroy(env->pool);
         fprintf(stderr, "nprfx: out of memory\n");
@@ -79,7 +79,7 @@ void cli_env_free(cli_env *env)
     memset(env, 0, sizeof *env);
 }
 
-const char *nprfx_cli_message(const nprfx_context *ctx)
+const char *cli_message(const nprfx_context *ctx)
 {
     static _Thread_local char buf[2048];
     nprfx_context_last_error(ctx, buf, sizeof buf);

@@ -14,7 +14,7 @@ extern "C" {
 /* A context whose executor is a pthread pool of `threads` threads (when > 0, else
  * $NPRFX_THREADS, else all cores), and the data directory (the stipple node's ivs.bin). Errors
  * are not printed as they are raised: layers add what they know through scoped contexts, and
- * commands print the finished message once (nprfx_cli_message). */
+ * commands print the finished message once (cli_message). */
 typedef struct cli_env {
     nprfx_context *ctx;
     nprfx_pool *pool;
@@ -23,7 +23,7 @@ int cli_env_init(cli_env *env, int threads);
 void cli_env_free(cli_env *env);
 
 /* The last message raised through ctx, copied (valid until the next call from this thread). */
-const char *nprfx_cli_message(const nprfx_context *ctx);
+const char *cli_message(const nprfx_context *ctx);
 
 /* Monotonic clock in seconds. */
 double cli_now(void);

@@ -80,7 +80,7 @@ static void init_plugins(void)
         n = MAX_PLUGINS;
     }
     for (int i = 0; i < n; i++) {
-        nprfx_ofx_plugin_id(nprfx_node_at(i), plugin_ids[i], sizeof plugin_ids[i]);
+        ofx_names_plugin_id(nprfx_node_at(i), plugin_ids[i], sizeof plugin_ids[i]);
         plugins[i].pluginApi = kOfxImageEffectPluginApi;
         plugins[i].apiVersion = kOfxImageEffectPluginApiVersion;
         plugins[i].pluginIdentifier = plugin_ids[i];

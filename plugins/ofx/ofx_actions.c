@@ -43,7 +43,7 @@ static void set_frame_ranges(OfxPropertySetHandle out_args, const nprfx_node_des
         v[2 * i] = r[i].first;
         v[2 * i + 1] = r[i].last;
     }
-    nprfx_ofx_clip_name(d, k, clip, sizeof clip);
+    ofx_names_clip_name(d, k, clip, sizeof clip);
     if (n > 0) set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, clip, v, 2 * n);
 }
 
@@ -62,7 +62,7 @@ OfxStatus ofx_regions_of_interest(ofx_instance *inst, OfxPropertySetHandle in_ar
             ofx_g.fx->clipGetRegionOfDefinition(inst->clips[k], t, &rod) != kOfxStatOK)
             continue;
         double v[4] = {rod.x1, rod.y1, rod.x2, rod.y2};
-        nprfx_ofx_clip_name(inst->desc, k, clip, sizeof clip);
+        ofx_names_clip_name(inst->desc, k, clip, sizeof clip);
         set_clip_rect(out_args, kOfxImageClipPropRoIPrefix, clip, v, 4);
     }
     if (inst->mask)
@@ -98,7 +98,7 @@ OfxStatus ofx_frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
      * stand in, so the frame itself is still declared. */
     if (ofx_eval_params(inst, ctx, t, 0, values, strings) != NPRFX_OK)
         nprfx_node_defaults(d, values);
-    int main = nprfx_ofx_main_input(d);
+    int main = ofx_names_main_input(d);
     if (inst->derive && main >= 0 && ofx_clip_connected(inst->clips[main])) {
         /* Footage: Source at the frames the flow reads for each derived input's frames, and at
          * the main input's own when Source feeds it; one frame where the host cannot give
@@ -166,7 +166,7 @@ OfxStatus ofx_clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_args
     if (!strings || ofx_eval_params(inst, ctx, 0, 1, values, strings) != NPRFX_OK)
         nprfx_node_defaults(d, values);
     ofx_input_channels(inst, 0, 1, in_ch);
-    int main = nprfx_ofx_main_input(d);
+    int main = ofx_names_main_input(d);
     nprfx_output_info oi;
     int nout = nprfx_node_output_info(ctx, d, values, in_ch, &oi) == NPRFX_OK ? oi.channels : 4;
     nprfx_context_destroy(ctx);
@@ -200,7 +200,7 @@ OfxStatus ofx_clip_preferences(ofx_instance *inst, OfxPropertySetHandle out_args
     char clip[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
         if (!inst->clips[k]) continue;
-        nprfx_ofx_clip_name(d, k, clip, sizeof clip);
+        ofx_names_clip_name(d, k, clip, sizeof clip);
         set_clip_string(out_args, kOfxImageClipPropDepthPrefix, clip, kOfxBitDepthFloat);
     }
     (void)ofx_g.prop->propSetString(out_args, kOfxImageEffectPropPreMultiplication, 0, premult);

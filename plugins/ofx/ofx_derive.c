@@ -105,7 +105,7 @@ int ofx_derive_make_plan(const nprfx_node_desc *d, int temporal, ofx_derive_plan
     outputs(f, plan->values, &oi);
     plan->flow = f;
     plan->channels = oi.channels;
-    int any = 0, complete = 1, main = nprfx_ofx_main_input(d);
+    int any = 0, complete = 1, main = ofx_names_main_input(d);
     for (int k = 0; k < d->num_inputs; k++) {
         for (int j = 0; j < nwant[k]; j++)
             for (int i = 0; i < oi.channels; i++)
@@ -161,7 +161,7 @@ int ofx_derive_frames(const nprfx_node_desc *d, const ofx_derive_plan *plan,
                       const nprfx_value *values, const nprfx_frames_query *q, int main_fed,
                       nprfx_frame_range *r)
 {
-    int n = 0, main = nprfx_ofx_main_input(d);
+    int n = 0, main = ofx_names_main_input(d);
     int src_ch[1] = {4};
     for (int k = 0; k < d->num_inputs; k++) {
         nprfx_frame_range nr[NPRFX_MAX_FRAME_RANGES];

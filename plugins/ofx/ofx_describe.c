@@ -24,7 +24,7 @@ static int filter_derives(const nprfx_node_desc *d)
  * can run without every other one, or when it derives the others from Source (footage). */
 static int filter_capable(const nprfx_node_desc *d)
 {
-    int main = nprfx_ofx_main_input(d);
+    int main = ofx_names_main_input(d);
     if (main < 0) return 0;
     if (filter_derives(d)) return 1;
     for (int k = 0; k < d->num_inputs; k++)
@@ -246,10 +246,10 @@ static OfxStatus define_selector(OfxParamSetHandle ps, const nprfx_node_desc *d,
 {
     const nprfx_input_desc *in = &d->inputs[k];
     int opts[NPRFX_OFX_CHAN_OPTIONS];
-    int n = nprfx_ofx_selector_options(in, opts);
+    int n = ofx_names_selector_options(in, opts);
     name[0] = 0;
     if (n < 2) return kOfxStatOK; /* nothing to choose */
-    nprfx_ofx_selector_name(d, k, name, name_size);
+    ofx_names_selector_name(d, k, name, name_size);
     OfxPropertySetHandle pp;
     OfxStatus st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, name, &pp);
     if (st != kOfxStatOK) return st;
@@ -257,8 +257,8 @@ static OfxStatus define_selector(OfxParamSetHandle ps, const nprfx_node_desc *d,
     snprintf(label, sizeof label, "%s Channels", in->label ? in->label : clip);
     ofx_set_str(pp, kOfxPropLabel, 0, label);
     for (int i = 0; i < n; i++)
-        ofx_set_str(pp, kOfxParamPropChoiceOption, i, nprfx_ofx_chan_options[opts[i]].label);
-    ofx_set_int(pp, kOfxParamPropDefault, 0, nprfx_ofx_selector_default(in));
+        ofx_set_str(pp, kOfxParamPropChoiceOption, i, ofx_names_chan_options[opts[i]].label);
+    ofx_set_int(pp, kOfxParamPropDefault, 0, ofx_names_selector_default(in));
     ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
     strbuf hint = {0};
     char head[256];
@@ -304,9 +304,9 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
      * that is itself derived (advect's motion_prev). */
     ofx_derive_plan plan;
     int derives = !general && ofx_derive_make_plan(d, ofx_g.temporal, &plan);
-    int main = nprfx_ofx_main_input(d);
+    int main = ofx_names_main_input(d);
     int temporal = (d->flags & NPRFX_NODE_TEMPORAL) && ofx_g.temporal;
-    int maskable = general && nprfx_ofx_maskable(d);
+    int maskable = general && ofx_names_maskable(d);
 
     OfxPropertySetHandle cp = define_clip(fx, NPRFX_OFX_OUTPUT_CLIP);
     if (!cp) return kOfxStatFailed;
@@ -321,7 +321,7 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         int k = j < 0 ? main : j;
         if (k < 0 || (j >= 0 && k == main) || (!general && k != main)) continue;
         const nprfx_input_desc *in = &d->inputs[k];
-        nprfx_ofx_clip_name(d, k, clip, sizeof clip);
+        ofx_names_clip_name(d, k, clip, sizeof clip);
         if (!(cp = define_clip(fx, clip))) return kOfxStatFailed;
         ofx_set_str(cp, kOfxPropLabel, 0,
                     derives && plan.count[k] ? NPRFX_OFX_SOURCE_CLIP
@@ -363,13 +363,13 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         if (!general && k != main) continue;
         /* Source read whole by the flow: a main input that is derived has no channels to pick */
         if (derives && plan.count[k]) continue;
-        nprfx_ofx_clip_name(d, k, clip, sizeof clip);
+        ofx_names_clip_name(d, k, clip, sizeof clip);
         if ((st = define_selector(ps, d, k, clip, name, sizeof name)) != kOfxStatOK) return st;
         if (name[0]) add_page_child(page, &nchildren, name);
     }
     if (maskable) {
         OfxPropertySetHandle pp;
-        nprfx_ofx_extra_param(d, "maskInvert", name, sizeof name);
+        ofx_names_extra_param(d, "maskInvert", name, sizeof name);
         if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeBoolean, name, &pp)) != kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Invert Mask");
@@ -377,7 +377,7 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
         ofx_set_str(pp, kOfxParamPropHint, 0, "Use 1 - Mask instead of the Mask.");
         add_page_child(page, &nchildren, name);
-        nprfx_ofx_extra_param(d, "mix", name, sizeof name);
+        ofx_names_extra_param(d, "mix", name, sizeof name);
         if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeDouble, name, &pp)) != kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Mix");

@@ -86,7 +86,7 @@ nprfx_result ofx_export(ofx_instance *inst, const nprfx_render_args *a)
         if (!(d->params[i].flags & NPRFX_PARAM_EXPORT) || !pattern || !pattern[0]) continue;
         char path[4096];
         int frame = (int)floor(a->time + 0.5);
-        if ((r = nprfx_seq_expand(a->ctx, pattern, frame, path, sizeof path))) break;
+        if ((r = seq_expand(a->ctx, pattern, frame, path, sizeof path))) break;
         unsigned long long key = export_key(a, path);
         pthread_mutex_lock(&inst->lock);
         if (!(inst->export_done && inst->export_key == key)) {

@@ -34,7 +34,7 @@ static nprfx_result source_at(ofx_render_call *rc, int t, nprfx_image *out)
                            "only the previous one (render in order)",
                            d->id, t, ofx_round_frame(rc->time));
     }
-    int main = nprfx_ofx_main_input(d);
+    int main = ofx_names_main_input(d);
     pthread_mutex_lock(&rc->lock);
     ofx_fetched *s = &rc->ring[rc->nfetch++ % OFX_FETCH_RING];
     ofx_fetched_release(s);

@@ -55,7 +55,7 @@ OfxStatus ofx_instance_create(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     /* Clips and params the context did not define stay NULL: Filter has Source only. */
     char name[NPRFX_OFX_NAME_MAX + 16];
     for (int k = 0; k < d->num_inputs; k++) {
-        nprfx_ofx_clip_name(d, k, name, sizeof name);
+        ofx_names_clip_name(d, k, name, sizeof name);
         if (fxs->clipGetHandle(fx, name, &inst->clips[k], NULL) != kOfxStatOK)
             inst->clips[k] = NULL;
     }
@@ -79,15 +79,15 @@ OfxStatus ofx_instance_create(const nprfx_node_desc *d, OfxImageEffectHandle fx)
             return kOfxStatErrBadHandle;
         }
     for (int k = 0; k < d->num_inputs; k++) {
-        nprfx_ofx_selector_name(d, k, name, sizeof name);
+        ofx_names_selector_name(d, k, name, sizeof name);
         if (!inst->clips[k] ||
             pm->paramGetHandle(ps, name, &inst->selectors[k], NULL) != kOfxStatOK)
             inst->selectors[k] = NULL;
     }
     if (inst->mask) {
-        nprfx_ofx_extra_param(d, "mix", name, sizeof name);
+        ofx_names_extra_param(d, "mix", name, sizeof name);
         if (pm->paramGetHandle(ps, name, &inst->mix, NULL) != kOfxStatOK) inst->mix = NULL;
-        nprfx_ofx_extra_param(d, "maskInvert", name, sizeof name);
+        ofx_names_extra_param(d, "maskInvert", name, sizeof name);
         if (pm->paramGetHandle(ps, name, &inst->mask_invert, NULL) != kOfxStatOK)
             inst->mask_invert = NULL;
     }
@@ -144,8 +144,8 @@ OfxStatus ofx_instance_changed(ofx_instance *inst, OfxPropertySetHandle in_args)
     }
     if (type && name && !strcmp(type, kOfxTypeParameter)) {
         char mix[NPRFX_OFX_NAME_MAX], inv[NPRFX_OFX_NAME_MAX];
-        nprfx_ofx_extra_param(inst->desc, "mix", mix, sizeof mix);
-        nprfx_ofx_extra_param(inst->desc, "maskInvert", inv, sizeof inv);
+        ofx_names_extra_param(inst->desc, "mix", mix, sizeof mix);
+        ofx_names_extra_param(inst->desc, "maskInvert", inv, sizeof inv);
         if (!strcmp(name, mix) || !strcmp(name, inv)) return kOfxStatOK; /* after the node */
     }
     ofx_instance_drop_state(inst);

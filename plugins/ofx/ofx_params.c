@@ -64,8 +64,8 @@ void ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int curr
 {
     const nprfx_input_desc *in = &inst->desc->inputs[k];
     int opts[NPRFX_OFX_CHAN_OPTIONS];
-    int n = nprfx_ofx_selector_options(in, opts);
-    int choice = nprfx_ofx_selector_default(in);
+    int n = ofx_names_selector_options(in, opts);
+    int choice = ofx_names_selector_default(in);
     if (inst->selectors[k]) {
         int v = choice;
         OfxStatus st = current ? ofx_g.param->paramGetValue(inst->selectors[k], &v)
@@ -73,14 +73,14 @@ void ofx_input_selection(const ofx_instance *inst, int k, OfxTime time, int curr
         if (st == kOfxStatOK && v >= 0 && v < n) choice = v;
     }
     if (choice >= n) choice = 0;
-    *first = nprfx_ofx_chan_options[opts[choice]].first;
-    *count = nprfx_ofx_chan_options[opts[choice]].count;
+    *first = ofx_names_chan_options[opts[choice]].first;
+    *count = ofx_names_chan_options[opts[choice]].count;
 }
 
 void ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int *channels)
 {
     /* Derived inputs have their flow channels once there is footage to derive them from. */
-    int main = nprfx_ofx_main_input(inst->desc);
+    int main = ofx_names_main_input(inst->desc);
     int footage = inst->derive && main >= 0 && ofx_clip_connected(inst->clips[main]);
     for (int k = 0; k < inst->desc->num_inputs; k++) {
         int first = 0, count = 0;

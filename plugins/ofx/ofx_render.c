@@ -49,7 +49,7 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     ci.executor = &ofx_host_executor;
     ci.data_dir = ofx_g.data_dir[0] ? ofx_g.data_dir : NULL;
-    ci.flow = nprfx_flow_opencv(); /* the flow node's solver; NULL without OpenCV */
+    ci.flow = flow_opencv_provider(); /* the flow node's solver; NULL without OpenCV */
     ofx_render_call rc;
     memset(&rc, 0, sizeof rc);
     rc.inst = inst;
@@ -136,7 +136,7 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     }
     if (inst->derive) {
         /* Footage: the derived inputs from the flow node run on Source (ofx_footage.c). */
-        int main = nprfx_ofx_main_input(d);
+        int main = ofx_names_main_input(d);
         if (!ofx_clip_connected(inst->clips[main])) {
             r = nprfx_error(rc.ctx, NPRFX_ERR_MISSING_INPUT,
                             "%s: the Source clip is not connected: it is the footage this effect "
@@ -190,7 +190,7 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         res_owned = 1;
     }
 
-    int main = nprfx_ofx_main_input(d);
+    int main = ofx_names_main_input(d);
     ofx_finish_job fj;
     memset(&fj, 0, sizeof fj);
     fj.out = &out;

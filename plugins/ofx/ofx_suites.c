@@ -50,7 +50,7 @@ OfxStatus ofx_suites_load(void)
         kOfxStatOK)
         temporal = 1;
     ofx_g.temporal = temporal != 0;
-    ofx_g.flow = nprfx_flow_opencv(); /* NULL without OpenCV: nothing is derived */
+    ofx_g.flow = flow_opencv_provider(); /* NULL without OpenCV: nothing is derived */
     find_data_dir();
     return kOfxStatOK;
 }

@@ -24,7 +24,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     opt.output_dir = "/nonexistent-nprfx-fuzz"; /* nothing is written: no frame is rendered */
     if (nprfx_graph_parse(ctx, text, "/nonexistent-nprfx-fuzz", &opt, &g) == NPRFX_OK) {
         nprfx_frame_list frames = {NULL, 0};
-        if (nprfx_graph_frames(g, NULL, &frames) == NPRFX_OK) nprfx_seq_frames_free(&frames);
+        if (nprfx_graph_frames(g, NULL, &frames) == NPRFX_OK) seq_frames_free(&frames);
         char buf[512];
         nprfx_graph_describe_outputs(g, buf, sizeof buf);
         nprfx_graph_free(g);

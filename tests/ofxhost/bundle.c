@@ -104,8 +104,8 @@ static nprfx_result describe_context(nprfx_ofx_host *h, hplugin *pl, const char 
     int general = !strcmp(context, kOfxImageEffectContextGeneral);
     char name[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
-        if (!general && k != nprfx_ofx_main_input(d)) continue;
-        nprfx_ofx_clip_name(d, k, name, sizeof name);
+        if (!general && k != ofx_names_main_input(d)) continue;
+        ofx_names_clip_name(d, k, name, sizeof name);
         hclip *c = internal_effect_clip(e, name);
         if (!c)
             return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s (%s): no clip %s for input '%s'", id,
@@ -327,7 +327,7 @@ nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, const c
         h->nplugins = i + 1;
         for (int k = 0; k < nprfx_node_count(); k++) {
             char id[NPRFX_OFX_NAME_MAX];
-            nprfx_ofx_plugin_id(nprfx_node_at(k), id, sizeof id);
+            ofx_names_plugin_id(nprfx_node_at(k), id, sizeof id);
             if (pl->p->pluginIdentifier && !strcmp(id, pl->p->pluginIdentifier))
                 pl->desc = nprfx_node_at(k);
         }

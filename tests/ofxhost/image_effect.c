@@ -299,7 +299,7 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
             st = kOfxStatFailed;
         } else if (!a->fetch || a->fetch(a->fetch_user, k, time, &view) != NPRFX_OK) {
             snprintf(ni->host_error, sizeof ni->host_error, "clip %s: no image at frame %g: %s",
-                     c->name, time, nprfx_cli_message(a->ctx));
+                     c->name, time, cli_message(a->ctx));
             st = kOfxStatFailed;
         }
     }

@@ -84,7 +84,7 @@ int main(int argc, char **argv)
         return 2;
     }
     ofx_run o = {NULL, NULL, 0, NULL};
-    const nprfx_run_extension ext = {
+    const cli_run_extension ext = {
         "nprfx-ofxtest",
         "  --ofx BUNDLE        render every node through the OpenFX plug-ins of BUNDLE\n"
         "                      (nprfx.ofx.bundle) in a minimal test host; same pixels (required)\n"
@@ -97,5 +97,5 @@ int main(int argc, char **argv)
         ofx_open,
         ofx_close,
         &o};
-    return nprfx_cmd_run_extended(argc - 1, argv + 1, &ext);
+    return cli_cmd_run_extended(argc - 1, argv + 1, &ext);
 }

@@ -28,7 +28,7 @@ static void inst_free(node_inst *ni)
 static hplugin *find_plugin(nprfx_ofx_host *h, const nprfx_node_desc *d)
 {
     char id[NPRFX_OFX_NAME_MAX];
-    nprfx_ofx_plugin_id(d, id, sizeof id);
+    ofx_names_plugin_id(d, id, sizeof id);
     for (int i = 0; i < h->nplugins; i++)
         if (h->plugins[i].p->pluginIdentifier && !strcmp(h->plugins[i].p->pluginIdentifier, id))
             return &h->plugins[i];
@@ -44,7 +44,7 @@ static hplugin *find_plugin(nprfx_ofx_host *h, const nprfx_node_desc *d)
 static int choose_context(nprfx_ofx_host *h, hplugin *pl, const nprfx_render_args *a, int footage)
 {
     const nprfx_node_desc *d = a->node;
-    int main = nprfx_ofx_main_input(d), only_main = 1, derivable = 0;
+    int main = ofx_names_main_input(d), only_main = 1, derivable = 0;
     for (int k = 0; k < d->num_inputs; k++) {
         only_main &= k == main || !a->inputs[k].data;
         derivable |= ofx_derivable(d, k);
@@ -127,14 +127,14 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, i
             connected = 1;
         }
         for (int k = 0; k < d->num_inputs && c->input == -2; k++) {
-            nprfx_ofx_clip_name(d, k, name, sizeof name);
+            ofx_names_clip_name(d, k, name, sizeof name);
             if (!strcmp(name, c->name)) {
                 c->input = k;
                 connected = a->inputs[k].data != NULL;
                 /* A 1-channel main input comes as Alpha, the other inputs as RGBA: both kinds
                  * of host image reach the adapter, and a 1-channel result goes out as Alpha
                  * (where the profile's host has Alpha images). */
-                alpha = connected && pf->alpha && k == nprfx_ofx_main_input(d) &&
+                alpha = connected && pf->alpha && k == ofx_names_main_input(d) &&
                         a->inputs[k].channels == 1;
                 ni->in_comps[k] = alpha ? 1 : 4;
             }
@@ -275,18 +275,18 @@ static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int f
         /* on footage a derived main input is Source read whole: no selector */
         if (ni->footage && ofx_derivable(d, k)) continue;
         int n = a->inputs[k].channels;
-        int opt = nprfx_ofx_selector_find(&d->inputs[k], 0, n);
+        int opt = ofx_names_selector_find(&d->inputs[k], 0, n);
         if (n > 4 || opt < 0) {
             r = nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED,
                             "input '%s' has %d channels: an OFX clip carries 1 to 4 (RGBA)",
                             d->inputs[k].name, n);
             goto done;
         }
-        nprfx_ofx_selector_name(d, k, name, sizeof name);
+        ofx_names_selector_name(d, k, name, sizeof name);
         hparam *p = internal_effect_param(e, name);
         if (!p) {
             int opts[NPRFX_OFX_CHAN_OPTIONS];
-            if (nprfx_ofx_selector_options(&d->inputs[k], opts) > 1) {
+            if (ofx_names_selector_options(&d->inputs[k], opts) > 1) {
                 r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: no selector %s", id, name);
                 goto done;
             }
@@ -409,7 +409,7 @@ static nprfx_result query_regions(node_inst *ni, const nprfx_render_args *a)
     }
     char key[NPRFX_OFX_NAME_MAX + 32], name[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
-        nprfx_ofx_clip_name(d, k, name, sizeof name);
+        ofx_names_clip_name(d, k, name, sizeof name);
         snprintf(key, sizeof key, "%s%s", kOfxImageClipPropFrameRangePrefix, name);
         int n = st == kOfxStatOK ? internal_pdim(&out, key) : 0;
         double v[64];
@@ -454,7 +454,7 @@ static nprfx_result check_frames(node_inst *ni, const nprfx_render_args *a)
     char why[600], name[NPRFX_OFX_NAME_MAX];
     for (int k = 0; k < d->num_inputs; k++) {
         if (!a->inputs[k].data || internal_frames_match(&ni->frames[k], why, sizeof why)) continue;
-        nprfx_ofx_clip_name(d, k, name, sizeof name);
+        ofx_names_clip_name(d, k, name, sizeof name);
         return nprfx_error(a->ctx, NPRFX_ERR_INTERNAL,
                            "%s: frames needed differ from frames fetched on clip %s at frame %g "
                            "(first render): %s",
@@ -514,7 +514,7 @@ static nprfx_result footage_args(nprfx_ofx_host *h, const nprfx_render_args *a, 
     *use = 0;
     if (!h->footage || !f || d == f || d->num_inputs > NPRFX_OFX_DERIVE_MAX_INPUTS) return NPRFX_OK;
     const nprfx_value *fp = NULL;
-    int main = nprfx_ofx_main_input(d), via = -1;
+    int main = ofx_names_main_input(d), via = -1;
     for (int k = 0; k < d->num_inputs; k++) {
         if (!a->inputs[k].data || !ofx_derivable(d, k)) continue;
         const nprfx_value *p = NULL;
