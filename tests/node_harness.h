@@ -165,6 +165,20 @@ static inline int th_param(const nprfx_node_desc *node, const char *name)
     return i;
 }
 
+/* The node's defaults, with "" for string params that have none (a front end passes text). */
+static inline void th_defaults(const nprfx_node_desc *node, nprfx_value *pv)
+{
+    nprfx_node_defaults(node, pv);
+    for (int i = 0; i < node->num_params; i++)
+        if (!pv[i].s) pv[i].s = "";
+}
+
+/* Set a number param by name. */
+static inline void th_set(const nprfx_node_desc *node, nprfx_value *pv, const char *name, double v)
+{
+    pv[th_param(node, name)].v[0] = v;
+}
+
 static inline int th_input(const nprfx_node_desc *node, const char *name)
 {
     int i = nprfx_node_input_index(node, name);

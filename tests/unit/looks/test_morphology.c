@@ -11,24 +11,6 @@
 
 extern const nprfx_node_desc nprfx_node_morphology;
 
-static nprfx_result run(nprfx_context *ctx, const nprfx_node_desc *node, const nprfx_image *ins,
-                        const nprfx_value *pv, nprfx_image *out, nprfx_rect window)
-{
-    return th_render(ctx, node, ins, pv, out, window);
-}
-
-static void defaults(const nprfx_node_desc *node, nprfx_value *pv)
-{
-    nprfx_node_defaults(node, pv);
-    for (int i = 0; i < node->num_params; i++)
-        if (!pv[i].s) pv[i].s = "";
-}
-
-static void set(const nprfx_node_desc *node, nprfx_value *pv, const char *name, double v)
-{
-    pv[th_param(node, name)].v[0] = v;
-}
-
 static float px(const nprfx_image *im, int x, int y)
 {
     return nprfx_image_at(im, x, y)[0];
@@ -43,14 +25,14 @@ static void test_morphology(nprfx_context *ctx)
     nprfx_image_alloc(ctx, r, 1, &out);
     nprfx_image_alloc(ctx, r, 1, &tiled);
     nprfx_value pv[8];
-    defaults(n, pv);
+    th_defaults(n, pv);
     nprfx_image_at(&in, 5, 5)[0] = 1.0f;
 
     /* dilate, disc radius 1: the 5-pixel cross */
-    set(n, pv, "operation", 0);
-    set(n, pv, "radius", 1);
-    set(n, pv, "footprint", 0);
-    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    th_set(n, pv, "operation", 0);
+    th_set(n, pv, "radius", 1);
+    th_set(n, pv, "footprint", 0);
+    CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
     int cross = 0, total = 0;
     for (int y = 0; y < 10; y++)
         for (int x = 0; x < 12; x++) {
@@ -59,16 +41,16 @@ static void test_morphology(nprfx_context *ctx)
         }
     CHECK(total == 5 && cross == 5);
     /* square radius 1: 3x3; disc radius 1.5: 3x3 too (corners at distance sqrt 2) */
-    set(n, pv, "footprint", 1);
-    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    th_set(n, pv, "footprint", 1);
+    CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
     total = 0;
     for (int y = 0; y < 10; y++)
         for (int x = 0; x < 12; x++)
             total += px(&out, x, y) == 1.0f;
     CHECK(total == 9);
-    set(n, pv, "footprint", 0);
-    set(n, pv, "radius", 2);
-    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    th_set(n, pv, "footprint", 0);
+    th_set(n, pv, "radius", 2);
+    CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
     total = 0;
     for (int y = 0; y < 10; y++)
         for (int x = 0; x < 12; x++)
@@ -79,10 +61,10 @@ static void test_morphology(nprfx_context *ctx)
     for (int y = 4; y <= 6; y++)
         for (int x = 4; x <= 6; x++)
             nprfx_image_at(&in, x, y)[0] = 1.0f;
-    set(n, pv, "operation", 1);
-    set(n, pv, "footprint", 1);
-    set(n, pv, "radius", 1);
-    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    th_set(n, pv, "operation", 1);
+    th_set(n, pv, "footprint", 1);
+    th_set(n, pv, "radius", 1);
+    CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
     total = 0;
     for (int y = 0; y < 10; y++)
         for (int x = 0; x < 12; x++)
@@ -91,8 +73,8 @@ static void test_morphology(nprfx_context *ctx)
 
     /* open keeps the 3x3 block and removes an isolated speck; close fills a one-pixel hole */
     nprfx_image_at(&in, 10, 1)[0] = 1.0f;
-    set(n, pv, "operation", 2);
-    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    th_set(n, pv, "operation", 2);
+    CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
     CHECK(px(&out, 10, 1) == 0.0f && px(&out, 4, 4) == 1.0f && px(&out, 6, 6) == 1.0f);
     total = 0;
     for (int y = 0; y < 10; y++)
@@ -102,8 +84,8 @@ static void test_morphology(nprfx_context *ctx)
     float one = 1.0f;
     nprfx_image_fill(&in, &one);
     nprfx_image_at(&in, 3, 3)[0] = 0.25f;
-    set(n, pv, "operation", 3);
-    CHECK_OK(run(ctx, n, &in, pv, &out, r));
+    th_set(n, pv, "operation", 3);
+    CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
     CHECK(px(&out, 3, 3) == 1.0f);
 
     /* tiles agree with the whole frame (open/close compute their first pass on a grown area) */
@@ -111,24 +93,24 @@ static void test_morphology(nprfx_context *ctx)
         for (int x = 0; x < 12; x++)
             nprfx_image_at(&in, x, y)[0] = (float)((x * 7 + y * 13) % 5);
     for (int op = 0; op < 4; op++) {
-        set(n, pv, "operation", op);
-        set(n, pv, "footprint", 0);
-        set(n, pv, "radius", 1.5);
-        CHECK_OK(run(ctx, n, &in, pv, &out, r));
+        th_set(n, pv, "operation", op);
+        th_set(n, pv, "footprint", 0);
+        th_set(n, pv, "radius", 1.5);
+        CHECK_OK(th_render(ctx, n, &in, pv, &out, r));
         nprfx_rect tiles[3] = {nprfx_rect_make(0, 0, 5, 10), nprfx_rect_make(5, 0, 12, 4),
                                nprfx_rect_make(5, 4, 12, 10)};
         for (int t = 0; t < 3; t++)
-            CHECK_OK(run(ctx, n, &in, pv, &tiled, tiles[t]));
+            CHECK_OK(th_render(ctx, n, &in, pv, &tiled, tiles[t]));
         CHECK(memcmp(out.data, tiled.data, sizeof(float) * 120) == 0);
     }
     /* erode <= image <= dilate; open <= image <= close */
     nprfx_image lo, hi;
     nprfx_image_alloc(ctx, r, 1, &lo);
     nprfx_image_alloc(ctx, r, 1, &hi);
-    set(n, pv, "operation", 2);
-    run(ctx, n, &in, pv, &lo, r);
-    set(n, pv, "operation", 3);
-    run(ctx, n, &in, pv, &hi, r);
+    th_set(n, pv, "operation", 2);
+    th_render(ctx, n, &in, pv, &lo, r);
+    th_set(n, pv, "operation", 3);
+    th_render(ctx, n, &in, pv, &hi, r);
     int order_ok = 1;
     for (int y = 0; y < 10; y++)
         for (int x = 0; x < 12; x++)

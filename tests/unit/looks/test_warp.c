@@ -11,25 +11,6 @@
 
 extern const nprfx_node_desc nprfx_node_warp;
 
-static nprfx_result run(nprfx_context *ctx, const nprfx_node_desc *node, const nprfx_image *ins,
-                        const nprfx_value *pv, nprfx_image *out, nprfx_rect window)
-{
-    return th_render(ctx, node, ins, pv, out, window);
-}
-
-static void defaults(const nprfx_node_desc *node, nprfx_value *pv)
-{
-    nprfx_node_defaults(node, pv);
-    for (int i = 0; i < node->num_params; i++)
-        if (!pv[i].s) pv[i].s = "";
-}
-
-static void set(const nprfx_node_desc *node, nprfx_value *pv, const char *name, double v)
-{
-    pv[th_param(node, name)].v[0] = v;
-}
-
-
 static void test_warp(nprfx_context *ctx)
 {
     const nprfx_node_desc *n = &nprfx_node_warp;
@@ -48,11 +29,11 @@ static void test_warp(nprfx_context *ctx)
             o[1] = -0.5f;
         }
     nprfx_value pv[8];
-    defaults(n, pv);
-    set(n, pv, "amount", 2.0); /* displacement (0.5, -1) */
+    th_defaults(n, pv);
+    th_set(n, pv, "amount", 2.0); /* displacement (0.5, -1) */
     for (int filter = 0; filter < 2; filter++) {
-        set(n, pv, "filter", filter);
-        CHECK_OK(run(ctx, n, ins, pv, &out, r));
+        th_set(n, pv, "filter", filter);
+        CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
         int bad = 0;
         for (int y = 3; y < 10; y++)
             for (int x = 2; x < 13; x++) {
@@ -64,25 +45,25 @@ static void test_warp(nprfx_context *ctx)
     }
     /* black border: a lookup far outside reads zero; clamp reads the edge */
     nprfx_image_at(&ins[1], 0, 0)[0] = -4.0f; /* x - 8 */
-    set(n, pv, "filter", 0);
-    set(n, pv, "border", 1);
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    th_set(n, pv, "filter", 0);
+    th_set(n, pv, "border", 1);
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     CHECK(nprfx_image_at(&out, 0, 0)[0] == 0.0f);
-    set(n, pv, "border", 0);
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    th_set(n, pv, "border", 0);
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     CHECK_NEAR(nprfx_image_at(&out, 0, 0)[0], 0.0f, 1e-6); /* clamped at (0, 0): ramp value 0 */
     /* a NaN offset leaves the pixel in place; amount 0 is the identity */
     nprfx_image_at(&ins[1], 5, 5)[0] = NAN;
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     CHECK(nprfx_image_at(&out, 5, 5)[0] == nprfx_image_at(&ins[0], 5, 5)[0]);
-    set(n, pv, "amount", 0.0);
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    th_set(n, pv, "amount", 0.0);
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     CHECK(memcmp(out.data, ins[0].data, sizeof(float) * 16 * 12 * 2) == 0);
     /* a one-channel offset is refused with a message naming the input: by nprfx_node_render
      * (the descriptor declares 2 channels) and by the core function called directly */
     nprfx_image one = nprfx_image_channels(&ins[1], 0, 1);
     nprfx_image bad_ins[2] = {ins[0], one};
-    CHECK(run(ctx, n, bad_ins, pv, &out, r) == NPRFX_ERR_INVALID_ARGUMENT);
+    CHECK(th_render(ctx, n, bad_ins, pv, &out, r) == NPRFX_ERR_INVALID_ARGUMENT);
     CHECK(strstr(th_error(ctx), "warp: input 'offset' has 1 channels, expected 2") != NULL);
     nprfx_warp_params wp = {
         .amount = 2.0, .filter = NPRFX_WARP_BICUBIC, .border = NPRFX_BORDER_CLAMP};
@@ -92,9 +73,9 @@ static void test_warp(nprfx_context *ctx)
     /* the core function with the typed params the descriptor binds: the same pixels */
     nprfx_image direct;
     nprfx_image_alloc(ctx, r, 2, &direct);
-    set(n, pv, "amount", 2.0);
-    set(n, pv, "filter", 1);
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    th_set(n, pv, "amount", 2.0);
+    th_set(n, pv, "filter", 1);
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     wa = th_core_args(ctx, ins, &direct, r, r);
     CHECK_OK(nprfx_warp_render(&wa, &wp));
     CHECK(memcmp(out.data, direct.data, sizeof(float) * 16 * 12 * 2) == 0);
@@ -104,17 +85,17 @@ static void test_warp(nprfx_context *ctx)
     /* reach clamps each component: displacement (0.5, -1) with reach 0.75 reads (0.5, -0.75);
      * with reach 2 nothing changes; the footprint is the reach plus two rows of taps, and -1
      * (anywhere) without one */
-    set(n, pv, "filter", 0);
-    set(n, pv, "reach", 0.75);
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    th_set(n, pv, "filter", 0);
+    th_set(n, pv, "reach", 0.75);
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     CHECK_NEAR(nprfx_image_at(&out, 6, 6)[0], 2.0f * 6.5f + 3.0f * 5.25f, 1e-4);
     int fp = 0;
     CHECK_OK(nprfx_node_footprint(ctx, n, pv, &fp));
     CHECK(fp == 3);
-    set(n, pv, "reach", 2.0);
-    CHECK_OK(run(ctx, n, ins, pv, &out, r));
+    th_set(n, pv, "reach", 2.0);
+    CHECK_OK(th_render(ctx, n, ins, pv, &out, r));
     CHECK_NEAR(nprfx_image_at(&out, 6, 6)[0], 2.0f * 6.5f + 3.0f * 5.0f, 1e-4);
-    set(n, pv, "reach", 0.0);
+    th_set(n, pv, "reach", 0.0);
     CHECK_OK(nprfx_node_footprint(ctx, n, pv, &fp));
     CHECK(fp == -1);
     wp.border = NPRFX_BORDER_CLAMP;

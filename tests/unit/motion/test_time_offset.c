@@ -11,15 +11,6 @@
 
 extern const nprfx_node_desc nprfx_node_time_offset;
 
-
-static void defaults(const nprfx_node_desc *node, nprfx_value *pv)
-{
-    nprfx_node_defaults(node, pv);
-    for (int i = 0; i < node->num_params; i++)
-        if (!pv[i].s) pv[i].s = "";
-}
-
-
 static float px(const nprfx_image *im, int x, int y)
 {
     return nprfx_image_at(im, x, y)[0];
@@ -66,7 +57,7 @@ static void test_time_offset(nprfx_context *ctx)
     float nine = 9.0f, minus = -7.0f;
     nprfx_image_fill(&cur, &nine);
     nprfx_value pv[1];
-    defaults(n, pv);
+    th_defaults(n, pv);
     CHECK(pv[0].v[0] == -1.0);
     fake_fetch f;
     memset(&f, 0, sizeof f);
