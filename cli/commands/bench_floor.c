@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/engine_util.h"
 #include "bench_floor.h"
 #include "util/cli_util.h"
 
@@ -21,9 +22,9 @@ double cli_copy_bandwidth(const nprfx_executor *ex, size_t bytes)
     memset(dst, 2, bytes);
     double best = 1e30;
     for (int rep = 0; rep < 5; rep++) {
-        double t0 = cli_now();
-        cli_parallel_bytes(ex, dst, src, bytes, 64);
-        double t = cli_now() - t0;
+        double t0 = engine_now();
+        engine_parallel_bytes(ex, dst, src, bytes, 64);
+        double t = engine_now() - t0;
         if (t < best) best = t;
     }
     free(src);

@@ -7,11 +7,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nprfx/io_oiio.h"
 #include "bench_floor.h"
 #include "bench_options.h"
 #include "cmd_shared.h"
 #include "commands.h"
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 #include "util/cli_util.h"
 
 static void usage(FILE *f)
@@ -117,6 +118,7 @@ int cli_cmd_bench(int argc, char **argv)
     int status = 0;
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt, (size_t)512 << 20, 0, NULL, NULL}; /* plates are big */
+    opt.io = nprfx_io_oiio();
     opt.no_pool = no_pool;
     if (nprfx_graph_parse(env.ctx, json, ".", &opt, &g)) {
         fprintf(stderr, "nprfx bench: %s\n", cli_message(env.ctx));

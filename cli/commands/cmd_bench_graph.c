@@ -9,11 +9,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/engine_util.h"
+#include "nprfx/io_oiio.h"
 #include "bench_options.h"
 #include "cmd_shared.h"
 #include "commands.h"
-#include "graph/graph.h"
-#include "io/io_limits.h"
+#include "nprfx/graph.h"
+#include "nprfx/io.h"
 #include "util/cli_util.h"
 
 static void usage(FILE *f)
@@ -84,7 +86,7 @@ int cli_cmd_bench_graph(int argc, char **argv)
     int w, h;
     if (cli_bench_size("bench-graph", &o, &w, &h)) return 2;
     uint64_t limit_bytes = 0;
-    if (mem_limit && cli_parse_size(mem_limit, &limit_bytes)) {
+    if (mem_limit && nprfx_parse_size(mem_limit, &limit_bytes)) {
         fprintf(stderr,
                 "nprfx bench-graph: --mem-limit '%s' is not a size (e.g. 8G, 512M, or 0 "
                 "for none)\n",
@@ -96,6 +98,7 @@ int cli_cmd_bench_graph(int argc, char **argv)
     int status = 0;
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt, 0, 0, write_dir, NULL};
+    opt.io = nprfx_io_oiio();
     opt.no_pool = no_pool;
     char shot[64];
     snprintf(shot, sizeof shot, "1-%d", frames);
@@ -103,7 +106,7 @@ int cli_cmd_bench_graph(int argc, char **argv)
     memset(&plan, 0, sizeof plan);
     /* The limit applies to the graph at --size, not at the size its file names. */
     if (nprfx_graph_load(env.ctx, path, &opt, &g) || nprfx_graph_set_shot(g, shot) ||
-        (mem_limit && (cli_mem_limit_set(limit_bytes), 0)) ||
+        (mem_limit && (nprfx_context_set_memory_limit(env.ctx, limit_bytes, "--mem-limit"), 0)) ||
         nprfx_graph_synthesize_reads(g, w, h, scene)) {
         fprintf(stderr, "nprfx bench-graph: %s\n", cli_message(env.ctx));
         status = 2;
@@ -126,7 +129,7 @@ int cli_cmd_bench_graph(int argc, char **argv)
         goto done;
     }
     /* seconds by kind: compute, read, synth, write; at1: as they stood after frame 1 */
-    double t0 = cli_now(), first = 0, at1[4] = {0, 0, 0, 0};
+    double t0 = engine_now(), first = 0, at1[4] = {0, 0, 0, 0};
     for (int f = 1; f <= frames; f++) {
         int written = 0;
         nprfx_result r =
@@ -137,11 +140,11 @@ int cli_cmd_bench_graph(int argc, char **argv)
             goto done;
         }
         if (f == 1) {
-            first = cli_now() - t0;
+            first = engine_now() - t0;
             seconds_by_kind(g, at1);
         }
     }
-    double total = cli_now() - t0, sec[4];
+    double total = engine_now() - t0, sec[4];
     seconds_by_kind(g, sec);
     int workers = nprfx_executor_workers(nprfx_context_executor(env.ctx));
     printf("%s %dx%d, %d frame%s, %d thread%s: %.1f ms/frame, %.2f frames/s (first frame %.1f "

@@ -14,11 +14,11 @@
 #include <string.h>
 
 #include "commands.h"
-#include "io/io.h"
-#include "io/io_read.h"
+#include "nprfx/io.h"
+#include "nprfx/io_oiio.h"
 #include "io/io_write.h"
-#include "io/plate.h"
-#include "seq.h"
+#include "nprfx/io.h"
+#include "nprfx/seq.h"
 
 enum { DIFF_PASS = 0, DIFF_WARN = 1, DIFF_FAIL = 2, DIFF_MISMATCH = 3, DIFF_FILE_ERROR = 4 };
 #define DIFF_USAGE 2 /* as for the other commands; a usage error can never pass */
@@ -147,16 +147,16 @@ static void free_list(char **v, int n)
 
 /* Pick the channels to compare: idx_a[i] in A pairs with idx_b[i] in B. Returns the count, or -1
  * after printing why (a mismatch). */
-static int match_channels(const cli_plate *a, const cli_plate *b, const char *pa, const char *pb,
-                          const char *list, int *idx_a, int *idx_b, FILE *rep)
+static int match_channels(const nprfx_plate *a, const nprfx_plate *b, const char *pa,
+                          const char *pb, const char *list, int *idx_a, int *idx_b, FILE *rep)
 {
     if (list) {
         char **names;
         int n = parse_list(list, &names);
         if (n < 0) return -1;
         for (int i = 0; i < n; i++) {
-            idx_a[i] = cli_plate_channel(a, names[i]);
-            idx_b[i] = cli_plate_channel(b, names[i]);
+            idx_a[i] = nprfx_plate_channel(a, names[i]);
+            idx_b[i] = nprfx_plate_channel(b, names[i]);
             if (idx_a[i] < 0 || idx_b[i] < 0) {
                 fprintf(stderr, "nprfx diff: channel '%s' is not in '%s'\n", names[i],
                         idx_a[i] < 0 ? pa : pb);
@@ -175,7 +175,7 @@ static int match_channels(const cli_plate *a, const cli_plate *b, const char *pa
     int by_name = 1;
     for (int i = 0; i < a->nchannels; i++) {
         idx_a[i] = i;
-        idx_b[i] = cli_plate_channel(b, a->names[i]);
+        idx_b[i] = nprfx_plate_channel(b, a->names[i]);
         if (idx_b[i] < 0) by_name = 0;
     }
     if (!by_name) {
@@ -188,7 +188,7 @@ static int match_channels(const cli_plate *a, const cli_plate *b, const char *pa
 }
 
 /* Read pixel (x, y) channel c, 0 outside the data window (the EXR meaning of "no data"). */
-static float sample(const cli_plate *p, int x, int y, int c)
+static float sample(const nprfx_plate *p, int x, int y, int c)
 {
     if (!nprfx_rect_contains(p->bounds, x, y)) return 0.0f;
     size_t w = (size_t)nprfx_rect_width(p->bounds);
@@ -210,11 +210,11 @@ static int compare_files(nprfx_context *ctx, const char *pa, const char *pb, con
 {
     memset(sum, 0, sizeof *sum);
     sum->status = DIFF_FILE_ERROR;
-    cli_plate a, b;
+    nprfx_plate a, b;
     memset(&b, 0, sizeof b);
-    if (cli_io_read(ctx, pa, &a)) return sum->status;
-    if (cli_io_read(ctx, pb, &b)) {
-        cli_plate_free(&a);
+    if (nprfx_io_read(ctx, pa, &a)) return sum->status;
+    if (nprfx_io_read(ctx, pb, &b)) {
+        nprfx_plate_free(&a);
         return sum->status;
     }
     int *idx_a = NULL, *idx_b = NULL, n = -1;
@@ -329,8 +329,8 @@ static int compare_files(nprfx_context *ctx, const char *pa, const char *pb, con
         if (!names) goto oom;
         for (int i = 0; i < n; i++)
             names[i] = a.names[idx_a[i]];
-        cli_write_options wo = {sizeof wo, "zip", 0};
-        nprfx_result wr = cli_io_write(ctx, out_path, &diff, names, &a.display, &wo);
+        nprfx_write_options wo = {sizeof wo, "zip", 0};
+        nprfx_result wr = nprfx_io_write(ctx, out_path, &diff, names, &a.display, &wo);
         free(names);
         if (wr) {
             sum->status = DIFF_FILE_ERROR;
@@ -347,8 +347,8 @@ done:
     free(cs);
     free(idx_a);
     free(idx_b);
-    cli_plate_free(&a);
-    cli_plate_free(&b);
+    nprfx_plate_free(&a);
+    nprfx_plate_free(&b);
     return sum->status;
 }
 
@@ -385,20 +385,20 @@ static int compare_sequence(nprfx_context *ctx, const char *pa, const char *pb,
 {
     nprfx_frame_list frames = {NULL, 0};
     if (o->frames) {
-        if (seq_parse_frames(ctx, o->frames, &frames)) return DIFF_USAGE;
+        if (nprfx_seq_parse_frames(ctx, o->frames, &frames)) return DIFF_USAGE;
     } else {
-        if (seq_list(ctx, pa, &frames)) return DIFF_FILE_ERROR;
+        if (nprfx_seq_list(ctx, pa, &frames)) return DIFF_FILE_ERROR;
         if (!frames.count) {
             fprintf(stderr, "nprfx diff: no frames of '%s' exist\n", pa);
             return DIFF_FILE_ERROR;
         }
     }
-    if (o->out && !seq_has_pattern(o->out) && frames.count > 1) {
+    if (o->out && !nprfx_seq_has_pattern(o->out) && frames.count > 1) {
         fprintf(stderr,
                 "nprfx diff: --out '%s' needs a frame pattern (e.g. diff.####.exr) for a "
                 "sequence\n",
                 o->out);
-        seq_frames_free(&frames);
+        nprfx_seq_frames_free(&frames);
         return DIFF_USAGE;
     }
     int counts[5] = {0};
@@ -412,10 +412,10 @@ static int compare_sequence(nprfx_context *ctx, const char *pa, const char *pb,
         int f = frames.frames[i];
         diff_summary s;
         report rep;
-        if (seq_expand(ctx, pa, f, fa, sizeof fa) ||
-            seq_expand(ctx, pb, f, fb, sizeof fb) ||
-            (o->out && seq_expand(ctx, o->out, f, fo, sizeof fo))) {
-            seq_frames_free(&frames);
+        if (nprfx_seq_expand(ctx, pa, f, fa, sizeof fa) ||
+            nprfx_seq_expand(ctx, pb, f, fb, sizeof fb) ||
+            (o->out && nprfx_seq_expand(ctx, o->out, f, fo, sizeof fo))) {
+            nprfx_seq_frames_free(&frames);
             free(worst_text);
             return DIFF_USAGE;
         }
@@ -450,7 +450,7 @@ static int compare_sequence(nprfx_context *ctx, const char *pa, const char *pb,
     }
     printf("%s\n", status_word(worst.status));
     free(worst_text);
-    seq_frames_free(&frames);
+    nprfx_seq_frames_free(&frames);
     return worst.status;
 }
 
@@ -561,7 +561,7 @@ int cli_cmd_diff(int argc, char **argv)
         return DIFF_FILE_ERROR;
     }
     int rc;
-    int seq_a = seq_has_pattern(files[0]), seq_b = seq_has_pattern(files[1]);
+    int seq_a = nprfx_seq_has_pattern(files[0]), seq_b = nprfx_seq_has_pattern(files[1]);
     if (seq_a != seq_b) {
         fprintf(stderr,
                 "nprfx diff: '%s' is %sa frame pattern but '%s' is %s; give two files or two "

@@ -4,8 +4,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nprfx/io_oiio.h"
 #include "commands.h"
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 #include "host/host_natron.h"
 #include "host/host_natron_py.h"
 #include "host/host_nuke.h"
@@ -118,6 +119,7 @@ int cli_cmd_host_project(int argc, char **argv)
     cli_env env;
     if (cli_env_init(&env, 1)) return 1;
     nprfx_graph_options opt = {sizeof opt, 0, 0, NULL, NULL};
+    opt.io = nprfx_io_oiio();
     nprfx_graph *g = NULL;
     int status = 0;
     if (nprfx_graph_load(env.ctx, graph, &opt, &g)) {

@@ -7,12 +7,12 @@
 #include <string.h>
 
 #include "commands.h"
-#include "io/io.h"
+#include "nprfx/io.h"
 #include "io/io_colour.h"
-#include "io/io_preview.h"
-#include "io/io_read.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/io_oiio.h"
 #include "io/io_write.h"
-#include "io/plate.h"
+#include "nprfx/io.h"
 #include "io_check.h"
 
 /* Exit codes follow idiff: a file that cannot be read is 4. */
@@ -88,7 +88,7 @@ static void print_channels(char **names, char **types, int n, const char *indent
 }
 
 /* A part's layout beyond its channels: tiles, MIP levels, pixel aspect, deep data. */
-static void print_layout(const cli_part_info *p, const char *sep)
+static void print_layout(const nprfx_part_info *p, const char *sep)
 {
     if (p->tile_w > 0) printf("%stiled %dx%d", sep, p->tile_w, p->tile_h), sep = ", ";
     if (p->miplevels > 1)
@@ -99,7 +99,7 @@ static void print_layout(const cli_part_info *p, const char *sep)
 
 /* Views, and every part of a multi-part file with what a read without "part" takes; a single
  * part's layout on one line. */
-static void print_parts(const cli_file_info *fi)
+static void print_parts(const nprfx_file_info *fi)
 {
     if (fi->nviews > 0) {
         printf("    views:");
@@ -108,7 +108,7 @@ static void print_parts(const cli_file_info *fi)
         printf("\n");
     }
     if (fi->nparts == 1) {
-        const cli_part_info *p = &fi->parts[0];
+        const nprfx_part_info *p = &fi->parts[0];
         if (p->tile_w > 0 || p->miplevels > 1 || p->pixel_aspect != 1.0f || p->deep) {
             printf("    layout: ");
             print_layout(p, "");
@@ -117,7 +117,7 @@ static void print_parts(const cli_file_info *fi)
         return;
     }
     for (int i = 0; i < fi->nparts; i++) {
-        const cli_part_info *p = &fi->parts[i];
+        const nprfx_part_info *p = &fi->parts[i];
         printf("    part %d", p->index);
         if (p->name[0]) printf(" '%s'", p->name);
         if (p->view[0]) printf(", view %s", p->view);
@@ -134,8 +134,8 @@ static void print_parts(const cli_file_info *fi)
 
 static int info_file(nprfx_context *ctx, const char *path)
 {
-    cli_file_info fi;
-    if (cli_io_info(ctx, path, &fi)) return INFO_FILE_ERROR;
+    nprfx_file_info fi;
+    if (nprfx_io_info(ctx, path, &fi)) return INFO_FILE_ERROR;
     printf("%s: %s %dx%d, %d channel%s, %d subimage%s", path, fi.format,
            nprfx_rect_width(fi.bounds), nprfx_rect_height(fi.bounds), fi.nchannels,
            fi.nchannels == 1 ? "" : "s", fi.subimages, fi.subimages == 1 ? "" : "s");
@@ -146,7 +146,7 @@ static int info_file(nprfx_context *ctx, const char *path)
     printf("\n");
     print_channels(fi.names, fi.types, fi.nchannels, "    ");
     print_parts(&fi);
-    cli_file_info_free(&fi);
+    nprfx_file_info_free(&fi);
     return INFO_OK;
 }
 
@@ -163,7 +163,7 @@ static int info_file(nprfx_context *ctx, const char *path)
  *   channels IN OUT A,B,...                           read only channels A, B, ... (in that
  *                                                     order), write them with their file types
  *   rows IN OUT N                                     the same, all channels, N rows at a time
- *                                                     in both (cli_io_rows_*) */
+ *                                                     in both (nprfx_io_rows_*) */
 static int io_test_channels(nprfx_context *ctx, const char *in, const char *out, const char *list,
                             int rows)
 {
@@ -172,47 +172,47 @@ static int io_test_channels(nprfx_context *ctx, const char *in, const char *out,
     snprintf(buf, sizeof buf, "%s", list ? list : "");
     for (char *t = strtok(buf, ","); t && n < 256; t = strtok(NULL, ","))
         names[n++] = t;
-    cli_read_options ro;
+    nprfx_read_options ro;
     memset(&ro, 0, sizeof ro);
     ro.size = sizeof ro;
     ro.channels = list ? (const char *const *)names : NULL;
     ro.nchannels = n;
-    cli_plate plate;
+    nprfx_plate plate;
     nprfx_result r;
     if (!rows) {
-        if ((r = cli_io_read_ex(ctx, in, &ro, &plate))) return INFO_FILE_ERROR;
+        if ((r = nprfx_io_read_ex(ctx, in, &ro, &plate))) return INFO_FILE_ERROR;
         nprfx_image all = {plate.pixels, plate.nchannels,
                            (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels,
                            plate.nchannels, plate.bounds};
-        cli_write_options wo = {sizeof wo, NULL, 0};
+        nprfx_write_options wo = {sizeof wo, NULL, 0};
         wo.types = plate.types;
         wo.pixel_aspect = plate.pixel_aspect;
-        r = cli_io_write(ctx, out, &all, (const char *const *)plate.names, &plate.display, &wo);
-        cli_plate_free(&plate);
+        r = nprfx_io_write(ctx, out, &all, (const char *const *)plate.names, &plate.display, &wo);
+        nprfx_plate_free(&plate);
         return r ? INFO_FILE_ERROR : INFO_OK;
     }
-    cli_row_reader *rr = NULL;
-    cli_row_writer *w = NULL;
-    if (cli_io_rows_open(ctx, in, &ro, &plate, &rr)) return INFO_FILE_ERROR;
-    cli_write_options wo = {sizeof wo, NULL, 0};
+    nprfx_row_reader *rr = NULL;
+    nprfx_row_writer *w = NULL;
+    if (nprfx_io_rows_open(ctx, in, &ro, &plate, &rr)) return INFO_FILE_ERROR;
+    nprfx_write_options wo = {sizeof wo, NULL, 0};
     wo.types = plate.types;
     wo.pixel_aspect = plate.pixel_aspect;
     const int width = nprfx_rect_width(plate.bounds), nc = plate.nchannels;
     float *px = malloc((size_t)width * (size_t)rows * (size_t)nc * sizeof(float));
-    r = px ? cli_io_rows_create(ctx, out, plate.bounds, nc, (const char *const *)plate.names,
-                                &plate.display, &wo, &w)
+    r = px ? nprfx_io_rows_create(ctx, out, plate.bounds, nc, (const char *const *)plate.names,
+                                  &plate.display, &wo, &w)
            : NPRFX_ERR_OUT_OF_MEMORY;
     for (int y = plate.bounds.y0; !r && y < plate.bounds.y1; y += rows) {
         int y1 = y + rows < plate.bounds.y1 ? y + rows : plate.bounds.y1;
         nprfx_image im = {px, nc, (ptrdiff_t)width * nc, nc,
                           nprfx_rect_make(plate.bounds.x0, y, plate.bounds.x1, y1)};
-        r = cli_io_rows_read(ctx, rr, y, y1, px);
-        if (!r) r = cli_io_rows_write(ctx, w, &im);
+        r = nprfx_io_rows_read(ctx, rr, y, y1, px);
+        if (!r) r = nprfx_io_rows_write(ctx, w, &im);
     }
-    nprfx_result f = cli_io_rows_finish(ctx, w, !r);
+    nprfx_result f = nprfx_io_rows_finish(ctx, w, !r);
     free(px);
-    cli_io_rows_close(rr);
-    cli_plate_free(&plate);
+    nprfx_io_rows_close(rr);
+    nprfx_plate_free(&plate);
     return r || f ? INFO_FILE_ERROR : INFO_OK;
 }
 
@@ -220,31 +220,32 @@ static int io_test(nprfx_context *ctx, int argc, char **argv)
 {
     if (argc < 3) return INFO_USAGE;
     const char *op = argv[1], *in = argv[2];
-    if (!strcmp(op, "damaged")) return cli_io_check_damaged(in);
+    if (!strcmp(op, "damaged")) return nprfx_io_check_damaged(in);
     if (!strcmp(op, "channels") && argc >= 5) return io_test_channels(ctx, in, argv[3], argv[4], 0);
     if (!strcmp(op, "rows") && argc >= 5)
         return atoi(argv[4]) > 0 ? io_test_channels(ctx, in, argv[3], NULL, atoi(argv[4]))
                                  : INFO_USAGE;
-    cli_plate plate;
-    if (cli_io_read(ctx, in, &plate)) return INFO_FILE_ERROR;
+    nprfx_plate plate;
+    if (nprfx_io_read(ctx, in, &plate)) return INFO_FILE_ERROR;
     /* The whole plate as one view (may exceed NPRFX_MAX_CHANNELS, which the writer allows). */
     nprfx_image all = {plate.pixels, plate.nchannels,
                        (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels, plate.nchannels,
                        plate.bounds};
     int rc = INFO_USAGE;
     if (!strcmp(op, "write") && argc >= 4) {
-        cli_write_options wo = {sizeof wo, NULL, 0};
+        nprfx_write_options wo = {sizeof wo, NULL, 0};
         for (int i = 4; i < argc; i++) {
             if (!strcmp(argv[i], "--half"))
                 wo.half = 1;
             else if (!strcmp(argv[i], "--compression") && i + 1 < argc)
                 wo.compression = argv[++i];
         }
-        rc = cli_io_write(ctx, argv[3], &all, (const char *const *)plate.names, &plate.display, &wo)
+        rc = nprfx_io_write(ctx, argv[3], &all, (const char *const *)plate.names, &plate.display,
+                            &wo)
                  ? INFO_FILE_ERROR
                  : INFO_OK;
     } else if (!strcmp(op, "preview") && argc >= 4) {
-        cli_preview_options po;
+        nprfx_preview_options po;
         memset(&po, 0, sizeof po);
         po.size = sizeof po;
         for (int i = 4; i < argc; i++) {
@@ -260,19 +261,19 @@ static int io_test(nprfx_context *ctx, int argc, char **argv)
             else if (!strcmp(argv[i], "--view") && next)
                 po.view = argv[++i];
         }
-        rc = cli_io_write_preview(ctx, argv[3], &all, &po) ? INFO_FILE_ERROR : INFO_OK;
+        rc = nprfx_io_write_preview(ctx, argv[3], &all, &po) ? INFO_FILE_ERROR : INFO_OK;
     } else if (!strcmp(op, "convert") && argc >= 6) {
         const char *cfg = argc >= 8 && !strcmp(argv[6], "--ocio") ? argv[7] : NULL;
         rc = INFO_FILE_ERROR;
-        if (!cli_io_convert_colorspace(ctx, &all, argv[4], argv[5], cfg) &&
-            !cli_io_write(ctx, argv[3], &all, (const char *const *)plate.names, &plate.display,
-                          NULL))
+        if (!nprfx_io_convert_colorspace(ctx, &all, argv[4], argv[5], cfg) &&
+            !nprfx_io_write(ctx, argv[3], &all, (const char *const *)plate.names, &plate.display,
+                            NULL))
             rc = INFO_OK;
     } else if (!strcmp(op, "channel") && argc >= 4) {
-        printf("%d\n", cli_plate_channel(&plate, argv[3]));
+        printf("%d\n", nprfx_plate_channel(&plate, argv[3]));
         rc = INFO_OK;
     } else if (!strcmp(op, "view") && argc >= 5) {
-        nprfx_image v = cli_plate_view(&plate, atoi(argv[3]), atoi(argv[4]));
+        nprfx_image v = nprfx_plate_view(&plate, atoi(argv[3]), atoi(argv[4]));
         if (!v.data)
             printf("absent\n");
         else
@@ -280,7 +281,7 @@ static int io_test(nprfx_context *ctx, int argc, char **argv)
                    v.pixel_stride, v.row_stride, v.data[0]);
         rc = INFO_OK;
     }
-    cli_plate_free(&plate);
+    nprfx_plate_free(&plate);
     return rc;
 }
 

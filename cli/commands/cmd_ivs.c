@@ -1,7 +1,7 @@
 /* nprfx ivs — generate, write and check the compact IVS sequence file (nprfx/ivs.h).
  *
  * The core generates and encodes the sequence in memory; this command writes the bytes (through
- * a temporary name and a rename, cli_io_write_text) and, with --check, reads a file back,
+ * a temporary name and a rename, nprfx_io_write_text) and, with --check, reads a file back,
  * decodes and validates it and measures its spacing. */
 #include <errno.h>
 #include <math.h>
@@ -10,6 +10,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "engine/engine_util.h"
 #include "commands.h"
 #include "io/io_write.h"
 #include "nprfx/ivs.h"
@@ -63,16 +64,16 @@ static int generate(nprfx_context *ctx, long long n, unsigned long long seed, co
         status = IVS_FAILED;
         goto done;
     }
-    double t0 = cli_now();
+    double t0 = engine_now();
     if (nprfx_ivs_generate(ctx, seed, (int)n, xy, NULL) != NPRFX_OK ||
         nprfx_ivs_encode(ctx, seed, (int)n, xy, buf, size) != NPRFX_OK ||
-        cli_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
+        nprfx_io_write_text(ctx, out, (const char *)buf, size) != NPRFX_OK) {
         fprintf(stderr, "nprfx ivs: %s\n", cli_message(ctx));
         status = IVS_FAILED;
         goto done;
     }
     printf("wrote %s: %lld points, seed %llu, %zu bytes (%.2f s)\n", out, n, seed, size,
-           cli_now() - t0);
+           engine_now() - t0);
 done:
     free(xy);
     free(buf);

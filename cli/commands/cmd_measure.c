@@ -10,13 +10,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nprfx/io_oiio.h"
 #include "cmd_measure_flow.h"
 #include "commands.h"
-#include "graph/graph.h"
-#include "graph/graph_eval.h"
-#include "graph/graph_model.h"
-#include "graph/graph_names.h"
-#include "io/channels.h"
+#include "nprfx/graph.h"
+#include "engine/graph_eval.h"
+#include "engine/graph_model.h"
+#include "engine/graph_names.h"
+#include "nprfx/channels.h"
 #include "nprfx/metrics.h"
 #include "util/cli_util.h"
 
@@ -96,8 +97,8 @@ static nprfx_result take(nprfx_graph *g, const char *spec, int frame, int want_l
     if (colon) {
         char bad[128];
         int amb = 0;
-        n = cli_channels_select((const char *const *)e->names, e->im.channels, colon + 1, idx,
-                                NPRFX_MAX_CHANNELS, bad, sizeof bad, &amb);
+        n = nprfx_channels_select((const char *const *)e->names, e->im.channels, colon + 1, idx,
+                                  NPRFX_MAX_CHANNELS, bad, sizeof bad, &amb);
         if (n < 1)
             return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "'%s': '%s' %s in node '%s'", spec,
                                bad, amb ? "matches several channels" : "is not a channel", name);
@@ -169,6 +170,7 @@ static nprfx_result load(nprfx_context *ctx, const measure_opts *o, int variant,
     opt.size = sizeof opt;
     opt.cache_bytes = (size_t)1 << 30;
     opt.variant = variant;
+    opt.io = nprfx_io_oiio();
     nprfx_result r = nprfx_graph_load(ctx, o->graph, &opt, g);
     if (!r && o->shot) r = nprfx_graph_set_shot(*g, o->shot);
     for (int i = 0; !r && i < o->nsets; i++)
@@ -352,7 +354,7 @@ done:
     nprfx_image_free(&paper);
     nprfx_image_free(&full);
     nprfx_image_free(&light);
-    seq_frames_free(&frames);
+    nprfx_seq_frames_free(&frames);
     if (truth != g) nprfx_graph_free(truth);
     nprfx_graph_free(g);
     return status;

@@ -8,11 +8,11 @@
 #include <string.h>
 
 #include "cmd_measure_flow.h"
-#include "io/io.h"
-#include "io/io_read.h"
-#include "io/plate.h"
+#include "nprfx/io.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/io.h"
 #include "nprfx/metrics.h"
-#include "seq.h"
+#include "nprfx/seq.h"
 
 enum { MF_OK = 0, MF_FAILED = 1, MF_USAGE = 2 };
 
@@ -39,19 +39,19 @@ static void print_error(void *user, const nprfx_context *ctx, nprfx_result code,
 }
 
 /* Frame `frame` of pattern, with the channels named (each must exist) as views. */
-static int load(nprfx_context *ctx, const char *pattern, int frame, cli_plate *p,
+static int load(nprfx_context *ctx, const char *pattern, int frame, nprfx_plate *p,
                 const char *const *names, int n, nprfx_image *views)
 {
     char path[4096];
-    if (seq_expand(ctx, pattern, frame, path, sizeof path) || cli_io_read(ctx, path, p))
+    if (nprfx_seq_expand(ctx, pattern, frame, path, sizeof path) || nprfx_io_read(ctx, path, p))
         return 1;
     for (int i = 0; i < n; i++) {
-        int c = cli_plate_channel(p, names[i]);
+        int c = nprfx_plate_channel(p, names[i]);
         if (c < 0) {
             fprintf(stderr, "nprfx measure flow: %s has no channel %s\n", path, names[i]);
             return 1;
         }
-        views[i] = cli_plate_view(p, c, 1);
+        views[i] = nprfx_plate_view(p, c, 1);
     }
     return 0;
 }
@@ -98,7 +98,7 @@ int cli_cmd_measure_flow(int argc, char **argv)
     if (nprfx_context_create(&init, &ctx)) return MF_FAILED;
     nprfx_frame_list fl = {0};
     int status = MF_OK;
-    if (seq_parse_frames(ctx, frames, &fl)) {
+    if (nprfx_seq_parse_frames(ctx, frames, &fl)) {
         nprfx_context_destroy(ctx);
         return MF_USAGE;
     }
@@ -113,7 +113,7 @@ int cli_cmd_measure_flow(int argc, char **argv)
         for (int j = 0; j < fl.count; j++)
             has_prev |= fl.frames[j] == t - 1;
         if (!has_prev) continue;
-        cli_plate pe = {0}, pt = {0}, pp = {0};
+        nprfx_plate pe = {0}, pt = {0}, pp = {0};
         nprfx_image ve[3], vt[5], vp[5], ef, tf, tn, vis = {0};
         if (load(ctx, est, t, &pe, est_names, 3, ve) ||
             load(ctx, truth, t, &pt, truth_names, 5, vt) ||
@@ -144,9 +144,9 @@ int cli_cmd_measure_flow(int argc, char **argv)
             measured++;
         }
         nprfx_image_free(&vis);
-        cli_plate_free(&pe);
-        cli_plate_free(&pt);
-        cli_plate_free(&pp);
+        nprfx_plate_free(&pe);
+        nprfx_plate_free(&pt);
+        nprfx_plate_free(&pp);
     }
     if (status == MF_OK && !measured) {
         fprintf(stderr, "nprfx measure flow: no frame of '%s' has its previous frame there\n",
@@ -159,7 +159,7 @@ int cli_cmd_measure_flow(int argc, char **argv)
         printf("occlusion_recall %.4f\n", tp + fn ? (double)tp / (double)(tp + fn) : 1.0);
         printf("conf_prev_mean %.4f\n", conf_n ? conf_sum / (double)conf_n : 0.0);
     }
-    seq_frames_free(&fl);
+    nprfx_seq_frames_free(&fl);
     nprfx_context_destroy(ctx);
     return status;
 }

@@ -2,7 +2,7 @@
  * samples, describe and check a built one, and paint procedural samples to build from.
  *
  * The core builds the strip in memory; this command reads the samples, writes the strip as an EXR
- * with the format's attributes (through cli/io/io_write.h) and reads them back for `info`. */
+ * with the format's attributes (through nprfx/io_oiio.h) and reads them back for `info`. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -10,13 +10,14 @@
 #include <string.h>
 #include <time.h>
 
+#include "engine/engine_util.h"
 #include "commands.h"
-#include "io/io.h"
+#include "nprfx/io.h"
 #include "io/io_colour.h"
-#include "io/io_preview.h"
-#include "io/io_read.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/io_oiio.h"
 #include "io/io_write.h"
-#include "io/plate.h"
+#include "nprfx/io.h"
 #include "nprfx/pam.h"
 #include "util/cli_util.h"
 
@@ -90,12 +91,12 @@ static int parse_int(const char *opt, const char *text, int lo, int hi, int *out
 /* ---- reading samples ---- */
 
 /* The R, G, B channels of a plate (by name, else the first three). */
-static int rgb_channels(const cli_plate *pl, int idx[3])
+static int rgb_channels(const nprfx_plate *pl, int idx[3])
 {
     static const char *const n[3] = {"R", "G", "B"};
     int found = 1;
     for (int c = 0; c < 3; c++)
-        if ((idx[c] = cli_plate_channel(pl, n[c])) < 0) found = 0;
+        if ((idx[c] = nprfx_plate_channel(pl, n[c])) < 0) found = 0;
     if (found) return 1;
     if (pl->nchannels < 3) return 0;
     for (int c = 0; c < 3; c++)
@@ -107,8 +108,8 @@ static int rgb_channels(const cli_plate *pl, int idx[3])
 static int read_sample(nprfx_context *ctx, const char *path, const char *colorspace,
                        nprfx_image *out)
 {
-    cli_plate pl;
-    if (cli_io_read(ctx, path, &pl) != NPRFX_OK) {
+    nprfx_plate pl;
+    if (nprfx_io_read(ctx, path, &pl) != NPRFX_OK) {
         fprintf(stderr, "nprfx pam build: %s\n", cli_message(ctx));
         return 0;
     }
@@ -116,7 +117,7 @@ static int read_sample(nprfx_context *ctx, const char *path, const char *colorsp
     if (!rgb_channels(&pl, idx)) {
         fprintf(stderr, "nprfx pam build: '%s' has %d channel(s); a sample is an RGB image\n", path,
                 pl.nchannels);
-        cli_plate_free(&pl);
+        nprfx_plate_free(&pl);
         return 0;
     }
     int ok = nprfx_image_alloc(ctx, pl.bounds, 3, out) == NPRFX_OK;
@@ -126,21 +127,21 @@ static int read_sample(nprfx_context *ctx, const char *path, const char *colorsp
             for (int c = 0; c < 3; c++)
                 out->data[3 * i + c] = pl.pixels[i * (size_t)pl.nchannels + (size_t)idx[c]];
     }
-    cli_plate_free(&pl);
+    nprfx_plate_free(&pl);
     if (!ok) {
         fprintf(stderr, "nprfx pam build: %s\n", cli_message(ctx));
         return 0;
     }
     int srgb = !strcmp(colorspace, "srgb");
     if (!strcmp(colorspace, "auto")) {
-        cli_file_info fi;
-        if (cli_io_info(ctx, path, &fi) == NPRFX_OK) {
+        nprfx_file_info fi;
+        if (nprfx_io_info(ctx, path, &fi) == NPRFX_OK) {
             /* Float files hold scene-linear light; 8- and 16-bit images are display-encoded. */
             srgb = strcmp(fi.format, "openexr") != 0;
-            cli_file_info_free(&fi);
+            nprfx_file_info_free(&fi);
         }
     }
-    if (srgb && cli_io_convert_colorspace(ctx, out, "srgb", "linear", NULL) != NPRFX_OK) {
+    if (srgb && nprfx_io_convert_colorspace(ctx, out, "srgb", "linear", NULL) != NPRFX_OK) {
         fprintf(stderr, "nprfx pam build: '%s': %s\n", path, cli_message(ctx));
         nprfx_image_free(out);
         return 0;
@@ -181,7 +182,7 @@ static int write_pam(nprfx_context *ctx, const char *path, const nprfx_image *st
     char *mv = join(&info->mean_yuv[0][2], 3, info->count, 0);
     int ok = k && my && mu && mv;
     if (ok) {
-        cli_attribute attrs[6] = {
+        nprfx_attribute attrs[6] = {
             {NPRFX_PAM_ATTR_VERSION, NPRFX_ATTR_INT, version},
             {NPRFX_PAM_ATTR_COUNT, NPRFX_ATTR_INT, count},
             {NPRFX_PAM_ATTR_KEYS, NPRFX_ATTR_STRING, k},
@@ -190,8 +191,8 @@ static int write_pam(nprfx_context *ctx, const char *path, const nprfx_image *st
             {NPRFX_PAM_ATTR_MEAN_V, NPRFX_ATTR_STRING, mv},
         };
         static const char *const names[3] = {"R", "G", "B"};
-        cli_write_options wo = {sizeof wo, "zip", half, attrs, 6};
-        ok = cli_io_write(ctx, path, strip, names, NULL, &wo) == NPRFX_OK;
+        nprfx_write_options wo = {sizeof wo, "zip", half, attrs, 6};
+        ok = nprfx_io_write(ctx, path, strip, names, NULL, &wo) == NPRFX_OK;
         if (!ok) fprintf(stderr, "nprfx pam build: %s\n", cli_message(ctx));
     } else {
         fprintf(stderr, "nprfx pam build: out of memory\n");
@@ -312,7 +313,7 @@ static int cmd_build(int argc, char **argv)
             goto done;
         }
     }
-    double t0 = cli_now();
+    double t0 = engine_now();
     nprfx_image strip;
     nprfx_pam_info info;
     memset(&info, 0, sizeof info);
@@ -326,7 +327,7 @@ static int cmd_build(int argc, char **argv)
             fprintf(stderr, "nprfx pam build: (sample %d is '%s')\n", idx, files[idx]);
         goto done;
     }
-    double t1 = cli_now();
+    double t1 = engine_now();
     if (write_pam(env.ctx, out, &strip, &info, half)) {
         int nk = 0;
         for (int m = 0; m < info.count; m++)
@@ -372,10 +373,10 @@ static int info_one(nprfx_context *ctx, const char *path)
 {
     char **names = NULL, **values = NULL;
     int na = 0, status = PAM_FAILED;
-    cli_plate pl;
+    nprfx_plate pl;
     memset(&pl, 0, sizeof pl);
-    if (cli_io_read_attributes(ctx, path, "nprfx:", &names, &values, &na) != NPRFX_OK ||
-        cli_io_read(ctx, path, &pl) != NPRFX_OK) {
+    if (nprfx_io_read_attributes(ctx, path, "nprfx:", &names, &values, &na) != NPRFX_OK ||
+        nprfx_io_read(ctx, path, &pl) != NPRFX_OK) {
         fprintf(stderr, "nprfx pam info: %s\n", cli_message(ctx));
         goto done;
     }
@@ -396,7 +397,7 @@ static int info_one(nprfx_context *ctx, const char *path)
                 pl.nchannels);
         goto done;
     }
-    nprfx_image rgb = cli_plate_view(&pl, 0, pl.nchannels);
+    nprfx_image rgb = nprfx_plate_view(&pl, 0, pl.nchannels);
     rgb.data = pl.pixels + idx[0];
     if (idx[1] != idx[0] + 1 || idx[2] != idx[0] + 2) {
         fprintf(stderr, "nprfx pam info: '%s': R, G, B are not adjacent channels\n", path);
@@ -464,8 +465,8 @@ static int info_one(nprfx_context *ctx, const char *path)
                info.mean_yuv[i][0], info.mean_yuv[i][1], info.mean_yuv[i][2]);
     status = PAM_OK;
 done:
-    cli_attributes_free(names, values, na);
-    cli_plate_free(&pl);
+    nprfx_attributes_free(names, values, na);
+    nprfx_plate_free(&pl);
     return status;
 }
 
@@ -535,11 +536,11 @@ static int cmd_samples(int argc, char **argv)
         nprfx_image im;
         char path[4096];
         snprintf(path, sizeof path, "%s/strokes_%d.png", dir, i + 1);
-        cli_preview_options po = {sizeof po, NULL, NULL, NULL, NULL, 0};
+        nprfx_preview_options po = {sizeof po, NULL, NULL, NULL, NULL, 0};
         po.ocio_config = "";
         if (nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, size, size), 3, &im) ||
             nprfx_pam_sample_strokes(ctx, tones[i], angles[i], seed + (unsigned)i, &im) ||
-            cli_io_write_preview(ctx, path, &im, &po)) {
+            nprfx_io_write_preview(ctx, path, &im, &po)) {
             fprintf(stderr, "nprfx pam samples: %s\n", cli_message(ctx));
             status = PAM_FAILED;
         } else {

@@ -5,10 +5,12 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "engine/engine_util.h"
+#include "nprfx/io_oiio.h"
 #include "cmd_shared.h"
 #include "commands.h"
-#include "graph/graph.h"
-#include "io/output_lock.h"
+#include "nprfx/graph.h"
+#include "util/output_lock.h"
 #include "util/cli_util.h"
 
 static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
@@ -136,6 +138,42 @@ static nprfx_result lock_outputs(nprfx_context *ctx, nprfx_graph *g, const char 
     return r;
 }
 
+/* What `nprfx run` shows of a run: a progress line a frame (one line rewritten on a terminal),
+ * each failed frame's message, and a warning once the measured pace says hours. */
+typedef struct run_progress {
+    const char *prog;
+    nprfx_context *ctx;
+    int tty, quiet, warned_eta;
+} run_progress;
+
+static int show_progress(void *user, const nprfx_graph_progress *p)
+{
+    run_progress *rp = user;
+    int k = p->done - 1;
+    if (p->result) {
+        if (rp->tty) fputc('\n', stderr);
+        fprintf(stderr, "%s run: frame %d failed: %s\n", rp->prog, p->frame, cli_message(rp->ctx));
+        return 0;
+    }
+    double el = p->elapsed, fps = (k + 1) / (el > 0 ? el : 1e-9);
+    double eta = (p->count - k - 1) / fps;
+    /* Measured, after the first frames (the first alone includes a temporal warm-up). */
+    if (!rp->warned_eta && k == (p->count > 2 ? 1 : 0) && eta > 3600.0) {
+        rp->warned_eta = 1;
+        if (rp->tty) fputc('\n', stderr);
+        fprintf(stderr,
+                "%s run: warning: %.2f s a frame so far: the remaining %d frames take about "
+                "%.1f hours\n",
+                rp->prog, el / (k + 1), p->count - k - 1, eta / 3600.0);
+    }
+    if (rp->tty)
+        fprintf(stderr, "\r[%d/%d] frame %d  %.2f fps  ETA %.0f s   ", k + 1, p->count, p->frame,
+                fps, eta);
+    else if (!rp->quiet)
+        fprintf(stderr, "frame %d (%d/%d) %.3f s\n", p->frame, k + 1, p->count, p->seconds);
+    return 0;
+}
+
 /* Load and render one graph; the exit status: 0 ok, 1 frames failed, 2 not rendered. */
 static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char *graph_path,
                      const run_opts *ro)
@@ -180,7 +218,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
      * fit fails here with the node and the sizes, never in the OOM killer at frame 40. */
     nprfx_graph_plan_info plan;
     memset(&plan, 0, sizeof plan);
-    if (fl.count > 0 && nprfx_graph_plan(g, fl.frames[0], &plan)) {
+    if (nprfx_graph_check(g, &fl, &plan)) {
         fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
@@ -204,40 +242,11 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         if (nprfx_graph_cost_warnings(g, fl.count, why, sizeof why) > 0)
             fprintf(stderr, "%s run: warning: %s: this may take hours:\n%s", prog, graph_path, why);
     }
-    int tty = isatty(STDERR_FILENO) && !quiet;
-    double t0 = cli_now();
-    int warned_eta = 0;
-    int failed = 0, files = 0;
-    for (int k = 0; k < fl.count; k++) {
-        double tf = cli_now();
-        int written = 0;
-        if (nprfx_graph_render_frame(g, fl.frames[k], &written)) {
-            if (tty) fputc('\n', stderr);
-            fprintf(stderr, "%s run: frame %d failed: %s\n", prog, fl.frames[k],
-                    cli_message(env.ctx));
-            failed++;
-            if (!keep_going) break;
-            continue;
-        }
-        files += written;
-        double el = cli_now() - t0, fps = (k + 1) / (el > 0 ? el : 1e-9);
-        double eta = (fl.count - k - 1) / fps;
-        /* Measured, after the first frames (the first alone includes a temporal warm-up). */
-        if (!warned_eta && k == (fl.count > 2 ? 1 : 0) && eta > 3600.0) {
-            warned_eta = 1;
-            if (tty) fputc('\n', stderr);
-            fprintf(stderr,
-                    "%s run: warning: %.2f s a frame so far: the remaining %d frames take about "
-                    "%.1f hours\n",
-                    prog, el / (k + 1), fl.count - k - 1, eta / 3600.0);
-        }
-        if (tty)
-            fprintf(stderr, "\r[%d/%d] frame %d  %.2f fps  ETA %.0f s   ", k + 1, fl.count,
-                    fl.frames[k], fps, eta);
-        else if (!quiet)
-            fprintf(stderr, "frame %d (%d/%d) %.3f s\n", fl.frames[k], k + 1, fl.count,
-                    cli_now() - tf);
-    }
+    run_progress rp = {prog, env.ctx, isatty(STDERR_FILENO) && !quiet, quiet, 0};
+    nprfx_graph_run_options runo = {sizeof runo, keep_going, show_progress, NULL, &rp};
+    nprfx_graph_run_summary sum;
+    nprfx_graph_run(g, &fl, &runo, &sum);
+    int tty = rp.tty, failed = sum.failed, files = sum.files;
     if (tty) fputc('\n', stderr);
     if (failed) {
         status = 1;
@@ -247,12 +256,12 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         char buf[4096];
         nprfx_graph_describe_outputs(g, buf, sizeof buf);
         printf("wrote %d frame%s in %.1f s:\n%s", fl.count - failed,
-               fl.count - failed == 1 ? "" : "s", cli_now() - t0, buf);
+               fl.count - failed == 1 ? "" : "s", sum.seconds, buf);
     }
     if (ro->stats) cli_print_stats(stdout, g, fl.count, &plan);
 done:
     cli_output_locks_release(locks);
-    seq_frames_free(&fl);
+    nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
     return status;
 }
@@ -330,6 +339,7 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     cli_env env;
     if (cli_env_init(&env, threads)) return 1;
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
+    opt.io = nprfx_io_oiio();
     opt.progress = !quiet;
     opt.no_pool = no_pool;
     opt.strip_rows = strip_rows;

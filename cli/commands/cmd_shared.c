@@ -3,19 +3,19 @@
 #include <stdio.h>
 
 #include "cmd_shared.h"
-#include "graph/graph.h"
-#include "io/io_limits.h"
+#include "nprfx/graph.h"
+#include "nprfx/io.h"
 #include "util/cli_util.h"
 
 int cli_set_mem_limit(const char *prog, const char *cmd, const char *size)
 {
     uint64_t bytes;
-    if (cli_parse_size(size, &bytes)) {
+    if (nprfx_parse_size(size, &bytes)) {
         fprintf(stderr, "%s %s: --mem-limit '%s' is not a size (e.g. 8G, 512M, or 0 for none)\n",
                 prog, cmd, size);
         return 1;
     }
-    cli_mem_limit_set(bytes);
+    cli_env_mem_limit(bytes);
     return 0;
 }
 
@@ -34,13 +34,13 @@ void cli_print_stats(FILE *f, nprfx_graph *g, int frames, const nprfx_graph_plan
                 (double)st[i].fresh_bytes / 1048576.0);
     }
     char peak[32], est[32], need[32], lim[32];
-    cli_format_bytes(peak, sizeof peak, nprfx_graph_mem_peak(g));
-    cli_format_bytes(est, sizeof est, plan ? plan->peak : 0);
-    cli_format_bytes(need, sizeof need, plan ? plan->need : 0);
+    nprfx_format_bytes(peak, sizeof peak, nprfx_graph_mem_peak(g));
+    nprfx_format_bytes(est, sizeof est, plan ? plan->peak : 0);
+    nprfx_format_bytes(need, sizeof need, plan ? plan->need : 0);
     if (!plan || plan->limit == UINT64_MAX)
         snprintf(lim, sizeof lim, "none");
     else
-        cli_format_bytes(lim, sizeof lim, plan->limit);
+        nprfx_format_bytes(lim, sizeof lim, plan->limit);
     fprintf(
         f,
         "frames and caches held at most %s (estimate %s, %s in use at once; memory limit %s); peak "
@@ -48,12 +48,12 @@ void cli_print_stats(FILE *f, nprfx_graph *g, int frames, const nprfx_graph_plan
         peak, est, need, lim, cli_peak_mib());
     if (plan && plan->state) {
         char kept[32];
-        cli_format_bytes(kept, sizeof kept, plan->state);
+        nprfx_format_bytes(kept, sizeof kept, plan->state);
         fprintf(f, "of the estimate, up to %s are caches nodes keep between frames\n", kept);
     }
     if (plan && plan->strip_rows > 0) {
         char whole[32];
-        cli_format_bytes(whole, sizeof whole, plan->whole_need);
+        nprfx_format_bytes(whole, sizeof whole, plan->whole_need);
         fprintf(f, "rendered by strips of %d rows (whole frames: %s in use at once)\n",
                 plan->strip_rows, whole);
     }

@@ -4,7 +4,7 @@
 
 #include <stdio.h>
 
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 
 /* --mem-limit SIZE of command `cmd`: set the process's memory limit (io_limits.h), or say why
  * SIZE is not a size on stderr and return non-zero. */

@@ -7,10 +7,10 @@
 #include <string.h>
 
 #include "commands.h"
-#include "io/io.h"
-#include "io/io_limits.h"
+#include "nprfx/io.h"
+#include "nprfx/io.h"
 #include "io/io_write.h"
-#include "seq.h"
+#include "nprfx/seq.h"
 #include "util/cli_util.h"
 
 /* Exit status: 0 written, 1 render or write error, 2 usage error. */
@@ -191,8 +191,9 @@ int cli_cmd_synth(int argc, char **argv)
     cli_env env;
     if (cli_env_init(&env, threads)) return SYNTH_FAILED;
     /* Refused before anything is allocated, with the size and the limit (NPRFX_READ_LIMIT). */
-    if (cli_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
-                              nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0), 0)) {
+    if (nprfx_image_limit_check(env.ctx, "nprfx synth: --size", w, h,
+                                nprfx_synth_channel_count() + (blender ? BLENDER_CHANNELS : 0),
+                                0)) {
         fprintf(stderr, "%s\n", cli_message(env.ctx));
         cli_env_free(&env);
         return SYNTH_USAGE;
@@ -204,12 +205,12 @@ int cli_cmd_synth(int argc, char **argv)
         bnames[c] = blender_layout[c].name;
     bnames[BLENDER_CHANNELS] = NULL;
     int status = SYNTH_OK;
-    if (seq_parse_frames(env.ctx, frames_spec, &frames) != NPRFX_OK) {
+    if (nprfx_seq_parse_frames(env.ctx, frames_spec, &frames) != NPRFX_OK) {
         fprintf(stderr, "nprfx synth: --frames: %s\n", cli_message(env.ctx));
         status = SYNTH_USAGE;
         goto done;
     }
-    if (frames.count > 1 && !seq_has_pattern(out)) {
+    if (frames.count > 1 && !nprfx_seq_has_pattern(out)) {
         fprintf(stderr,
                 "nprfx synth: %d frames but '%s' has no frame token; use e.g. "
                 "name.####.exr\n",
@@ -230,14 +231,14 @@ int cli_cmd_synth(int argc, char **argv)
     }
     const nprfx_image *written = blender ? &packed : &im;
     const char *const *names = blender ? bnames : nprfx_synth_channel_names();
-    cli_write_options opt = {sizeof opt, compression, half};
+    nprfx_write_options opt = {sizeof opt, compression, half};
     for (int i = 0; i < frames.count; i++) {
         int frame = frames.frames[i];
         char path[4096];
-        if (seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
+        if (nprfx_seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
             nprfx_synth_render(env.ctx, scene, frame, &im) != NPRFX_OK ||
             (blender && (to_blender(&im, &packed), 0)) ||
-            cli_io_write(env.ctx, path, written, names, NULL, &opt) != NPRFX_OK) {
+            nprfx_io_write(env.ctx, path, written, names, NULL, &opt) != NPRFX_OK) {
             fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, cli_message(env.ctx));
             status = SYNTH_FAILED;
             goto done;
@@ -249,7 +250,7 @@ int cli_cmd_synth(int argc, char **argv)
 done:
     nprfx_image_free(&im);
     nprfx_image_free(&packed);
-    seq_frames_free(&frames);
+    nprfx_seq_frames_free(&frames);
     cli_env_free(&env);
     return status;
 }

@@ -2,7 +2,7 @@
 #ifndef NPRFX_CLI_COMMANDS_H
 #define NPRFX_CLI_COMMANDS_H
 
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,5 +1,5 @@
 /* nprfx CLI — `nprfx info --io-test damaged LIST`: reads every file named in LIST (one path a
- * line) with cli_io_info and cli_io_read in one process and prints one verdict a file, for
+ * line) with nprfx_io_info and nprfx_io_read in one process and prints one verdict a file, for
  * tests/cli/corpus_damaged.sh. One process for a corpus of thousands: the runner's libraries take
  * half a second to load, a file's refusal a millisecond. Peak memory is the process's, which only
  * grows, so a file that made it jump shows it on its own line.
@@ -15,9 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/io.h"
-#include "io/io_read.h"
-#include "io/plate.h"
+#include "engine/engine_util.h"
+#include "nprfx/io.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/io.h"
 #include "io_check.h"
 #include "util/cli_util.h"
 
@@ -47,7 +48,7 @@ static void flat(char *s)
         if (*s == '\t' || *s == '\n' || *s == '\r') *s = ' ';
 }
 
-int cli_io_check_damaged(const char *list)
+int nprfx_io_check_damaged(const char *list)
 {
     FILE *f = strcmp(list, "-") ? fopen(list, "r") : stdin;
     if (!f) {
@@ -62,18 +63,18 @@ int cli_io_check_damaged(const char *list)
         path[strcspn(path, "\n")] = 0;
         if (!*path) continue;
         char msg_info[1024] = "", msg_read[1024] = "";
-        double t0 = cli_now();
-        cli_file_info fi;
-        nprfx_result ri = cli_io_info(ctx, path, &fi);
+        double t0 = engine_now();
+        nprfx_file_info fi;
+        nprfx_result ri = nprfx_io_info(ctx, path, &fi);
         const char *fault = NULL;
         if (ri)
             nprfx_context_last_error(ctx, msg_info, sizeof msg_info);
         else {
             fault = names_fault(fi.names, fi.nchannels);
-            cli_file_info_free(&fi);
+            nprfx_file_info_free(&fi);
         }
-        cli_plate pl;
-        nprfx_result rr = cli_io_read(ctx, path, &pl);
+        nprfx_plate pl;
+        nprfx_result rr = nprfx_io_read(ctx, path, &pl);
         char detail[1200] = "";
         if (rr) {
             nprfx_context_last_error(ctx, msg_read, sizeof msg_read);
@@ -81,9 +82,9 @@ int cli_io_check_damaged(const char *list)
             if (!fault) fault = names_fault(pl.names, pl.nchannels);
             snprintf(detail, sizeof detail, "%dx%d, %d channels", nprfx_rect_width(pl.bounds),
                      nprfx_rect_height(pl.bounds), pl.nchannels);
-            cli_plate_free(&pl);
+            nprfx_plate_free(&pl);
         }
-        double dt = cli_now() - t0;
+        double dt = engine_now() - t0;
         const char *verdict;
         if (fault) {
             verdict = "garbage";

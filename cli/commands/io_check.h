@@ -3,6 +3,6 @@
 #define NPRFX_CLI_IO_CHECK_H
 
 /* nprfx info --io-test damaged LIST: one verdict a file. */
-int cli_io_check_damaged(const char *list);
+int nprfx_io_check_damaged(const char *list);
 
 #endif

@@ -8,8 +8,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "nprfx/io_oiio.h"
 #include "farm_args.h"
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 #include "util/cli_util.h"
 
 void farm_job_free(farm_job *job)
@@ -118,9 +119,9 @@ static int check_reads(nprfx_graph *g, nprfx_context *ctx, const char *cmd,
     for (int i = 0; i < n && !status; i++) {
         int missing = 0, first = 0, err = 0;
         char file[4096], first_file[4096] = "";
-        int frames = seq_has_pattern(paths[i]) ? fl->count : (fl->count > 0);
+        int frames = nprfx_seq_has_pattern(paths[i]) ? fl->count : (fl->count > 0);
         for (int k = 0; k < frames; k++) {
-            if (seq_expand(ctx, paths[i], fl->frames[k], file, sizeof file)) {
+            if (nprfx_seq_expand(ctx, paths[i], fl->frames[k], file, sizeof file)) {
                 snprintf(file, sizeof file, "%s", paths[i]);
             }
             if (access(file, R_OK) == 0) continue;
@@ -184,6 +185,7 @@ int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int ch
         return 2;
     }
     nprfx_graph_options opt = {sizeof opt, (size_t)64 << 20, 0, a->output_dir, NULL};
+    opt.io = nprfx_io_oiio();
     if (nprfx_graph_load(ctx, a->graph, &opt, &g)) {
         fprintf(stderr, "nprfx %s: %s\n", cmd, cli_message(ctx));
         goto done;
@@ -230,7 +232,7 @@ int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int ch
 fail:
     fprintf(stderr, "nprfx %s: %s: %s\n", cmd, a->graph, cli_message(ctx));
 done:
-    seq_frames_free(&fl);
+    nprfx_seq_frames_free(&fl);
     if (status) {
         farm_job_free(job);
         nprfx_graph_free(g);

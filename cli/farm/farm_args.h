@@ -10,7 +10,7 @@
 
 #include <stdio.h>
 
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 #include "util/cli_util.h"
 
 /* What every chunk's `nprfx run` gets besides its frames, and the shot as a whole. */

@@ -9,11 +9,11 @@
 
 #include "farm_args.h"
 #include "farm_check.h"
-#include "graph/graph.h"
-#include "io/io.h"
-#include "io/io_read.h"
-#include "io/output_lock.h"
-#include "io/plate.h"
+#include "nprfx/graph.h"
+#include "nprfx/io.h"
+#include "nprfx/io_oiio.h"
+#include "util/output_lock.h"
+#include "nprfx/io.h"
 #include "util/cli_util.h"
 
 static void usage(FILE *f)
@@ -60,12 +60,12 @@ static const char *fault(nprfx_context *ctx, const char *path, char *why, size_t
     if (stat(path, &st)) return "missing";
     if (!S_ISREG(st.st_mode)) return "not a plain file";
     if (!is_image(path)) return NULL;
-    cli_plate pl;
-    if (cli_io_read(ctx, path, &pl)) {
+    nprfx_plate pl;
+    if (nprfx_io_read(ctx, path, &pl)) {
         snprintf(why, n, "damaged: %s", cli_message(ctx));
         return why;
     }
-    cli_plate_free(&pl);
+    nprfx_plate_free(&pl);
     return NULL;
 }
 
@@ -138,8 +138,8 @@ int farm_check(int argc, char **argv)
         for (int p = 0; p < npatterns; p++) {
             char path[4096], why[2048], single[32];
             /* a pattern without a frame token is one file, checked once */
-            if (!seq_has_pattern(patterns[p]) && k > 0) continue;
-            if (seq_expand(env.ctx, patterns[p], fl.frames[k], path, sizeof path))
+            if (!nprfx_seq_has_pattern(patterns[p]) && k > 0) continue;
+            if (nprfx_seq_expand(env.ctx, patterns[p], fl.frames[k], path, sizeof path))
                 snprintf(path, sizeof path, "%s", patterns[p]);
             files++;
             const char *f = fault(env.ctx, path, why, sizeof why);
@@ -165,7 +165,7 @@ int farm_check(int argc, char **argv)
     free(bad);
 done:
     nprfx_graph_output_patterns_free(patterns, npatterns);
-    seq_frames_free(&fl);
+    nprfx_seq_frames_free(&fl);
     nprfx_graph_free(g);
     farm_job_free(&job); /* after farm_prepare, even a failed one: idempotent */
     cli_env_free(&env);

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "graph/graph_model.h"
+#include "engine/graph_model.h"
 #include "host_natron.h"
 #include "host_project.h"
 #include "ofx_names.h"
@@ -412,7 +412,7 @@ nprfx_result host_write_natron(const host_project *hp, FILE *f)
         node_end(&w, cs->shuffle, &a, &rname, 1, cs->count, 1);
         gui[ng++] = (gui_node){cs->shuffle, 140.0 * i - 200, 160, rgb_shuffle, 0, 0};
         if (!cs->has_sign) continue;
-        /* The runner's vector convention (cli/graph/graph_resolve.c, vec_conventions): each motion
+        /* The runner's vector convention (engine/graph_resolve.c, vec_conventions): each motion
          * channel is a plate channel times a sign, here per component after the Shuffle. */
         int alpha = cs->count > 3 && cs->sign[3] != 1;
         node_begin(&w, cs->multiply, "net.sf.openfx.MultiplyPlugin", 2, 0, 1 + alpha);

@@ -5,7 +5,7 @@
  * script name with the graph's values; inputs are connected by clip label. */
 #include <string.h>
 
-#include "graph/graph_model.h"
+#include "engine/graph_model.h"
 #include "host_natron_py.h"
 #include "host_project.h"
 #include "ofx_names.h"
@@ -130,7 +130,7 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
     py_string(f, parent);
     fprintf(f, "\nSCRIPT_DIR = ");
     py_string(f, dir);
-    seq_expand(NULL, hp->reads[0].path, hp->first_frame, first, sizeof first);
+    nprfx_seq_expand(NULL, hp->reads[0].path, hp->first_frame, first, sizeof first);
     fprintf(f, "\nFIRST_PLATE = ");
     py_string(f, first);
     fprintf(f, "\n\n%s", prelude);

@@ -5,7 +5,7 @@
  * channels by position (red, green, blue, alpha: the 1st to 4th in Nuke's order). */
 #include <string.h>
 
-#include "graph/graph_model.h"
+#include "engine/graph_model.h"
 #include "host_nuke.h"
 #include "host_project.h"
 #include "ofx_names.h"

@@ -7,14 +7,15 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "graph/graph.h"
-#include "graph/graph_model.h"
-#include "graph/graph_resolve.h"
+#include "engine/engine_util.h"
+#include "nprfx/graph.h"
+#include "engine/graph_model.h"
+#include "engine/graph_resolve.h"
 #include "host_project.h"
-#include "io/channels.h"
-#include "io/io.h"
-#include "io/io_read.h"
-#include "io/plate.h"
+#include "nprfx/channels.h"
+#include "nprfx/io.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/io.h"
 #include "ofx_names.h"
 #include "util/cli_util.h"
 
@@ -85,8 +86,8 @@ static int plate_before(const char *x, const char *y)
     size_t l = lx < ly ? lx : ly;
     int c = strncmp(x, y, l);
     if (c || lx != ly) return c ? c < 0 : lx < ly;
-    int rx = cli_channels_component_rank(dx ? dx + 1 : x);
-    int ry = cli_channels_component_rank(dy ? dy + 1 : y);
+    int rx = nprfx_channels_component_rank(dx ? dx + 1 : x);
+    int ry = nprfx_channels_component_rank(dy ? dy + 1 : y);
     return rx != ry ? rx < ry : strcmp(x, y) < 0;
 }
 
@@ -105,32 +106,32 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
     gnode *n = &g->nodes[gi];
     char file[4096];
     internal_graph_resolve_path(g, g->base_dir, n->path, b->hp->first_frame, file, sizeof file);
-    cli_file_info fi;
+    nprfx_file_info fi;
     memset(&fi, 0, sizeof fi);
-    nprfx_result r = cli_io_info(n->ctx, file, &fi);
+    nprfx_result r = nprfx_io_info(n->ctx, file, &fi);
     if (r) return r;
     int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
     s->names = calloc((size_t)fi.nchannels + 4, sizeof *s->names);
     s->rank = calloc((size_t)fi.nchannels + 1, sizeof *s->rank);
     if (!s->names || !s->rank) {
-        cli_file_info_free(&fi);
+        nprfx_file_info_free(&fi);
         return oom(b);
     }
     for (int c = 0; c < fi.nchannels; c++)
-        s->names[c] = cli_strdup(fi.names[c]);
+        s->names[c] = engine_strdup(fi.names[c]);
     s->plate_nc = s->nc = fi.nchannels;
     plate_ranks(s->names, s->nc, s->rank);
     if (!b->hp->width) {
         b->hp->width = nprfx_rect_width(fi.bounds);
         b->hp->height = nprfx_rect_height(fi.bounds);
     }
-    cli_file_info_free(&fi);
+    nprfx_file_info_free(&fi);
     if (extra) {
         r = internal_graph_motion_sources(g, n, file, (const char *const *)s->names, s->nc,
                                           s->motion_idx, s->motion_sign);
         if (r) return r;
         for (int k = 0; k < 4; k++)
-            s->names[s->nc++] = cli_strdup(internal_graph_motion_names[k]);
+            s->names[s->nc++] = engine_strdup(internal_graph_motion_names[k]);
     }
     return NPRFX_OK;
 }
@@ -371,7 +372,7 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
     hp->first_frame = g->first_frame;
     hp->last_frame = g->last_frame;
     if (!g->frames_text && fl.count) hp->first_frame = hp->last_frame = fl.frames[0];
-    seq_frames_free(&fl);
+    nprfx_seq_frames_free(&fl);
     /* the project format's name: the output file's, without folder and extension */
     const char *leaf = strrchr(out_file, '/');
     char stem[64];

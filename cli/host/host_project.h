@@ -8,8 +8,8 @@
 
 #include <stdio.h>
 
-#include "graph/graph.h"
-#include "graph/graph_model.h"
+#include "nprfx/graph.h"
+#include "engine/graph_model.h"
 
 #define NPRFX_HOST_NAME_MAX 96
 

@@ -1,5 +1,6 @@
-/* nprfx CLI — the runner's lowest layer: the context commands run with, the clocks, strdup,
- * peak memory and a parallel byte copy. Includes nothing of the runner's other folders. */
+/* nprfx CLI — the runner's lowest layer: the context commands run with and peak memory (the
+ * clocks, strdup and the parallel copy are the engine's: engine/engine_util.h). Includes nothing of
+ * the runner's other folders. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -52,6 +53,17 @@ static const char *cli_data_dir(char *buf, size_t size)
     return NULL;
 }
 
+/* --mem-limit, parsed before the command's context exists: every context cli_env_init makes
+ * afterwards carries it (one limit per process, as the option says). */
+static int have_mem_limit;
+static uint64_t mem_limit;
+
+void cli_env_mem_limit(uint64_t bytes)
+{
+    have_mem_limit = 1;
+    mem_limit = bytes;
+}
+
 int cli_env_init(cli_env *env, int threads)
 {
     memset(env, 0, sizeof *env);
@@ -69,6 +81,7 @@ int cli_env_init(cli_env *env, int threads)
         fprintf(stderr, "nprfx: out of memory\n");
         return 1;
     }
+    if (have_mem_limit) nprfx_context_set_memory_limit(env->ctx, mem_limit, "--mem-limit");
     return 0;
 }
 
@@ -86,64 +99,9 @@ const char *cli_message(const nprfx_context *ctx)
     return buf;
 }
 
-double cli_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-double cli_cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-char *cli_strdup(const char *s)
-{
-    if (!s) return NULL;
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d) memcpy(d, s, n);
-    return d;
-}
-
 double cli_peak_mib(void)
 {
     struct rusage ru;
     if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
     return (double)ru.ru_maxrss / 1024.0; /* Linux reports KiB */
-}
-
-typedef struct bytes_job {
-    const unsigned char *src; /* NULL: zero */
-    unsigned char *dst;
-    size_t bytes;
-    int parts;
-} bytes_job;
-
-static void bytes_parts(void *user, int begin, int end, int worker)
-{
-    (void)worker;
-    const bytes_job *j = user;
-    for (int p = begin; p < end; p++) {
-        size_t a = j->bytes * (size_t)p / (size_t)j->parts;
-        size_t b = j->bytes * (size_t)(p + 1) / (size_t)j->parts;
-        if (j->src)
-            memcpy(j->dst + a, j->src + a, b - a);
-        else
-            memset(j->dst + a, 0, b - a);
-    }
-}
-
-void cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
-                        int parts)
-{
-    bytes_job j = {src, dst, bytes, parts > 0 ? parts : 1};
-    if (j.parts == 1 || !ex) {
-        bytes_parts(&j, 0, j.parts, 0);
-        return;
-    }
-    nprfx_parallel_for(ex, j.parts, 1, bytes_parts, &j);
 }

@@ -1,9 +1,11 @@
-/* nprfx CLI — the runner's lowest layer: the context every command runs with, the clocks,
- * strdup, peak memory and a parallel byte copy. */
+/* nprfx CLI — the runner's lowest layer: the context every command runs with, its memory limit
+ * and peak memory (the clocks, strdup and the parallel copy are the engine's:
+ * engine/engine_util.h). */
 #ifndef NPRFX_CLI_UTIL_H
 #define NPRFX_CLI_UTIL_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "nprfx/nprfx.h"
 
@@ -20,25 +22,16 @@ typedef struct cli_env {
     nprfx_pool *pool;
 } cli_env;
 int cli_env_init(cli_env *env, int threads);
+/* The memory limit (--mem-limit; UINT64_MAX: none) of the contexts cli_env_init makes from now
+ * on, over NPRFX_READ_LIMIT's. */
+void cli_env_mem_limit(uint64_t bytes);
 void cli_env_free(cli_env *env);
 
 /* The last message raised through ctx, copied (valid until the next call from this thread). */
 const char *cli_message(const nprfx_context *ctx);
 
-/* Monotonic clock in seconds. */
-double cli_now(void);
-/* The process's CPU time in seconds, all threads (CLOCK_PROCESS_CPUTIME_ID). */
-double cli_cpu_now(void);
-
-/* A malloc'd copy of s (NULL for NULL or no memory). */
-char *cli_strdup(const char *s);
-
 /* Peak resident memory of this process in MiB. */
 double cli_peak_mib(void);
-
-/* Copy src to dst (src NULL: zero dst), `bytes` cut into `parts` spread over ex's threads. */
-void cli_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
-                        int parts);
 
 #ifdef __cplusplus
 }

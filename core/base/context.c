@@ -1,5 +1,6 @@
 /* The caller's context: where error messages go, and which executor runs parallel work. */
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +15,10 @@ struct nprfx_context {
     const nprfx_executor *executor;
     char *data_dir;
     const nprfx_flow_provider *flow;
+    /* nprfx_context_set_memory_limit: the bound and what set it ("--mem-limit") */
+    int have_memory_limit;
+    uint64_t memory_limit;
+    char memory_origin[64];
     nprfx_context *parent; /* scoped contexts: where messages go on, with `prefix` before them */
     char *prefix;
     pthread_mutex_t lock; /* guards last_*: render threads may raise errors concurrently */
@@ -69,6 +74,27 @@ nprfx_result nprfx_context_create_scoped(nprfx_context *parent, const char *pref
     pthread_mutex_init(&ctx->lock, NULL);
     *out = ctx;
     return NPRFX_OK;
+}
+
+void nprfx_context_set_memory_limit(nprfx_context *ctx, uint64_t bytes, const char *origin)
+{
+    if (!ctx) return;
+    ctx->have_memory_limit = 1;
+    ctx->memory_limit = bytes;
+    snprintf(ctx->memory_origin, sizeof ctx->memory_origin, "%s", origin ? origin : "");
+}
+
+int nprfx_context_memory_limit(const nprfx_context *ctx, uint64_t *bytes, const char **origin)
+{
+    /* A scoped context's own limit, else the nearest parent's: a graph's node scopes see the
+     * limit its caller set. */
+    for (; ctx; ctx = ctx->parent)
+        if (ctx->have_memory_limit) {
+            if (bytes) *bytes = ctx->memory_limit;
+            if (origin) *origin = ctx->memory_origin;
+            return 1;
+        }
+    return 0;
 }
 
 void nprfx_context_destroy(nprfx_context *ctx)

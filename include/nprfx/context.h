@@ -5,6 +5,8 @@
 #ifndef NPRFX_CONTEXT_H
 #define NPRFX_CONTEXT_H
 
+#include <stdint.h>
+
 #include "nprfx/exec.h"
 #include "nprfx/result.h"
 #include "nprfx/export.h"
@@ -54,6 +56,17 @@ NPRFX_API const nprfx_flow_provider *nprfx_context_flow(const nprfx_context *ctx
 
 /* The executor given at creation (never NULL: a serial one when none was given). */
 NPRFX_API const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);
+
+/* The bytes of image data work through ctx may hold at once: one image made in one piece (a plate
+ * read, a node's frame) and a graph's frames together (UINT64_MAX: no bound). `origin` says what
+ * set it, for messages ("--mem-limit"; copied, 63 bytes at most). Scoped contexts use the nearest
+ * parent's. Without one, NPRFX_READ_LIMIT in the environment sets the bound, else half the
+ * physical memory (nprfx_image_limit, nprfx/io.h). */
+NPRFX_API void nprfx_context_set_memory_limit(nprfx_context *ctx, uint64_t bytes,
+                                              const char *origin);
+/* Whether a limit was set on ctx or a parent; *bytes and *origin (may be NULL) receive it. */
+NPRFX_API int nprfx_context_memory_limit(const nprfx_context *ctx, uint64_t *bytes,
+                                         const char **origin);
 
 /* Raise an error: formats the message, hands it to the handler once (through the scopes' prefixes
  * up to the root context), keeps a copy in each context it passes, and returns `code` so callers

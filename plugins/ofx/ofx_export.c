@@ -1,7 +1,7 @@
 /* nprfx OpenFX adapter — a node's text export (stipple dots as CSV/SVG) written from a host
  * (declared in ofx_export.h). The runner writes it beside its images; in a host the export
  * param's path is all there is, so the adapter writes it: the path's frame token expanded as the
- * runner expands it (common/seq.h, linked into the bundle), folders created, a temporary name
+ * runner expands it (nprfx/seq.h), folders created, a temporary name
  * renamed into place so a reader never sees half a file. Tiles of one frame, and repeated
  * renders of it with the same params, write it once. */
 #define _POSIX_C_SOURCE 200809L /* mkdir, getpid */
@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "ofx_export.h"
-#include "seq.h"
+#include "nprfx/seq.h"
 
 /* FNV-1a over what the export is made of. */
 static unsigned long long mix(unsigned long long h, const void *p, size_t n)
@@ -86,7 +86,7 @@ nprfx_result ofx_export(ofx_instance *inst, const nprfx_render_args *a)
         if (!(d->params[i].flags & NPRFX_PARAM_EXPORT) || !pattern || !pattern[0]) continue;
         char path[4096];
         int frame = (int)floor(a->time + 0.5);
-        if ((r = seq_expand(a->ctx, pattern, frame, path, sizeof path))) break;
+        if ((r = nprfx_seq_expand(a->ctx, pattern, frame, path, sizeof path))) break;
         unsigned long long key = export_key(a, path);
         pthread_mutex_lock(&inst->lock);
         if (!(inst->export_done && inst->export_key == key)) {

@@ -112,6 +112,32 @@ done
 ! readelf -d cmake-static-build/render_node 2>/dev/null | grep -q "NEEDED.*libnprfx" && pass ||
   fail "nprfx::nprfx_static links libnprfx.so"
 
+# ---- libnprfx-io and the graph engine -----------------------------------------------------------
+# nprfx-io.pc (requiring nprfx) and libnprfx-io.so, which exports only nprfx/io_oiio.h's
+# functions; samples/example/run_graph.c runs a sample graph through the installed engine and
+# writes what `nprfx run` writes, pixel for pixel.
+iolib=$LIB/libnprfx-io.so
+[ -L "$iolib" ] && [ -s "$LIB/pkgconfig/nprfx-io.pc" ] && pass || fail "libnprfx-io.so or nprfx-io.pc is not installed"
+nm -D --defined-only "$iolib" | awk '$2 ~ /^[TDBRVW]$/ {print $3}' | sort > io_exported.txt
+tr '\n' ' ' < "$P/include/nprfx/io_oiio.h" | grep -oE 'NPRFX_IO_API[^;(]*\(' |
+  grep -oE 'nprfx_[A-Za-z0-9_]+ *\($' | tr -d ' (' | sort -u > io_declared.txt
+[ -s io_declared.txt ] && cmp -s io_declared.txt io_exported.txt && pass ||
+  { fail "libnprfx-io: declared (NPRFX_IO_API) and exported differ:"; diff io_declared.txt io_exported.txt | head; }
+check "build run_graph.c (shared)" "$CC" -std=c11 -Wall -Wextra -Werror "${SAN[@]}" \
+  "$SRC/samples/example/run_graph.c" -o run_graph $(pkg-config --cflags --libs nprfx-io)
+if LD_LIBRARY_PATH="$LIB" ./run_graph "$SRC/samples/graphs/toon.json" eng 1-2 > run_graph.out 2>&1 &&
+   [ "$(tail -n 1 run_graph.out)" = ok ]; then pass; else fail "run_graph:"; cat run_graph.out; fi
+grep -q "^frame 2 (2/2): done" run_graph.out && grep -q "calls*$" run_graph.out && pass ||
+  fail "run_graph: no progress or statistics lines"
+"$NPRFX" run "$SRC/samples/graphs/toon.json" --frames 1-2 --output-dir cli --quiet > cli.log 2>&1 ||
+  fail "nprfx run toon.json: $(cat cli.log)"
+n=0
+for f in $(cd cli && find . -name '*.exr' | sort); do
+  n=$((n+1))
+  "$NPRFX" diff "cli/$f" "eng/$f" --fail 0 > /dev/null 2>&1 || fail "run_graph and nprfx run differ on $f"
+done
+[ "$n" -gt 0 ] && pass || fail "nprfx run toon.json wrote no EXR"
+
 # ---- the installed runner ----------------------------------------------------------------------
 check "the installed runner lists threshold-map" sh -c "'$P/bin/nprfx' list | grep -q threshold-map"
 

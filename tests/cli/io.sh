@@ -1,4 +1,4 @@
-# The image I/O adapter (cli/io/) through `nprfx info --io-test`, with oiiotool/iinfo as
+# The image I/O library (io/, libnprfx-io) through `nprfx info --io-test`, with oiiotool/iinfo as
 # independent readers: round trips, half/compression, windows, atomic writes, previews, colour.
 # usage: bash io.sh NPRFX SOURCE_DIR WORK_DIR
 set -eu

@@ -1,4 +1,4 @@
-# Output sequence locks (cli/io/output_lock.c): a second run on a sequence another run is writing
+# Output sequence locks (cli/util/output_lock.c): a second run on a sequence another run is writing
 # fails at once naming that run and the path, or waits for it with --wait; a run killed with
 # kill -9 leaves no stale lock, and the next run removes the temporary files it left (only
 # those). The first run is stopped (SIGSTOP) once it holds its lock, so the overlap does not

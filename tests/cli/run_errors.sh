@@ -73,7 +73,7 @@ expect 2 "malformed JSON near line 2, column 11" -- "$NPRFX" run malformed.json
 printf '{"nodes": {"a": {"node": "synth",\n  "\303\251": 1 2}}}\n' > malformed_utf8.json
 expect 2 "malformed JSON near line 2, column 10" -- "$NPRFX" run malformed_utf8.json
 
-# cJSON keeps both of two equal keys: a name given twice is an error, not a hidden node.
+# The JSON reader keeps both of two equal keys: a name given twice is an error, not a hidden node.
 graph duplicate '"b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate"}}, "b": {"node": "blend", "inputs": {"base": "plate", "layer": "plate"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect 2 "duplicate.json: node name 'b' is given twice" -- "$NPRFX" run duplicate.json
 

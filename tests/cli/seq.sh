@@ -1,4 +1,4 @@
-# Frame sequences (common/seq.c) driven through `nprfx diff`: frame-list parsing, the ####, @ and
+# Frame sequences (engine/seq.c) driven through `nprfx diff`: frame-list parsing, the ####, @ and
 # %04d patterns, frame discovery, missing frames, per-frame difference images.
 # usage: bash seq.sh NPRFX SOURCE_DIR WORK_DIR
 set -eu

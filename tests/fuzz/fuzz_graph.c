@@ -5,7 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "graph/graph.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/graph.h"
 
 static nprfx_context *ctx;
 
@@ -21,10 +22,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     text[size] = 0;
     nprfx_graph *g = NULL;
     nprfx_graph_options opt = {sizeof opt};
+    opt.io = nprfx_io_oiio();
     opt.output_dir = "/nonexistent-nprfx-fuzz"; /* nothing is written: no frame is rendered */
     if (nprfx_graph_parse(ctx, text, "/nonexistent-nprfx-fuzz", &opt, &g) == NPRFX_OK) {
         nprfx_frame_list frames = {NULL, 0};
-        if (nprfx_graph_frames(g, NULL, &frames) == NPRFX_OK) seq_frames_free(&frames);
+        if (nprfx_graph_frames(g, NULL, &frames) == NPRFX_OK) nprfx_seq_frames_free(&frames);
         char buf[512];
         nprfx_graph_describe_outputs(g, buf, sizeof buf);
         nprfx_graph_free(g);

@@ -1,7 +1,7 @@
 /* libFuzzer target: the image readers of cli/io/io_read.h on arbitrary bytes.
  *
- * Each input is written to a file (OpenImageIO reads paths) and given to cli_io_info and
- * cli_io_read, as `nprfx info` and a graph's read node do. Beyond the sanitizers' findings, a
+ * Each input is written to a file (OpenImageIO reads paths) and given to nprfx_io_info and
+ * nprfx_io_read, as `nprfx info` and a graph's read node do. Beyond the sanitizers' findings, a
  * read that succeeds with a channel name unfit to print is a finding: abort(). The memory bound
  * is lowered so that a refusal, not libFuzzer's -rss_limit_mb, decides large declared images.
  * See tests/fuzz/README.md. */
@@ -11,7 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "io/io.h"
+#include "nprfx/io.h"
 
 static nprfx_context *ctx;
 static char path[256];
@@ -46,15 +46,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!f) abort();
     if (size && fwrite(data, 1, size, f) != size) abort();
     fclose(f);
-    cli_file_info fi;
-    if (cli_io_info(ctx, path, &fi) == NPRFX_OK) {
+    nprfx_file_info fi;
+    if (nprfx_io_info(ctx, path, &fi) == NPRFX_OK) {
         check_names(fi.names, fi.nchannels);
-        cli_file_info_free(&fi);
+        nprfx_file_info_free(&fi);
     }
-    cli_plate pl;
-    if (cli_io_read(ctx, path, &pl) == NPRFX_OK) {
+    nprfx_plate pl;
+    if (nprfx_io_read(ctx, path, &pl) == NPRFX_OK) {
         check_names(pl.names, pl.nchannels);
-        cli_plate_free(&pl);
+        nprfx_plate_free(&pl);
     }
     unlink(path);
     return 0;

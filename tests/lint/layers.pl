@@ -3,7 +3,8 @@
 #
 #   perl tests/lint/layers.pl SOURCE_DIR
 #
-# Every #include of a C/C++ file under include/, core/, plugins/, common/ and cli/ is resolved
+# Every #include of a C/C++ file under include/, core/, plugins/, engine/, io/, common/ and cli/
+# is resolved
 # to a file of the tree (quoted: beside the including file, then under the include roots below;
 # <nprfx/...>: under include/; other <...> are the system's and not followed). Two rules:
 #   1. Direction: a file's folder is one layer of the table below; it may include files of its
@@ -22,13 +23,16 @@ $root =~ s{/+$}{};
 # Layers: folder (longest prefix wins) => [layer name, layers it may include besides its own].
 # The core families sit side by side on core/base: one family never includes another, except
 # pam, whose pam-splat scatters its strokes with gabor-splat's anchored points
-# (core/gabor/internal_scatter.h). Node descriptors use the families and their support code;
-# the front ends (the runner, the OpenFX adapter) use the descriptors' public API, common/, and
-# never each other. Inside the runner, lower folders never include higher ones: util, io, the
-# graph engine, farm and host projects, commands, main.c.
+# (core/gabor/internal_scatter.h). Node descriptors use the families and their support code. The
+# graph engine (engine/) and the image I/O library (io/) use only the public headers: the
+# engine reaches nodes through the registry and files through an nprfx_io. The front ends (the
+# runner, the OpenFX adapter) use the public API, the engine, io/ and common/, and never each
+# other. Inside the runner, lower folders never include higher ones: util, farm and host
+# projects, commands, main.c.
 my @FAMILIES = qw(noise gabor stipple pam looks motion);
 # The runner's folders, lowest first: each includes only those before it (main.c all of them).
-my @CLI = qw(cli/util cli/io cli/graph cli/farm cli/host cli/commands);
+my @CLI = qw(cli/util cli/farm cli/host cli/commands);
+my @LIBS = ('public', 'common', 'engine', 'io');
 my %LAYERS = (
     'include/nprfx'   => ['public', []],
     'core/base'       => ['base', ['public']],
@@ -40,18 +44,18 @@ my %LAYERS = (
     'core/motion'     => ['motion', ['public', 'base']],
     'plugins/support' => ['support', ['public', 'base', @FAMILIES]],
     'plugins'         => ['nodes', ['public', 'base', @FAMILIES, 'support']],
+    'engine'          => ['engine', ['public']],
+    'io'              => ['io', ['public']],
     'common'          => ['common', ['public']],
-    'plugins/ofx'     => ['ofx', ['public', 'support', 'common']],
-    'cli'             => ['cli', ['public', 'common', @CLI]],
-    'cli/util'        => ['cli/util', ['public', 'common']],
-    'cli/io'          => ['cli/io', ['public', 'common', 'cli/util']],
-    'cli/graph'       => ['cli/graph', ['public', 'common', 'cli/util', 'cli/io']],
-    'cli/farm'        => ['cli/farm', ['public', 'common', 'cli/util', 'cli/io', 'cli/graph']],
-    'cli/host'        => ['cli/host', ['public', 'common', 'cli/util', 'cli/io', 'cli/graph']],
-    'cli/commands'    => ['cli/commands', ['public', 'common', @CLI[0 .. 4]]],
+    'plugins/ofx'     => ['ofx', ['public', 'support', 'common', 'engine']],
+    'cli'             => ['cli', [@LIBS, @CLI]],
+    'cli/util'        => ['cli/util', [@LIBS]],
+    'cli/farm'        => ['cli/farm', [@LIBS, 'cli/util']],
+    'cli/host'        => ['cli/host', [@LIBS, 'cli/util']],
+    'cli/commands'    => ['cli/commands', [@LIBS, @CLI[0 .. 2]]],
 );
 # Roots a quoted include is looked up under after the including file's own folder.
-my @ROOTS = ('include', 'core', 'plugins', 'common', 'cli');
+my @ROOTS = ('include', 'core', 'plugins', 'common', 'cli', '.');
 
 sub layer_of {
     my ($path) = @_;
@@ -64,7 +68,7 @@ sub layer_of {
 }
 
 my @files;
-for my $top (qw(include core plugins common cli)) {
+for my $top (qw(include core plugins common engine io cli)) {
     next unless -d "$root/$top";
     open(my $fh, '-|', 'find', "$root/$top", '-type', 'f', '(', '-name', '*.c', '-o', '-name',
          '*.h', '-o', '-name', '*.cpp', ')') or die "find: $!\n";

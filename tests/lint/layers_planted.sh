@@ -3,7 +3,8 @@
 # it is, then fails on each planted fault, naming the file, the line and the rule:
 #   - a wrong-way include (core/base includes a family's internal header),
 #   - one front end including the other (the runner includes the OpenFX adapter),
-#   - the runner's I/O including its graph engine (a lower folder including a higher one),
+#   - the graph engine including the runner, and the image I/O library including the engine's
+#     internals (the library layers use only the public headers),
 #   - a loop between two files of one folder,
 #   - an include that resolves to no file.
 set -u
@@ -22,7 +23,8 @@ check() { # check NAME EXPECTED_STATUS EXPECTED_TEXT
 }
 fresh() {
     rm -rf "$W/tree"; mkdir -p "$W/tree"
-    cp -r "$SRC/include" "$SRC/core" "$SRC/plugins" "$SRC/common" "$SRC/cli" "$W/tree/"
+    cp -r "$SRC/include" "$SRC/core" "$SRC/plugins" "$SRC/engine" "$SRC/io" "$SRC/common" "$SRC/cli" \
+          "$W/tree/"
 }
 plant() { # plant FILE LINE: append an #include line
     printf '%s\n' "$2" >>"$W/tree/$1"
@@ -41,8 +43,12 @@ plant "$main" '#include "ofx/ofx_api.h"'
 check "front end into front end" 1 "includes plugins/ofx/ofx_api.h: layer 'cli' may not include layer 'ofx'"
 
 fresh
-plant cli/io/io.h '#include "graph/graph.h"'
-check "runner: lower folder includes a higher one" 1 "cli/io/io.h:$(wc -l <"$W/tree/cli/io/io.h"): includes cli/graph/graph.h: layer 'cli/io' may not include layer 'cli/graph'"
+plant engine/graph_eval.c '#include "commands/commands.h"'
+check "engine includes the runner" 1 "engine/graph_eval.c:$(wc -l <"$W/tree/engine/graph_eval.c"): includes cli/commands/commands.h: layer 'engine' may not include layer 'cli/commands'"
+
+fresh
+plant io/io_parts.h '#include "engine/graph_model.h"'
+check "I/O library includes the engine's internals" 1 "io/io_parts.h:$(wc -l <"$W/tree/io/io_parts.h"): includes engine/graph_model.h: layer 'io' may not include layer 'engine'"
 
 fresh
 plant core/base/internal_simd.h '#include "internal_state.h"'

@@ -13,7 +13,7 @@
 #ifndef NPRFX_TESTS_OFX_HOST_H
 #define NPRFX_TESTS_OFX_HOST_H
 
-#include "graph/graph.h"
+#include "nprfx/graph.h"
 #include "nprfx/nprfx.h"
 
 typedef struct nprfx_ofx_host nprfx_ofx_host;

@@ -1,0 +1,62 @@
+/* nprfx graph engine — engine_util.h: the clocks, strdup and a parallel byte copy. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "engine_util.h"
+
+double engine_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+double engine_cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+char *engine_strdup(const char *s)
+{
+    if (!s) return NULL;
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d) memcpy(d, s, n);
+    return d;
+}
+
+typedef struct bytes_job {
+    const unsigned char *src; /* NULL: zero */
+    unsigned char *dst;
+    size_t bytes;
+    int parts;
+} bytes_job;
+
+static void bytes_parts(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const bytes_job *j = user;
+    for (int p = begin; p < end; p++) {
+        size_t a = j->bytes * (size_t)p / (size_t)j->parts;
+        size_t b = j->bytes * (size_t)(p + 1) / (size_t)j->parts;
+        if (j->src)
+            memcpy(j->dst + a, j->src + a, b - a);
+        else
+            memset(j->dst + a, 0, b - a);
+    }
+}
+
+void engine_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,
+                           int parts)
+{
+    bytes_job j = {src, dst, bytes, parts > 0 ? parts : 1};
+    if (j.parts == 1 || !ex) {
+        bytes_parts(&j, 0, j.parts, 0);
+        return;
+    }
+    nprfx_parallel_for(ex, j.parts, 1, bytes_parts, &j);
+}

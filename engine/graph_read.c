@@ -1,0 +1,271 @@
+/* nprfx CLI — a graph's plates: read nodes (the channels the graph uses, the motion channels a
+ * convention appends, colour conversion; whole frames or a strip of rows) and synth nodes. */
+#define _DEFAULT_SOURCE
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "nprfx/graph.h"
+#include "graph_frames.h"
+#include "graph_memory.h"
+#include "graph_model.h"
+#include "graph_plan.h"
+#include "graph_read.h"
+#include "graph_resolve.h"
+#include "graph_variant.h"
+#include "nprfx/channels.h"
+#include "nprfx/io.h"
+#include "nprfx/io_oiio.h"
+#include "nprfx/io.h"
+#include "engine_util.h"
+
+static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *file,
+                                        nprfx_plate *plate)
+{
+    int idx[4];
+    double sign[4];
+    nprfx_result r = internal_graph_motion_sources(g, n, file, (const char *const *)plate->names,
+                                                   plate->nchannels, idx, sign);
+    if (r) return r;
+    int nc = plate->nchannels, nn = nc + 4;
+    size_t npix =
+        (size_t)nprfx_rect_width(plate->bounds) * (size_t)nprfx_rect_height(plate->bounds);
+    float *px = malloc(npix * (size_t)nn * sizeof(float));
+    char **names = realloc(plate->names, (size_t)nn * sizeof *names);
+    if (!px || !names) {
+        free(px);
+        if (names) plate->names = names;
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
+    }
+    plate->names = names;
+    for (int k = 0; k < 4; k++)
+        names[nc + k] = engine_strdup(internal_graph_motion_names[k]);
+    for (size_t p = 0; p < npix; p++) {
+        const float *s = plate->pixels + p * (size_t)nc;
+        float *d = px + p * (size_t)nn;
+        memcpy(d, s, (size_t)nc * sizeof(float));
+        for (int k = 0; k < 4; k++) {
+            float v = s[idx[k]] * (float)sign[k];
+            d[nc + k] = isfinite(v) ? v : 0.0f;
+        }
+    }
+    free(plate->pixels);
+    plate->pixels = px;
+    plate->nchannels = nn;
+    return NPRFX_OK;
+}
+
+static int push_want(gnode *n, char *sel)
+{
+    if ((n->nwants & (n->nwants - 1)) == 0) { /* 0, 1, 2, 4, ...: grow to the next power */
+        char **w = realloc(n->wants, (size_t)(n->nwants ? 2 * n->nwants : 1) * sizeof *w);
+        if (!w) return 0;
+        n->wants = w;
+    }
+    n->wants[n->nwants++] = sel;
+    return 1;
+}
+
+/* The channels the graph names on each read node: every reference's selection and the vectors
+ * convention's channels, which pick the part of a multi-part file when none is given. One pass
+ * over all references, at the first read. */
+static nprfx_result gather_wants(nprfx_graph *g)
+{
+    for (int i = 0; i < g->count; i++) {
+        gnode *n = &g->nodes[i];
+        n->wants_known = 1;
+        for (int k = 0; k < n->ninputs; k++) {
+            const gref *ref = &n->inputs[k];
+            if (ref->src < 0 || !ref->sel || g->nodes[ref->src].kind != GK_READ) continue;
+            if (!push_want(&g->nodes[ref->src], ref->sel))
+                return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        }
+        const char *layer =
+            n->kind == GK_READ && n->vectors ? internal_graph_motion_layer(n->vectors) : NULL;
+        if (layer && !push_want(n, (char *)layer))
+            return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    return NPRFX_OK;
+}
+
+typedef struct read_pick {
+    nprfx_graph *g;
+    int node;
+} read_pick;
+
+static int pick_channels(void *user, const char *const *names, int n, int *pick)
+{
+    const read_pick *rp = user;
+    return internal_graph_read_pick(rp->g, rp->node, names, n, pick);
+}
+
+/* What a read makes of the channels it read, the same for a whole plate and a strip of rows:
+ * the note on parts and views (once per node), the motion channels, the colour conversion. */
+static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, nprfx_plate *plate)
+{
+    nprfx_result r = NPRFX_OK;
+    if (plate->note && !n->noted && g->notice) {
+        char msg[4600];
+        snprintf(msg, sizeof msg, "%s: read '%s': %s", plate->note_is_warning ? "warning" : "note",
+                 n->name, plate->note);
+        g->notice(g->notice_user, msg);
+    }
+    n->noted = 1;
+    if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, plate)))
+        return r;
+    if (n->colorspace) {
+        int idx[3], amb;
+        char bad[64];
+        if (nprfx_channels_select((const char *const *)plate->names, plate->nchannels, "R,G,B", idx,
+                                  3, bad, sizeof bad, &amb) == 3 &&
+            idx[1] == idx[0] + 1 && idx[2] == idx[0] + 2) {
+            nprfx_image rgb = nprfx_plate_view(plate, idx[0], 3);
+            nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
+            r = nprfx_context_create_scoped(n->ctx, file, &fctx);
+            if (!r)
+                r = g->io.convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+            nprfx_context_destroy(fctx);
+        }
+    }
+    return r;
+}
+
+static nprfx_read_options read_options_of(gnode *n, read_pick *rp)
+{
+    nprfx_read_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.size = sizeof ro;
+    ro.part = n->part;
+    ro.view = n->read_view;
+    ro.want = (const char *const *)n->wants;
+    ro.nwant = n->nwants;
+    /* Only the channels the graph uses are read (the plan picks them from the names the read
+     * would deliver): a renderer's plate has 23-56, a graph reads a dozen. */
+    ro.pick = pick_channels;
+    ro.pick_user = rp;
+    return ro;
+}
+
+nprfx_result internal_graph_read_rows_open(nprfx_graph *g, int node, int frame, char *file,
+                                           size_t n, nprfx_plate *shape, nprfx_row_reader **rr)
+{
+    gnode *nd = &g->nodes[node];
+    internal_graph_resolve_path(g, g->base_dir, nd->path, frame, file, n);
+    nprfx_result r = nd->wants_known ? NPRFX_OK : gather_wants(g);
+    if (r) return r;
+    read_pick rp = {g, node};
+    nprfx_read_options ro = read_options_of(nd, &rp);
+    return g->io.rows_open(nd->ctx, file, &ro, shape, rr);
+}
+
+nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file,
+                                      nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
+                                      int y1, nprfx_plate *out)
+{
+    gnode *n = &g->nodes[node];
+    memset(out, 0, sizeof *out);
+    int w = nprfx_rect_width(shape->bounds), nc = shape->nchannels;
+    out->bounds = nprfx_rect_make(shape->bounds.x0, y0, shape->bounds.x1, y1);
+    out->display = shape->display;
+    out->pixel_aspect = shape->pixel_aspect;
+    out->pixels = malloc((size_t)w * (size_t)(y1 - y0) * (size_t)nc * sizeof(float));
+    out->names = internal_graph_names_dup((const char *const *)shape->names, nc);
+    if (!out->pixels || !out->names) {
+        free(out->pixels);
+        for (int c = 0; out->names && c < nc; c++)
+            free(out->names[c]);
+        free(out->names);
+        memset(out, 0, sizeof *out);
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
+    }
+    out->nchannels = nc;
+    /* The read's note on parts and views goes out with its first strip, as with a whole plate. */
+    if (!n->noted && shape->note) {
+        out->note = engine_strdup(shape->note);
+        out->note_is_warning = shape->note_is_warning;
+    }
+    nprfx_result r = g->io.rows_read(n->ctx, rr, y0, y1, out->pixels);
+    if (!r) r = finish_plate(g, n, file, out);
+    if (r) nprfx_plate_free(out);
+    return r;
+}
+
+nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprfx_image *im,
+                                       char ***names, gmeta *meta)
+{
+    gnode *n = &g->nodes[node];
+    char file[4096];
+    internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
+    nprfx_plate plate;
+    memset(&plate, 0, sizeof plate);
+    nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
+    if (r) return r;
+    read_pick rp = {g, node};
+    nprfx_read_options ro = read_options_of(n, &rp);
+    if ((r = g->io.read(n->ctx, file, &ro, &plate))) return r;
+    if ((r = finish_plate(g, n, file, &plate))) {
+        nprfx_plate_free(&plate);
+        return r;
+    }
+    im->data = plate.pixels;
+    im->channels = plate.nchannels;
+    im->pixel_stride = plate.nchannels;
+    im->row_stride = (ptrdiff_t)nprfx_rect_width(plate.bounds) * plate.nchannels;
+    im->bounds = plate.bounds;
+    *names = plate.names;
+    internal_graph_variant_plate(g, im, *names);
+    meta->display = plate.display;
+    meta->pixel_aspect = plate.pixel_aspect;
+    /* The appended motion channels are floats of their own. */
+    unsigned char *types = realloc(plate.types, (size_t)plate.nchannels);
+    if (types) {
+        for (int c = 0; c < plate.nchannels; c++)
+            if (c >= plate.nchannels - (n->vectors && strcmp(n->vectors, "none") ? 4 : 0))
+                types[c] = NPRFX_PIXEL_FLOAT;
+        meta->types = types;
+        plate.types = NULL;
+    }
+    internal_graph_frame_adopt(g, node, im);
+    plate.pixels = NULL;
+    plate.names = NULL;
+    plate.nchannels = 0;
+    nprfx_plate_free(&plate);
+    return NPRFX_OK;
+}
+
+nprfx_result internal_graph_synth_plate(nprfx_graph *g, int node, int frame, nprfx_image *im,
+                                        char ***names, gmeta *meta)
+{
+    gnode *n = &g->nodes[node];
+    const char *const *all = nprfx_synth_channel_names();
+    int nc = nprfx_synth_channel_count(), pick[1024];
+    /* Only the channels the readers take are made (as a read reads only those): the plate is
+     * never whole, and unpicked motion is not computed. */
+    int count = internal_graph_plate_pick(g, node, all, nc, pick);
+    if (count <= 0) {
+        count = nc;
+        for (int c = 0; c < nc; c++)
+            pick[c] = c;
+    }
+    char what[300];
+    snprintf(what, sizeof what, "node '%s': synth frame", n->name);
+    nprfx_result r = internal_graph_frame_alloc(
+        g, node, what, nprfx_rect_make(0, 0, n->width, n->height), count, im);
+    if (r) return r;
+    if ((r = nprfx_synth_render_channels(n->ctx, n->scene, frame, pick, count, im))) {
+        internal_graph_frame_release(g, im);
+        return r;
+    }
+    const char *picked[1024];
+    for (int c = 0; c < count; c++)
+        picked[c] = all[pick[c]];
+    *names = internal_graph_names_dup(picked, count);
+    if (!*names) {
+        internal_graph_frame_release(g, im);
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    internal_graph_variant_plate(g, im, *names);
+    meta->display = im->bounds;
+    meta->pixel_aspect = 1.0f;
+    return NPRFX_OK;
+}

@@ -1,0 +1,253 @@
+/* nprfx — the graph engine: load a JSON graph of nodes (docs/graphs.md), validate it against
+ * the node descriptors, and evaluate it frame by frame under a memory plan, with a bounded cache
+ * of node results and strip renders. Plates are read and outputs written through the nprfx_io
+ * the caller gives (nprfx/io.h; libnprfx-io's nprfx_io_oiio()). The runner (`nprfx run`), the
+ * OpenFX test host and any binding share this one engine. */
+#ifndef NPRFX_GRAPH_H
+#define NPRFX_GRAPH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nprfx/export.h"
+#include "nprfx/io.h"
+#include "nprfx/node.h"
+#include "nprfx/seq.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct nprfx_graph nprfx_graph;
+
+/* Renders one window of one node instead of calling desc->render directly: the OpenFX test
+ * host uses it to drive the nodes through the plugin bundle. `instance` is a per-graph-node slot
+ * (NULL at first) the hook may keep a plugin instance in; it is released with `release`. */
+typedef struct nprfx_render_hook {
+    nprfx_result (*render)(void *user, const nprfx_render_args *args, void **instance);
+    void (*release)(void *user, const nprfx_node_desc *node, void *instance);
+    void *user;
+    /* Non-zero: the hook's renders write the nodes' exports (NPRFX_PARAM_EXPORT) themselves, as
+     * a plug-in in a host must, so the runner does not write them too: a file that appears is
+     * then the plug-in's. */
+    int exports;
+} nprfx_render_hook;
+
+/* For a render hook, during its render: the node connected to input `input` of the node being
+ * rendered (fetch_user is the render's args->fetch_user), with its params; NULL when the input is
+ * not connected or comes from a read or synth. The OpenFX test host's --footage mode serves a
+ * plug-in the picture a flow node reads instead of the flow (tests/ofxhost/render.c). */
+NPRFX_API const nprfx_node_desc *nprfx_graph_hook_upstream(void *fetch_user, int input,
+                                                           const nprfx_value **params);
+/* Input `up_input` of that node at `frame`, with the channels that node reads: a view valid as
+ * args->fetch's are (NPRFX_FETCH_KEEP further fetches). */
+NPRFX_API nprfx_result nprfx_graph_hook_fetch_upstream(void *fetch_user, int input, int up_input,
+                                                       int frame, nprfx_image *out);
+
+/* How the graph's plates and seeds are altered, for measuring a look against its baselines
+ * (nprfx measure). */
+typedef enum nprfx_graph_variant {
+    NPRFX_VARIANT_NONE = 0, /* the graph as it is */
+    /* Patterns stuck to the screen: the plates' motion vectors are zeroed and their anchors
+     * (Pref, rest, UV, P, Position) replaced by screen position, x / width and y / width. */
+    NPRFX_VARIANT_SHOWER_DOOR = 1,
+    /* Patterns drawn anew every frame: every node's 'seed' param is changed each frame. */
+    NPRFX_VARIANT_WHITE = 2
+} nprfx_graph_variant;
+
+typedef struct nprfx_graph_options {
+    size_t size;                   /* sizeof(nprfx_graph_options) */
+    size_t cache_bytes;            /* bound on cached node results (0: 2 GiB) */
+    int tile;                      /* > 0: render nodes in tiles of this size (tests invariance) */
+    const char *output_dir;        /* prefix for relative write paths (NULL: current directory) */
+    const nprfx_render_hook *hook; /* NULL: call the node's render function */
+    int variant;                   /* nprfx_graph_variant (appended: read when size covers it) */
+    /* Non-zero: a temporal node whose render fetches many other frames (a recursion's warm-up)
+     * reports them on stderr once it has taken a second, about once a second (appended). */
+    int progress;
+    /* Appended: what a user should know but that is no error, e.g. which part of a multi-part
+     * file a read took and which parts it left out; once per read node (NULL: silent). */
+    void (*notice)(void *user, const char *message);
+    void *notice_user;
+    /* Appended. Non-zero: no frame-buffer pool and no memory plan: every frame is calloc'd and
+     * freed, and results stay in the cache until evicted (--no-pool; the pixels must not
+     * change). */
+    int no_pool;
+    /* Appended. Write nodes whose whole chain renders by rows (NPRFX_NODE_ROWS) are rendered a
+     * strip of this many rows at a time, reading and writing only those rows (plus the margins
+     * the footprints need): > 0 always, 0 only when whole frames would pass the memory limit
+     * (nprfx_graph_plan chooses), < 0 never (--strip-rows). */
+    int strip_rows;
+    /* Appended: how the graph reads plates and writes outputs (NULL: it cannot; a read or write
+     * fails saying so). The table is copied at load. */
+    const nprfx_io *io;
+} nprfx_graph_options;
+
+/* What one node of a graph cost since it loaded (nprfx run --stats, bench-graph). */
+typedef struct nprfx_graph_node_stats {
+    const char *name, *type; /* type: the node's id, or "read", "synth", "write" */
+    int kind;                /* 0 processing node, 1 read, 2 synth, 3 write */
+    long long calls;         /* frames it rendered (a node re-rendered after eviction counts
+                                again) */
+    double seconds;          /* in its own render, read or write, not in nodes it fetched */
+    size_t bytes;            /* frames it allocated: outputs and channel scratch */
+    size_t fresh_bytes;      /* of those, the ones the pool had no buffer for */
+} nprfx_graph_node_stats;
+
+/* The graph's memory estimate for one frame (nprfx_graph_plan). */
+typedef struct nprfx_graph_plan_info {
+    uint64_t peak;         /* bytes of frames held at the most, the pool's idle ones included */
+    uint64_t need;         /* of those, the most in use at once: what must fit the limit */
+    uint64_t limit;        /* the memory limit (UINT64_MAX: none) */
+    int width, height;     /* the frame size the estimate is for */
+    const char *peak_node; /* the node whose output frame makes the peak */
+    /* Appended: > 0 when the frames render a strip of this many rows at a time; need is then
+     * what strips hold at once (whole_need: what whole frames would). */
+    int strip_rows;
+    uint64_t whole_need;
+    /* Appended: of need, the bytes stateful nodes keep between frames (their caches, as
+     * desc->state_bytes bounds them). */
+    uint64_t state;
+} nprfx_graph_plan_info;
+
+/* Parse a graph file. Read paths are resolved relative to the graph file's directory; write
+ * paths relative to the current directory (or output_dir). */
+NPRFX_API nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path,
+                                        const nprfx_graph_options *opt, nprfx_graph **out);
+/* Parse a graph from JSON text (base_dir resolves relative read paths). */
+NPRFX_API nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char *base_dir,
+                                         const nprfx_graph_options *opt, nprfx_graph **out);
+NPRFX_API void nprfx_graph_free(nprfx_graph *g);
+
+/* Override a value: "node.param=value" (params of processing nodes, or path/preview/... of read
+ * and write nodes). */
+NPRFX_API nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment);
+
+/* Replace the graph's "frames" (the shot temporal nodes see, and the frames rendered by
+ * default), e.g. for a shot longer or shorter than the graph was written for (--shot). */
+NPRFX_API nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames);
+/* The shot's frames from the graph's "frames" entry (or `override`, e.g. from --frames, which
+ * must lie inside the shot when the graph declares one). Free with nprfx_seq_frames_free. */
+NPRFX_API nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override,
+                                          nprfx_frame_list *out);
+
+/* Evaluate every write node at `frame`; *written receives the number of files written. */
+NPRFX_API nprfx_result nprfx_graph_render_frame(nprfx_graph *g, int frame, int *written);
+
+/* As nprfx_graph_render_frame, but the write nodes only evaluate their inputs: nothing is
+ * written (bench-graph times the compute apart from the file I/O). */
+NPRFX_API nprfx_result nprfx_graph_compute_frame(nprfx_graph *g, int frame);
+
+/* Describe the write nodes' outputs ("out/x.####.exr (preview out/x.####.png)"), one per line. */
+NPRFX_API void nprfx_graph_describe_outputs(const nprfx_graph *g, char *buf, size_t n);
+
+/* Every file pattern the graph writes: write nodes' paths and previews and the export params of
+ * processing nodes, placed under the output directory as their frames' files are, frame tokens
+ * kept ("out/x.####.exr"); in graph order, possibly repeated. Free with
+ * nprfx_graph_output_patterns_free. */
+NPRFX_API nprfx_result nprfx_graph_output_patterns(const nprfx_graph *g, char ***paths, int *count);
+NPRFX_API void nprfx_graph_output_patterns_free(char **paths, int count);
+
+/* Every read node's file pattern, resolved as a render resolves it (relative to the graph file),
+ * frame tokens kept; *nodes (may be NULL) receives the read nodes' names (the graph's own strings,
+ * valid while it lives). In graph order. Free the paths with nprfx_graph_output_patterns_free and
+ * *nodes with free. */
+NPRFX_API nprfx_result nprfx_graph_read_patterns(const nprfx_graph *g, char ***paths,
+                                                 const char ***nodes, int *count);
+
+/* Whether the graph has a shot of its own ("frames", or --shot through nprfx_graph_set_shot);
+ * *first and *last receive the shot's first and last frame (its frames' range) when it has. */
+NPRFX_API int nprfx_graph_shot(const nprfx_graph *g, int *first, int *last);
+
+/* Warnings, one a line into buf, when rendering `frames` frames of g would take hours: many frames,
+ * or a node whose footprint (nprfx_node_footprint) makes every pixel read a huge area. Before a
+ * single pixel is read, so it knows no frame size: counts, not seconds. Returns how many. */
+NPRFX_API int nprfx_graph_cost_warnings(nprfx_graph *g, int frames, char *buf, size_t n);
+
+/* Whether the graph has a node called name. */
+NPRFX_API int nprfx_graph_has_node(const nprfx_graph *g, const char *name);
+/* Number of write nodes (a graph to run needs at least one). */
+NPRFX_API int nprfx_graph_write_count(const nprfx_graph *g);
+
+/* Evaluate node `name` at `frame` without writing; the view stays valid until the next call
+ * into the graph. */
+NPRFX_API nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame,
+                                        nprfx_image *out);
+
+/* Estimate the memory that evaluating `frame` needs from the graph and the frame size alone
+ * (plates' headers, synth sizes, "format"; no pixel is read), as the memory plan runs it: each
+ * result freed after its last consumer, a temporal source's frames kept one frame longer, freed
+ * buffers idle in the pool until reused. NPRFX_ERR_OUT_OF_MEMORY, naming the node and the sizes,
+ * when the frames in use at once (need; idle buffers are given up under the limit) exceed the
+ * memory limit; any other problem (a missing file, a bad channel name) is left to the render, which
+ * reports it as it always has, and gives NPRFX_OK with out->peak 0. */
+NPRFX_API nprfx_result nprfx_graph_plan(nprfx_graph *g, int frame, nprfx_graph_plan_info *out);
+
+/* Per-node costs since the graph loaded: *stats gets g's count entries (valid while g lives). */
+NPRFX_API int nprfx_graph_stats(const nprfx_graph *g, const nprfx_graph_node_stats **stats);
+/* The most bytes the graph's frames held at once (cached, in use and idle in the pool). */
+NPRFX_API size_t nprfx_graph_mem_peak(const nprfx_graph *g);
+
+/* Make every read node a synth node of `scene` at w x h, and every synth node and "format" that
+ * size (bench-graph: a graph timed without its plates). */
+NPRFX_API nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h,
+                                                    const char *scene);
+
+/* Seconds spent inside node render functions since the last call (for bench); resets. */
+NPRFX_API double nprfx_graph_take_render_seconds(nprfx_graph *g);
+/* The process's CPU seconds (all threads) over the same spans: on a loaded machine, what the
+ * renders cost rather than how long they waited for a core; resets. */
+NPRFX_API double nprfx_graph_take_render_cpu_seconds(nprfx_graph *g);
+/* The bytes of frames the renders read (each input once) and wrote (the output once) since the
+ * last call: the memory traffic no implementation can avoid (bench's floor); resets. */
+NPRFX_API double nprfx_graph_take_render_bytes(nprfx_graph *g);
+/* Items the nodes counted since the last call (nprfx_render_args.items; for bench); resets. */
+NPRFX_API long long nprfx_graph_take_render_items(nprfx_graph *g);
+
+/* ---- checking and running a shot ------------------------------------------------------------ */
+
+/* Everything a render of `frames` would refuse before a pixel is read: a graph without a write
+ * node, and the memory plan of its first frame (nprfx_graph_plan; plan may be NULL). Reads plate
+ * headers only and allocates no frame. */
+NPRFX_API nprfx_result nprfx_graph_check(nprfx_graph *g, const nprfx_frame_list *frames,
+                                         nprfx_graph_plan_info *plan);
+
+/* What nprfx_graph_run reports after each frame. */
+typedef struct nprfx_graph_progress {
+    int done, count;     /* frames rendered or failed so far (this one included), of count */
+    int frame;           /* the frame just finished */
+    nprfx_result result; /* NPRFX_OK, or the frame's error (its message raised through ctx) */
+    int written;         /* files the frame wrote */
+    double seconds;      /* the frame's wall time */
+    double elapsed;      /* since the run began */
+} nprfx_graph_progress;
+
+typedef struct nprfx_graph_run_options {
+    size_t size;    /* sizeof(nprfx_graph_run_options) */
+    int keep_going; /* non-zero: a failed frame does not stop the run */
+    /* After each frame, rendered or failed (NULL: none); a non-zero return stops the run there
+     * (a user's cancel), which is no error. */
+    int (*progress)(void *user, const nprfx_graph_progress *p);
+    /* At the end of the run: every node's costs since the graph loaded (NULL: none). */
+    void (*stats)(void *user, const nprfx_graph_node_stats *stats, int count);
+    void *user;
+} nprfx_graph_run_options;
+
+/* What a run did. */
+typedef struct nprfx_graph_run_summary {
+    int rendered, failed; /* frames */
+    int files;            /* files written */
+    double seconds;
+} nprfx_graph_run_summary;
+
+/* Render `frames` in order: each frame's write nodes write their files (a failed frame writes
+ * none and leaves the others' alone). NPRFX_OK when every frame rendered; otherwise the first
+ * failed frame's code. summary may be NULL. */
+NPRFX_API nprfx_result nprfx_graph_run(nprfx_graph *g, const nprfx_frame_list *frames,
+                                       const nprfx_graph_run_options *opt,
+                                       nprfx_graph_run_summary *summary);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
