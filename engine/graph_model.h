@@ -10,13 +10,15 @@
 #include "nprfx/io.h"
 #include "nprfx/nprfx.h"
 
-typedef enum gkind { GK_NODE, GK_READ, GK_SYNTH, GK_WRITE } gkind;
+typedef enum gkind {
+    GK_NODE = NPRFX_GRAPH_NODE,
+    GK_READ = NPRFX_GRAPH_READ,
+    GK_SYNTH = NPRFX_GRAPH_SYNTH,
+    GK_WRITE = NPRFX_GRAPH_WRITE
+} gkind;
 
-typedef struct gref {
-    int src;   /* node index, -1 when not connected */
-    char *sel; /* channel selection, NULL: by the input's AOV hint */
-    char *text;
-} gref;
+/* An input's reference (nprfx/graph.h). */
+typedef nprfx_graph_ref gref;
 
 typedef struct gnode {
     char *name;

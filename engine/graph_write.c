@@ -228,7 +228,8 @@ int nprfx_graph_has_node(const nprfx_graph *g, const char *name)
     return internal_graph_find_node(g, name) >= 0;
 }
 
-nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out)
+nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx_image *out,
+                              const char *const **names)
 {
     int i = internal_graph_find_node(g, name);
     if (i < 0 || g->nodes[i].kind == GK_WRITE)
@@ -248,5 +249,6 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
     r = internal_graph_eval(g, i, frame, &e);
     g->external = 0;
     if (!r) *out = e->im;
+    if (!r && names) *names = (const char *const *)e->names;
     return r;
 }

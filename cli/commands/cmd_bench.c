@@ -148,7 +148,7 @@ int cli_cmd_bench(int argc, char **argv)
         nprfx_graph_take_render_cpu_seconds(g);
         nprfx_graph_take_render_items(g);
         nprfx_graph_take_render_bytes(g);
-        if (nprfx_graph_eval(g, "bench", 1 + f, &out)) {
+        if (nprfx_graph_eval(g, "bench", 1 + f, &out, NULL)) {
             fprintf(stderr, "nprfx bench: %s\n", cli_message(env.ctx));
             status = 1;
             goto done;

@@ -14,9 +14,6 @@
 #include "cmd_measure_flow.h"
 #include "commands.h"
 #include "nprfx/graph.h"
-#include "engine/graph_eval.h"
-#include "engine/graph_model.h"
-#include "engine/graph_names.h"
 #include "nprfx/channels.h"
 #include "nprfx/metrics.h"
 #include "util/cli_util.h"
@@ -76,6 +73,24 @@ static double lum(const float *p, int c)
     return c >= 3 ? 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2] : p[0];
 }
 
+/* Node i's kind (nprfx_graph_node_kind), -1 when there is none. */
+static int node_kind(const nprfx_graph *g, int i)
+{
+    nprfx_graph_node_info info = {sizeof info};
+    return nprfx_graph_node(g, i, &info) ? -1 : info.kind;
+}
+static const char *node_name(const nprfx_graph *g, int i)
+{
+    nprfx_graph_node_info info = {sizeof info};
+    return nprfx_graph_node(g, i, &info) ? "" : info.name;
+}
+/* Whether node i is a read or synth node. */
+static int is_plate(const nprfx_graph *g, int i)
+{
+    int k = node_kind(g, i);
+    return k == NPRFX_GRAPH_READ || k == NPRFX_GRAPH_SYNTH;
+}
+
 /* Evaluate "NODE" or "NODE:CHANNELS" of g at frame into an owned copy (channels as selected; with
  * want_lum, one channel of luminance). */
 static nprfx_result take(nprfx_graph *g, const char *spec, int frame, int want_lum,
@@ -84,29 +99,31 @@ static nprfx_result take(nprfx_graph *g, const char *spec, int frame, int want_l
     char name[256];
     const char *colon = strchr(spec, ':');
     snprintf(name, sizeof name, "%.*s", colon ? (int)(colon - spec) : (int)strlen(spec), spec);
-    int node = internal_graph_find_node(g, name);
-    if (node < 0 || g->nodes[node].kind == GK_WRITE)
-        return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to measure",
+    nprfx_context *ctx = nprfx_graph_context(g);
+    int kind = node_kind(g, nprfx_graph_node_index(g, name));
+    if (kind < 0 || kind == NPRFX_GRAPH_WRITE)
+        return nprfx_error(ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to measure",
                            name);
-    centry *e;
-    nprfx_result r = internal_graph_eval(g, node, frame, &e);
+    nprfx_image im;
+    const char *const *names;
+    nprfx_result r = nprfx_graph_eval(g, name, frame, &im, &names);
     if (r) return r;
-    int idx[NPRFX_MAX_CHANNELS], n = e->im.channels < NPRFX_MAX_CHANNELS ? e->im.channels : 4;
+    int idx[NPRFX_MAX_CHANNELS], n = im.channels < NPRFX_MAX_CHANNELS ? im.channels : 4;
     for (int c = 0; c < n; c++)
         idx[c] = c;
     if (colon) {
         char bad[128];
         int amb = 0;
-        n = nprfx_channels_select((const char *const *)e->names, e->im.channels, colon + 1, idx,
-                                  NPRFX_MAX_CHANNELS, bad, sizeof bad, &amb);
+        n = nprfx_channels_select(names, im.channels, colon + 1, idx, NPRFX_MAX_CHANNELS, bad,
+                                  sizeof bad, &amb);
         if (n < 1)
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT, "'%s': '%s' %s in node '%s'", spec,
+            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT, "'%s': '%s' %s in node '%s'", spec,
                                bad, amb ? "matches several channels" : "is not a channel", name);
     }
-    if ((r = nprfx_image_alloc(g->ctx, e->im.bounds, want_lum ? 1 : n, out))) return r;
+    if ((r = nprfx_image_alloc(ctx, im.bounds, want_lum ? 1 : n, out))) return r;
     for (int y = out->bounds.y0; y < out->bounds.y1; y++)
         for (int x = out->bounds.x0; x < out->bounds.x1; x++) {
-            const float *s = nprfx_image_at(&e->im, x, y);
+            const float *s = nprfx_image_at(&im, x, y);
             float *d = nprfx_image_at(out, x, y), v[NPRFX_MAX_CHANNELS];
             for (int c = 0; c < n; c++)
                 v[c] = s[idx[c]];
@@ -122,8 +139,8 @@ static nprfx_result take(nprfx_graph *g, const char *spec, int frame, int want_l
 static int only_plate(const nprfx_graph *g)
 {
     int found = -1;
-    for (int i = 0; i < g->count; i++)
-        if (g->nodes[i].kind == GK_READ || g->nodes[i].kind == GK_SYNTH) {
+    for (int i = 0; i < nprfx_graph_node_count(g); i++)
+        if (is_plate(g, i)) {
             if (found >= 0) return -1;
             found = i;
         }
@@ -205,8 +222,8 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
         status = MEASURE_USAGE;
         goto done;
     }
-    int plate = o->plate ? internal_graph_find_node(g, o->plate) : only_plate(g);
-    if (plate < 0 || (g->nodes[plate].kind != GK_READ && g->nodes[plate].kind != GK_SYNTH)) {
+    int plate = o->plate ? nprfx_graph_node_index(g, o->plate) : only_plate(g);
+    if (!is_plate(g, plate)) {
         fprintf(stderr, "nprfx measure: %s\n",
                 o->plate ? "--plate does not name a read or synth node"
                          : "the graph has several plates: name the one with the motion, --plate");
@@ -215,7 +232,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
     }
     char motion_spec[300];
     snprintf(motion_spec, sizeof motion_spec, "%s:motion_prev.X,motion_prev.Y",
-             g->nodes[plate].name);
+             node_name(g, plate));
     for (int i = 0; i < frames.count; i++) {
         int f = frames.frames[i];
         if ((r = take(g, o->node, f, 1, &cur))) break;
@@ -224,7 +241,7 @@ static int measure(nprfx_context *ctx, const measure_opts *o)
                 fprintf(stderr,
                         "nprfx measure: plate '%s' has no motion_prev channels (a read node "
                         "needs \"vectors\", e.g. \"blender\")\n",
-                        g->nodes[plate].name);
+                        node_name(g, plate));
                 break;
             }
             nprfx_warp_error we;

@@ -6,7 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/graph_model.h"
 #include "host_natron.h"
 #include "host_project.h"
 #include "ofx_names.h"
@@ -282,7 +281,7 @@ static const char *const rgb_shuffle = "6.000000238e-01 2.399939001e-01 3.900053
 static const char *const rgb_math = "4.800030589e-01 6.599984765e-01 1.000000000e+00";
 static const char *const rgb_write = "7.499961853e-01 7.499961853e-01 0.000000000e+00";
 
-static void param_knob(ntp *w, const gnode *n, int i)
+static void param_knob(ntp *w, const nprfx_graph_node_info *n, int i)
 {
     const nprfx_param_desc *p = &n->desc->params[i];
     const nprfx_value *v = &n->params[i];
@@ -323,7 +322,7 @@ static void param_knob(ntp *w, const gnode *n, int i)
 
 static void ofx_node(ntp *w, const host_node *hn)
 {
-    const gnode *n = hn->n;
+    const nprfx_graph_node_info *n = hn->n;
     const nprfx_node_desc *d = n->desc;
     int knobs = 0;
     for (int i = 0; i < d->num_params; i++)
@@ -358,7 +357,8 @@ nprfx_result host_write_natron(const host_project *hp, FILE *f)
     for (int i = 0; i < hp->nsets; i++)
         total += 1 + hp->sets[i].has_sign;
     gui_node *gui = calloc((size_t)total, sizeof *gui);
-    if (!gui) return nprfx_error(hp->g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    if (!gui)
+        return nprfx_error(nprfx_graph_context(hp->g), NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     int ng = 0;
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"yes\" ?>\n"
                "<!DOCTYPE boost_serialization>\n"
@@ -398,7 +398,7 @@ nprfx_result host_write_natron(const host_project *hp, FILE *f)
         const host_chanset *cs = &hp->sets[i];
         const char *rname = NULL;
         for (int r = 0; r < hp->nreads; r++)
-            if (hp->reads[r].n == &hp->g->nodes[cs->read]) rname = hp->reads[r].name;
+            if (hp->reads[r].n == &hp->info[cs->read]) rname = hp->reads[r].name;
         node_begin(&w, cs->shuffle, "net.sf.openfx.ShufflePlugin", 2, 0, cs->count);
         static const char *const outs[4] = {"outputR", "outputG", "outputB", "outputA"};
         for (int c = 0; c < cs->count; c++) {
@@ -503,5 +503,6 @@ nprfx_result host_write_natron(const host_project *hp, FILE *f)
     fprintf(f, "\t</NodesGui>\n");
     fprintf(f, gui_tail, hp->first_frame, hp->last_frame);
     free(gui);
-    return ferror(f) ? nprfx_error(hp->g->ctx, NPRFX_ERR_IO, "write error") : NPRFX_OK;
+    return ferror(f) ? nprfx_error(nprfx_graph_context(hp->g), NPRFX_ERR_IO, "write error")
+                     : NPRFX_OK;
 }

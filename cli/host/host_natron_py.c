@@ -5,7 +5,6 @@
  * script name with the graph's values; inputs are connected by clip label. */
 #include <string.h>
 
-#include "engine/graph_model.h"
 #include "host_natron_py.h"
 #include "host_project.h"
 #include "ofx_names.h"
@@ -78,7 +77,7 @@ static const char prelude[] =
     "    node.setScriptName(name)\n"
     "    return node\n\n\n";
 
-static void param_line(FILE *f, const gnode *n, const char *var, int i)
+static void param_line(FILE *f, const nprfx_graph_node_info *n, const char *var, int i)
 {
     const nprfx_param_desc *p = &n->desc->params[i];
     const nprfx_value *v = &n->params[i];
@@ -148,7 +147,7 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
         const host_chanset *cs = &hp->sets[i];
         const char *rname = NULL;
         for (int r = 0; r < hp->nreads; r++)
-            if (hp->reads[r].n == &hp->g->nodes[cs->read]) rname = hp->reads[r].name;
+            if (hp->reads[r].n == &hp->info[cs->read]) rname = hp->reads[r].name;
         fprintf(f, "    %s = create(app, \"net.sf.openfx.ShufflePlugin\", \"%s\")\n", cs->shuffle,
                 cs->shuffle);
         fprintf(f, "    %s.connectInput(0, %s)\n", cs->shuffle, rname);
@@ -173,7 +172,7 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
     }
     for (int i = 0; i < hp->nnodes; i++) {
         const host_node *hn = &hp->nodes[i];
-        const gnode *n = hn->n;
+        const nprfx_graph_node_info *n = hn->n;
         const nprfx_node_desc *d = n->desc;
         fprintf(f, "    %s = create(app, \"%s\", \"%s\")\n", hn->name, hn->plugin_id, hn->name);
         for (int c = 0; c < hn->nclips; c++) {
@@ -207,5 +206,6 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
     fprintf(f, "    # PNG previews are left to the runner (nprfx run): they go through its display "
                "transform\n\n\n");
     fprintf(f, "build(app)  # noqa: F821  (`app` is the project Natron runs the script in)\n");
-    return ferror(f) ? nprfx_error(hp->g->ctx, NPRFX_ERR_IO, "write error") : NPRFX_OK;
+    return ferror(f) ? nprfx_error(nprfx_graph_context(hp->g), NPRFX_ERR_IO, "write error")
+                     : NPRFX_OK;
 }

@@ -5,7 +5,6 @@
  * channels by position (red, green, blue, alpha: the 1st to 4th in Nuke's order). */
 #include <string.h>
 
-#include "engine/graph_model.h"
 #include "host_nuke.h"
 #include "host_project.h"
 #include "ofx_names.h"
@@ -90,24 +89,24 @@ nprfx_result host_write_nuke(const host_project *hp, FILE *f)
         const host_chanset *cs = &hp->sets[i];
         const char *rname = NULL;
         for (int r = 0; r < hp->nreads; r++)
-            if (hp->reads[r].n == &hp->g->nodes[cs->read]) rname = hp->reads[r].name;
+            if (hp->reads[r].n == &hp->info[cs->read]) rname = hp->reads[r].name;
         char layer[256], other[256];
         nuke_layer(cs->chan[0], layer, sizeof layer);
         for (int c = 1; c < cs->count; c++) {
             nuke_layer(cs->chan[c], other, sizeof other);
             if (strcmp(other, layer))
-                return nprfx_error(hp->g->ctx, NPRFX_ERR_UNSUPPORTED,
+                return nprfx_error(nprfx_graph_context(hp->g), NPRFX_ERR_UNSUPPORTED,
                                    "node '%s': a Nuke Shuffle takes one layer, and %s and %s are "
                                    "in two",
-                                   hp->g->nodes[cs->read].name, cs->chan[0], cs->chan[c]);
+                                   hp->info[cs->read].name, cs->chan[0], cs->chan[c]);
         }
         fprintf(f, "push $N%s\nShuffle {\n in %s\n", rname, layer);
         for (int c = 0; c < 4; c++) {
             if (cs->layer_pos[c < cs->count ? c : cs->count - 1] > 3)
-                return nprfx_error(hp->g->ctx, NPRFX_ERR_UNSUPPORTED,
+                return nprfx_error(nprfx_graph_context(hp->g), NPRFX_ERR_UNSUPPORTED,
                                    "node '%s': %s is past the 4th channel of its layer, which a "
                                    "Nuke Shuffle cannot take",
-                                   hp->g->nodes[cs->read].name, cs->chan[c]);
+                                   hp->info[cs->read].name, cs->chan[c]);
             /* unused components repeat the last channel, as the runner ignores them */
             int k = c < cs->count ? c : cs->count - 1;
             fprintf(f, " %s %s\n", pos[c], pos[cs->layer_pos[k]]);
@@ -130,7 +129,7 @@ nprfx_result host_write_nuke(const host_project *hp, FILE *f)
     }
     for (int i = 0; i < hp->nnodes; i++) {
         const host_node *hn = &hp->nodes[i];
-        const gnode *n = hn->n;
+        const nprfx_graph_node_info *n = hn->n;
         const nprfx_node_desc *d = n->desc;
         int last = -1;
         for (int c = 0; c < hn->nclips; c++)
@@ -173,5 +172,6 @@ nprfx_result host_write_nuke(const host_project *hp, FILE *f)
                 " use_limit true\n name %s\n}\n",
                 hp->first_frame, hp->last_frame, w->name);
     }
-    return ferror(f) ? nprfx_error(hp->g->ctx, NPRFX_ERR_IO, "write error") : NPRFX_OK;
+    return ferror(f) ? nprfx_error(nprfx_graph_context(hp->g), NPRFX_ERR_IO, "write error")
+                     : NPRFX_OK;
 }

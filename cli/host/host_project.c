@@ -9,8 +9,6 @@
 
 #include "engine/engine_util.h"
 #include "nprfx/graph.h"
-#include "engine/graph_model.h"
-#include "engine/graph_resolve.h"
 #include "host_project.h"
 #include "nprfx/channels.h"
 #include "nprfx/io.h"
@@ -34,7 +32,7 @@ char *host_double(double v, char *buf, size_t n)
     return buf;
 }
 
-int host_param_changed(const gnode *n, int i)
+int host_param_changed(const nprfx_graph_node_info *n, int i)
 {
     const nprfx_param_desc *p = &n->desc->params[i];
     const nprfx_value *v = &n->params[i];
@@ -44,6 +42,20 @@ int host_param_changed(const gnode *n, int i)
     for (int c = 0; c < dims; c++)
         if (v->v[c] != p->def[c]) return 1;
     return 0;
+}
+
+/* Copies of n channel names (NULL names become "C", as the engine names them). */
+static char **names_dup(const char *const *names, int n)
+{
+    char **d = calloc((size_t)n + 1, sizeof *d);
+    for (int c = 0; d && c < n; c++)
+        if (!(d[c] = engine_strdup(names[c] ? names[c] : "C"))) {
+            for (int k = 0; k < c; k++)
+                free(d[k]);
+            free(d);
+            return NULL;
+        }
+    return d;
 }
 
 /* Host node names are Python identifiers (Natron script names): other characters become '_'. */
@@ -75,7 +87,7 @@ typedef struct builder {
 
 static nprfx_result oom(builder *b)
 {
-    return nprfx_error(b->g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    return nprfx_error(nprfx_graph_context(b->g), NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
 }
 
 /* Order of plate channels as hosts list them: by layer, then by component inside the layer. */
@@ -103,9 +115,10 @@ static void plate_ranks(char **names, int nc, int *rank)
 static nprfx_result read_info(builder *b, int gi, src_info *s)
 {
     nprfx_graph *g = b->g;
-    gnode *n = &g->nodes[gi];
+    const nprfx_graph_node_info *n = &b->hp->info[gi];
     char file[4096];
-    internal_graph_resolve_path(g, g->base_dir, n->path, b->hp->first_frame, file, sizeof file);
+    nprfx_graph_resolve_path(g, nprfx_graph_base_dir(g), n->path, b->hp->first_frame, file,
+                             sizeof file);
     nprfx_file_info fi;
     memset(&fi, 0, sizeof fi);
     nprfx_result r = nprfx_io_info(n->ctx, file, &fi);
@@ -127,11 +140,11 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
     }
     nprfx_file_info_free(&fi);
     if (extra) {
-        r = internal_graph_motion_sources(g, n, file, (const char *const *)s->names, s->nc,
-                                          s->motion_idx, s->motion_sign);
+        r = nprfx_graph_motion_sources(g, gi, file, (const char *const *)s->names, s->nc,
+                                       s->motion_idx, s->motion_sign);
         if (r) return r;
         for (int k = 0; k < 4; k++)
-            s->names[s->nc++] = engine_strdup(internal_graph_motion_names[k]);
+            s->names[s->nc++] = engine_strdup(nprfx_graph_motion_name(k));
     }
     return NPRFX_OK;
 }
@@ -188,7 +201,7 @@ static nprfx_result add_set(builder *b, int gi, const src_info *s, const int *id
     }
     char base[256];
     snprintf(base, sizeof base, "%s%s%s", layer, layer[0] ? "_" : "", letters);
-    host_name(cs.shuffle, sizeof cs.shuffle, b->g->nodes[gi].name, base);
+    host_name(cs.shuffle, sizeof cs.shuffle, b->hp->info[gi].name, base);
     if (cs.has_sign) {
         snprintf(cs.multiply, sizeof cs.multiply, "%s", cs.shuffle);
         size_t len = strlen(cs.shuffle);
@@ -208,7 +221,9 @@ static nprfx_result visit(builder *b, int gi);
 static nprfx_result link_input(builder *b, host_node *hn, int k)
 {
     nprfx_graph *g = b->g;
-    const gnode *n = hn->n;
+    nprfx_context *ctx = nprfx_graph_context(g);
+    const nprfx_graph_node_info *n = hn->n;
+    int gi = (int)(n - b->hp->info);
     const nprfx_input_desc *in = &n->desc->inputs[k];
     host_link *l = &hn->links[k];
     int src = n->inputs[k].src;
@@ -217,32 +232,32 @@ static nprfx_result link_input(builder *b, host_node *hn, int k)
     if (r) return r;
     src_info *s = &b->info[src];
     int idx[256], count = 0;
-    if ((r = internal_graph_input_channels(g, n, k, (const char *const *)s->names, s->nc, idx,
-                                           &count)))
+    if ((r = nprfx_graph_input_channels(g, gi, k, (const char *const *)s->names, s->nc, idx,
+                                        &count)))
         return r;
     if (count > 4)
-        return nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                            "node '%s': input '%s' takes %d channels; host clips carry 4 at most",
                            n->name, in->name, count);
     int first = 0;
-    if (g->nodes[src].kind == GK_READ) {
+    if (b->hp->info[src].kind == NPRFX_GRAPH_READ) {
         const host_chanset *cs;
         if ((r = add_set(b, src, s, idx, count, &cs))) return r;
         l->src = cs->has_sign ? cs->multiply : cs->shuffle;
     } else {
         for (int c = 1; c < count; c++)
             if (idx[c] != idx[0] + c)
-                return nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+                return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                                    "node '%s': input '%s' takes channels of '%s' that are not "
                                    "adjacent; a host selector picks a run of R, G, B, A",
-                                   n->name, in->name, g->nodes[src].name);
+                                   n->name, in->name, b->hp->info[src].name);
         first = idx[0];
         for (int i = 0; i < b->hp->nnodes; i++)
-            if (b->hp->nodes[i].n == &g->nodes[src]) l->src = b->hp->nodes[i].name;
+            if (b->hp->nodes[i].n == &b->hp->info[src]) l->src = b->hp->nodes[i].name;
     }
     l->option = ofx_names_selector_find(in, first, count);
     if (l->option < 0)
-        return nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                            "node '%s': input '%s' has no channel selector option for %d "
                            "channel%s from component %d",
                            n->name, in->name, count, count > 1 ? "s" : "", first);
@@ -256,22 +271,23 @@ static nprfx_result link_input(builder *b, host_node *hn, int k)
 static nprfx_result visit(builder *b, int gi)
 {
     nprfx_graph *g = b->g;
-    gnode *n = &g->nodes[gi];
+    nprfx_context *ctx = nprfx_graph_context(g);
+    const nprfx_graph_node_info *n = &b->hp->info[gi];
     src_info *s = &b->info[gi];
     if (s->done) return NPRFX_OK;
     if (b->visiting[gi])
-        return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "the graph has a cycle through node '%s'",
+        return nprfx_error(ctx, NPRFX_ERR_PARSE, "the graph has a cycle through node '%s'",
                            n->name);
     b->visiting[gi] = 1;
     nprfx_result r = NPRFX_OK;
-    if (n->kind == GK_SYNTH) {
-        r = nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+    if (n->kind == NPRFX_GRAPH_SYNTH) {
+        r = nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                         "node '%s': synth plates exist in the runner only; render them with "
                         "'nprfx synth' and read the files",
                         n->name);
-    } else if (n->kind == GK_READ) {
+    } else if (n->kind == NPRFX_GRAPH_READ) {
         r = read_info(b, gi, s);
-    } else if (n->kind == GK_NODE) {
+    } else if (n->kind == NPRFX_GRAPH_NODE) {
         const nprfx_node_desc *d = n->desc;
         host_node hn;
         memset(&hn, 0, sizeof hn);
@@ -289,8 +305,8 @@ static nprfx_result visit(builder *b, int gi)
             if (!r && n->inputs[k].src >= 0) {
                 int idx[256], count = 0;
                 src_info *si = &b->info[n->inputs[k].src];
-                internal_graph_input_channels(g, n, k, (const char *const *)si->names, si->nc, idx,
-                                              &count);
+                nprfx_graph_input_channels(g, gi, k, (const char *const *)si->names, si->nc, idx,
+                                           &count);
                 ch[k] = count;
             }
         }
@@ -298,12 +314,12 @@ static nprfx_result visit(builder *b, int gi)
         memset(&oi, 0, sizeof oi);
         if (!r) r = nprfx_node_output_info(n->ctx, d, n->params, ch, &oi);
         if (!r && oi.channels > 4)
-            r = nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+            r = nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                             "node '%s': %s outputs %d channels; host images carry 4 at most",
                             n->name, d->id, oi.channels);
         if (!r) {
             s->nc = oi.channels;
-            s->names = internal_graph_names_dup(oi.names, oi.channels);
+            s->names = names_dup(oi.names, oi.channels);
             host_project *hp = b->hp;
             host_node *nodes = realloc(hp->nodes, sizeof *nodes * (size_t)(hp->nnodes + 1));
             if (!nodes || !s->names) {
@@ -369,9 +385,9 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
     nprfx_frame_list fl = {NULL, 0};
     nprfx_result r = nprfx_graph_frames(g, NULL, &fl);
     if (r) return r;
-    hp->first_frame = g->first_frame;
-    hp->last_frame = g->last_frame;
-    if (!g->frames_text && fl.count) hp->first_frame = hp->last_frame = fl.frames[0];
+    hp->first_frame = hp->last_frame = 1;
+    if (!nprfx_graph_shot(g, &hp->first_frame, &hp->last_frame) && fl.count)
+        hp->first_frame = hp->last_frame = fl.frames[0];
     nprfx_seq_frames_free(&fl);
     /* the project format's name: the output file's, without folder and extension */
     const char *leaf = strrchr(out_file, '/');
@@ -381,33 +397,41 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
     if (dot && dot != stem) *dot = 0;
     host_name(hp->format_name, sizeof hp->format_name, stem, NULL);
 
-    builder b = {g, hp, calloc((size_t)g->count + 1, sizeof(src_info)),
-                 calloc((size_t)g->count + 1, sizeof(int))};
-    hp->reads = calloc((size_t)g->count + 1, sizeof *hp->reads);
-    hp->writes = calloc((size_t)g->count + 1, sizeof *hp->writes);
-    if (!b.info || !b.visiting || !hp->reads || !hp->writes) {
+    int count = nprfx_graph_node_count(g);
+    nprfx_context *ctx = nprfx_graph_context(g);
+    const char *base_dir = nprfx_graph_base_dir(g);
+    builder b = {g, hp, calloc((size_t)count + 1, sizeof(src_info)),
+                 calloc((size_t)count + 1, sizeof(int))};
+    hp->info = calloc((size_t)count + 1, sizeof *hp->info);
+    hp->reads = calloc((size_t)count + 1, sizeof *hp->reads);
+    hp->writes = calloc((size_t)count + 1, sizeof *hp->writes);
+    if (!b.info || !b.visiting || !hp->info || !hp->reads || !hp->writes) {
         r = oom(&b);
         goto done;
     }
-    for (int i = 0; i < g->count; i++) {
-        gnode *n = &g->nodes[i];
-        if (n->kind != GK_READ) continue;
+    for (int i = 0; i < count; i++) {
+        hp->info[i].size = sizeof hp->info[i];
+        nprfx_graph_node(g, i, &hp->info[i]);
+    }
+    for (int i = 0; i < count; i++) {
+        const nprfx_graph_node_info *n = &hp->info[i];
+        if (n->kind != NPRFX_GRAPH_READ) continue;
         host_read *rd = &hp->reads[hp->nreads++];
         rd->n = n;
         host_name(rd->name, sizeof rd->name, n->name, NULL);
         char full[4096];
-        if (n->path[0] == '/' || !strcmp(g->base_dir, "."))
+        if (n->path[0] == '/' || !strcmp(base_dir, "."))
             snprintf(full, sizeof full, "%s", n->path);
         else
-            snprintf(full, sizeof full, "%s/%s", g->base_dir, n->path);
+            snprintf(full, sizeof full, "%s/%s", base_dir, n->path);
         if (full[0] == '/')
             snprintf(rd->path, sizeof rd->path, "%s", full);
         else
             relative_to(out_dir, full, rd->path, sizeof rd->path);
     }
-    for (int i = 0; i < g->count && !r; i++) {
-        gnode *n = &g->nodes[i];
-        if (n->kind != GK_WRITE) {
+    for (int i = 0; i < count && !r; i++) {
+        const nprfx_graph_node_info *n = &hp->info[i];
+        if (n->kind != NPRFX_GRAPH_WRITE) {
             r = visit(&b, i);
             continue;
         }
@@ -417,17 +441,17 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
         w->n = n;
         w->path = n->path;
         host_name(w->name, sizeof w->name, n->name, NULL);
-        if (g->nodes[src].kind != GK_NODE || n->inputs[0].sel)
-            r = nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+        if (hp->info[src].kind != NPRFX_GRAPH_NODE || n->inputs[0].sel)
+            r = nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                             "node '%s': a write in a host project takes a whole nprfx node's "
                             "output (\"image\": \"NODE\"), not '%s%s%s'",
                             n->name, n->inputs[0].text, n->inputs[0].sel ? ":" : "",
                             n->inputs[0].sel ? n->inputs[0].sel : "");
         for (int k = 0; k < hp->nnodes; k++)
-            if (hp->nodes[k].n == &g->nodes[src]) w->src = hp->nodes[k].name;
+            if (hp->nodes[k].n == &hp->info[src]) w->src = hp->nodes[k].name;
     }
     if (!r && !hp->nreads)
-        r = nprfx_error(g->ctx, NPRFX_ERR_UNSUPPORTED,
+        r = nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
                         "the graph has no read node, so a host project would have no format");
     /* set .out once the set array no longer moves */
     for (int i = 0; i < hp->nsets; i++)
@@ -438,25 +462,25 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
         for (int k = 0; k < hn->n->desc->num_inputs; k++) {
             int src = hn->n->inputs[k].src;
             if (src < 0) continue;
-            if (g->nodes[src].kind == GK_NODE) {
+            if (hp->info[src].kind == NPRFX_GRAPH_NODE) {
                 for (int j = 0; j < hp->nnodes; j++)
-                    if (hp->nodes[j].n == &g->nodes[src]) hn->links[k].src = hp->nodes[j].name;
+                    if (hp->nodes[j].n == &hp->info[src]) hn->links[k].src = hp->nodes[j].name;
                 continue;
             }
             src_info *s = &b.info[src];
             int idx[256], count = 0;
             const host_chanset *cs = NULL;
-            internal_graph_input_channels(g, hn->n, k, (const char *const *)s->names, s->nc, idx,
-                                          &count);
+            nprfx_graph_input_channels(g, (int)(hn->n - hp->info), k, (const char *const *)s->names,
+                                       s->nc, idx, &count);
             if (!(r = add_set(&b, src, s, idx, count, &cs))) hn->links[k].src = cs->out;
         }
     }
     for (int i = 0; i < hp->nwrites; i++)
         for (int k = 0; k < hp->nnodes; k++)
-            if (hp->nodes[k].n == &g->nodes[hp->writes[i].n->inputs[0].src])
+            if (hp->nodes[k].n == &hp->info[hp->writes[i].n->inputs[0].src])
                 hp->writes[i].src = hp->nodes[k].name;
 done:
-    for (int i = 0; b.info && i < g->count; i++) {
+    for (int i = 0; b.info && i < count; i++) {
         for (int c = 0; c < b.info[i].nc; c++)
             free(b.info[i].names[c]);
         free(b.info[i].names);
@@ -476,5 +500,6 @@ void host_project_free(host_project *hp)
     free(hp->sets);
     free(hp->reads);
     free(hp->writes);
+    free(hp->info);
     memset(hp, 0, sizeof *hp);
 }

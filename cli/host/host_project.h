@@ -9,7 +9,7 @@
 #include <stdio.h>
 
 #include "nprfx/graph.h"
-#include "engine/graph_model.h"
+#include "nprfx/graph.h"
 
 #define NPRFX_HOST_NAME_MAX 96
 
@@ -37,7 +37,7 @@ typedef struct host_link {
 } host_link;
 
 typedef struct host_node {
-    const gnode *n;
+    const nprfx_graph_node_info *n;
     char plugin_id[NPRFX_HOST_NAME_MAX];
     char name[NPRFX_HOST_NAME_MAX];
     int clips[32]; /* input indices in the order hosts number the clips */
@@ -46,13 +46,13 @@ typedef struct host_node {
 } host_node;
 
 typedef struct host_read {
-    const gnode *n;
+    const nprfx_graph_node_info *n;
     char name[NPRFX_HOST_NAME_MAX];
     char path[4096]; /* relative to the project file's folder where possible */
 } host_read;
 
 typedef struct host_write {
-    const gnode *n;
+    const nprfx_graph_node_info *n;
     char name[NPRFX_HOST_NAME_MAX];
     const char *src;
     const char *path; /* as in the graph: relative paths are taken from the project's folder */
@@ -60,6 +60,7 @@ typedef struct host_write {
 
 typedef struct host_project {
     nprfx_graph *g;
+    nprfx_graph_node_info *info; /* every node of g, by index: what the host nodes point at */
     const char *graph_path;
     int first_frame, last_frame;
     int width, height;    /* the first read node's data window */
@@ -81,7 +82,7 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
 void host_project_free(host_project *hp);
 
 /* Whether param i of node n differs from the descriptor's default. */
-int host_param_changed(const gnode *n, int i);
+int host_param_changed(const nprfx_graph_node_info *n, int i);
 /* A double in the fewest digits that read back as the same value (0.05, not 0.0500...03). */
 char *host_double(double v, char *buf, size_t n);
 

@@ -169,10 +169,10 @@ NPRFX_API int nprfx_graph_has_node(const nprfx_graph *g, const char *name);
 /* Number of write nodes (a graph to run needs at least one). */
 NPRFX_API int nprfx_graph_write_count(const nprfx_graph *g);
 
-/* Evaluate node `name` at `frame` without writing; the view stays valid until the next call
- * into the graph. */
+/* Evaluate node `name` at `frame` without writing; the view (and *names, its channels' names,
+ * when names is not NULL) stays valid until the next call into the graph. */
 NPRFX_API nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame,
-                                        nprfx_image *out);
+                                        nprfx_image *out, const char *const **names);
 
 /* Estimate the memory that evaluating `frame` needs from the graph and the frame size alone
  * (plates' headers, synth sizes, "format"; no pixel is read), as the memory plan runs it: each
@@ -203,6 +203,67 @@ NPRFX_API double nprfx_graph_take_render_cpu_seconds(nprfx_graph *g);
 NPRFX_API double nprfx_graph_take_render_bytes(nprfx_graph *g);
 /* Items the nodes counted since the last call (nprfx_render_args.items; for bench); resets. */
 NPRFX_API long long nprfx_graph_take_render_items(nprfx_graph *g);
+
+/* ---- what a graph holds, for front ends that translate it (host projects, measurements) ---- */
+
+/* A reference from an input to the node it reads ("plate:Vector.XY"). */
+typedef struct nprfx_graph_ref {
+    int src;    /* node index, -1 when not connected */
+    char *sel;  /* channel selection (nprfx/channels.h), NULL: by the input's AOV hint */
+    char *text; /* the referenced node's name */
+} nprfx_graph_ref;
+
+typedef enum nprfx_graph_node_kind {
+    NPRFX_GRAPH_NODE = 0, /* a processing node (desc) */
+    NPRFX_GRAPH_READ = 1,
+    NPRFX_GRAPH_SYNTH = 2,
+    NPRFX_GRAPH_WRITE = 3
+} nprfx_graph_node_kind;
+
+/* One node as the graph holds it; every pointer is the graph's, valid while it lives and until
+ * nprfx_graph_set changes the node. */
+typedef struct nprfx_graph_node_info {
+    size_t size; /* sizeof(nprfx_graph_node_info), set by the caller */
+    const char *name;
+    int kind;                    /* nprfx_graph_node_kind */
+    const nprfx_node_desc *desc; /* NPRFX_GRAPH_NODE, else NULL */
+    int ninputs;
+    const nprfx_graph_ref *inputs;
+    const nprfx_value *params;     /* desc->nparams values */
+    const char *const *param_text; /* STRING params' text, per param (NULL elsewhere) */
+    nprfx_context *ctx;            /* raises with "node 'NAME': " before the message */
+    /* read, synth and write nodes' fields as the graph gives them (NULL or 0 when absent) */
+    const char *path, *preview, *colorspace, *vectors, *compression, *scene, *display, *view;
+    const char *part, *read_view;
+    int half, raw, width, height;
+} nprfx_graph_node_info;
+
+NPRFX_API int nprfx_graph_node_count(const nprfx_graph *g);
+/* The index of node `name`, or -1. */
+NPRFX_API int nprfx_graph_node_index(const nprfx_graph *g, const char *name);
+/* Node i (0 <= i < nprfx_graph_node_count) into *out, as far as out->size covers. */
+NPRFX_API nprfx_result nprfx_graph_node(const nprfx_graph *g, int i, nprfx_graph_node_info *out);
+/* The context the graph raises its errors through, and the folder relative reads resolve in. */
+NPRFX_API nprfx_context *nprfx_graph_context(const nprfx_graph *g);
+NPRFX_API const char *nprfx_graph_base_dir(const nprfx_graph *g);
+/* A frame-numbered pattern at `frame`, relative to dir unless absolute, into buf. */
+NPRFX_API void nprfx_graph_resolve_path(const nprfx_graph *g, const char *dir, const char *pattern,
+                                        int frame, char *buf, size_t n);
+/* The channels (indices into names, nc of them) input k of node `node` takes from its source:
+ * the reference's selection, else the input's AOV hint, else all, checked against the input's
+ * channel count; *count receives how many (idx has room for 256). */
+NPRFX_API nprfx_result nprfx_graph_input_channels(nprfx_graph *g, int node, int k,
+                                                  const char *const *names, int nc, int *idx,
+                                                  int *count);
+/* Name k (0..3) of the channels a read node with "vectors" appends to its plates
+ * ("motion_prev.X", ...). */
+NPRFX_API const char *nprfx_graph_motion_name(int k);
+/* Read node `node`'s motion convention: the plate channels (indices into names) its 4 appended
+ * channels are made of, and the factor each is multiplied by. file names the plate in
+ * messages. */
+NPRFX_API nprfx_result nprfx_graph_motion_sources(nprfx_graph *g, int node, const char *file,
+                                                  const char *const *names, int nc, int *idx,
+                                                  double *sign);
 
 /* ---- checking and running a shot ------------------------------------------------------------ */
 

@@ -20,7 +20,7 @@ use warnings;
 my $root = shift @ARGV or die "usage: perl layers.pl SOURCE_DIR\n";
 $root =~ s{/+$}{};
 
-# Layers: folder (longest prefix wins) => [layer name, layers it may include besides its own].
+# Layers: file or folder (the file itself, else the longest folder prefix wins) => [layer name, layers it may include besides its own].
 # The core families sit side by side on core/base: one family never includes another, except
 # pam, whose pam-splat scatters its strokes with gabor-splat's anchored points
 # (core/gabor/internal_scatter.h). Node descriptors use the families and their support code. The
@@ -32,7 +32,9 @@ $root =~ s{/+$}{};
 my @FAMILIES = qw(noise gabor stipple pam looks motion);
 # The runner's folders, lowest first: each includes only those before it (main.c all of them).
 my @CLI = qw(cli/util cli/farm cli/host cli/commands);
-my @LIBS = ('public', 'common', 'engine', 'io');
+# The engine's files are its own: front ends reach it through nprfx/graph.h, and of its private
+# headers only engine_util.h (the clocks, strdup, the parallel copy: one of each in the tree).
+my @LIBS = ('public', 'common', 'engine-util', 'io');
 my %LAYERS = (
     'include/nprfx'   => ['public', []],
     'core/base'       => ['base', ['public']],
@@ -44,10 +46,11 @@ my %LAYERS = (
     'core/motion'     => ['motion', ['public', 'base']],
     'plugins/support' => ['support', ['public', 'base', @FAMILIES]],
     'plugins'         => ['nodes', ['public', 'base', @FAMILIES, 'support']],
-    'engine'          => ['engine', ['public']],
+    'engine'          => ['engine', ['public', 'engine-util']],
+    'engine/engine_util.h' => ['engine-util', ['public']],
     'io'              => ['io', ['public']],
     'common'          => ['common', ['public']],
-    'plugins/ofx'     => ['ofx', ['public', 'support', 'common', 'engine']],
+    'plugins/ofx'     => ['ofx', ['public', 'support', 'common']],
     'cli'             => ['cli', [@LIBS, @CLI]],
     'cli/util'        => ['cli/util', [@LIBS]],
     'cli/farm'        => ['cli/farm', [@LIBS, 'cli/util']],
@@ -59,6 +62,7 @@ my @ROOTS = ('include', 'core', 'plugins', 'common', 'cli', '.');
 
 sub layer_of {
     my ($path) = @_;
+    return ($LAYERS{$path}[0], $path) if exists $LAYERS{$path}; # a file that is a layer of its own
     my $dir = $path =~ m{^(.*)/[^/]+$} ? $1 : '';
     while ($dir ne '') {
         return ($LAYERS{$dir}[0], $dir) if exists $LAYERS{$dir};

@@ -3,8 +3,8 @@
 # it is, then fails on each planted fault, naming the file, the line and the rule:
 #   - a wrong-way include (core/base includes a family's internal header),
 #   - one front end including the other (the runner includes the OpenFX adapter),
-#   - the graph engine including the runner, and the image I/O library including the engine's
-#     internals (the library layers use only the public headers),
+#   - the graph engine including the runner, and the image I/O library or the runner including
+#     the engine's internals (only nprfx/graph.h, and engine_util.h's clocks, are for others),
 #   - a loop between two files of one folder,
 #   - an include that resolves to no file.
 set -u
@@ -45,6 +45,10 @@ check "front end into front end" 1 "includes plugins/ofx/ofx_api.h: layer 'cli' 
 fresh
 plant engine/graph_eval.c '#include "commands/commands.h"'
 check "engine includes the runner" 1 "engine/graph_eval.c:$(wc -l <"$W/tree/engine/graph_eval.c"): includes cli/commands/commands.h: layer 'engine' may not include layer 'cli/commands'"
+
+fresh
+plant cli/host/host_project.c '#include "engine/graph_model.h"'
+check "front end includes the engine's internals" 1 "cli/host/host_project.c:$(wc -l <"$W/tree/cli/host/host_project.c"): includes engine/graph_model.h: layer 'cli/host' may not include layer 'engine'"
 
 fresh
 plant io/io_parts.h '#include "engine/graph_model.h"'
