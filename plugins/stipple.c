@@ -1,7 +1,7 @@
 /* The stipple node: instant stippling from UV and shading (Ma et al. 2018). The math lives in
- * core/stipple*.c and core/ivs*.c, the node's params and instance cache in core/stipple/stipple_node.c;
- * the shipped dot sequence is read and the dots exported as CSV/SVG in plugins/support/. This
- * file is the descriptor and the glue. */
+ * core/stipple*.c and core/ivs*.c, the node's params and instance cache in
+ * core/stipple/stipple_node.c; the shipped dot sequence is read and the dots exported as CSV/SVG in
+ * plugins/support/. This file is the descriptor and the glue. */
 #include <string.h>
 
 #include "nprfx/node.h"
@@ -241,18 +241,30 @@ static nprfx_result st_output(const void *params, const int *ich, nprfx_output_i
     return NPRFX_OK;
 }
 
-/* Core renders (core/stipple/stipple_node.c); the dot sequence comes from the shipped data file when
- * there is one (plugins/support/data_files.c). */
+/* The bound params with the one field no param binds filled: the dot sequence comes from the
+ * shipped data file when there is one (plugins/support/data_files.c). Core reads no files, and
+ * this layer is the one that may, so the descriptor names the maker, for render and export alike;
+ * the node keeps the one render shape (nprfx/stipple.h, make_sequence). */
+static sp with_shipped_sequence(const void *params)
+{
+    sp p = *(const sp *)params;
+    p.make_sequence = internal_stipple_shipped_sequence;
+    return p;
+}
+
+/* Core renders (core/stipple/stipple_node.c). */
 static nprfx_result st_render(const nprfx_render_args *a, const void *params)
 {
-    return nprfx_stipple_node_render(a, params, internal_stipple_shipped_sequence);
+    sp p = with_shipped_sequence(params);
+    return nprfx_stipple_render(a, &p);
 }
 
 /* The dots as CSV or SVG, by the path's extension (plugins/support/stipple_export.c). */
 static nprfx_result st_export_text(const nprfx_render_args *a, const void *params, const char *path,
                                    char **text, size_t *len)
 {
-    return internal_stipple_export_text(a, params, internal_stipple_shipped_sequence, path, text, len);
+    sp p = with_shipped_sequence(params);
+    return internal_stipple_export_text(a, &p, path, text, len);
 }
 
 const nprfx_node_desc nprfx_node_stipple = {
@@ -298,7 +310,7 @@ const nprfx_node_desc nprfx_node_stipple = {
     .output = st_output,
     .flags = NPRFX_NODE_STATEFUL,
     .render = st_render,
-    .state_free = nprfx_stipple_node_state_free,
+    .state_free = nprfx_stipple_state_free,
     .export_text = st_export_text,
     .item_name = "stipples",
     .params_size = sizeof(sp),

@@ -505,9 +505,9 @@ static long long count_in_window(const sjob *j, int units, nprfx_rect w)
     return n;
 }
 
-nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params *p,
-                                  const nprfx_stipple_inputs *in_, nprfx_rect window,
-                                  nprfx_image *out)
+nprfx_result nprfx_stipple_draw(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                const nprfx_stipple_inputs *in_, nprfx_rect window,
+                                nprfx_image *out)
 {
     nprfx_result r = check_params(ctx, p);
     if (r == NPRFX_OK) r = check_inputs(ctx, in_);
@@ -681,7 +681,7 @@ nprfx_result nprfx_stipple_tone_curve(nprfx_context *ctx, const nprfx_stipple_pa
     for (int k = 1; k < levels && r == NPRFX_OK; k++) {
         float t = (float)(1.0 - (double)k / (levels - 1));
         nprfx_image_fill(&tone, &t);
-        r = nprfx_stipple_render(ctx, &p, &in, tone.bounds, &out);
+        r = nprfx_stipple_draw(ctx, &p, &in, tone.bounds, &out);
         double sum = 0;
         for (int y = m; y < n - m; y++)
             for (int x = m; x < n - m; x++)

@@ -1,7 +1,8 @@
 /* The stipple node over its render arguments: its bound params into core's (the pen tones
  * parsed), the per-instance cache (the dot sequence, which keeps the tone-correction curves)
- * in the instance slot, then nprfx_stipple_render or nprfx_stipple_collect. No file I/O:
- * the caller's make_sequence brings a shipped sequence. See nprfx/stipple.h. */
+ * in the instance slot, then nprfx_stipple_draw or nprfx_stipple_collect. No file I/O: the
+ * params' make_sequence, which the descriptor fills, brings a shipped sequence. See
+ * nprfx/stipple.h. */
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,7 +16,7 @@ typedef struct node_state {
     nprfx_stipple_sequence *seq; /* grown on demand, thread-safe on its own; may be shared */
 } node_state;
 
-void nprfx_stipple_node_state_free(void *state)
+void nprfx_stipple_state_free(void *state)
 {
     node_state *s = state;
     if (!s) return;
@@ -48,7 +49,7 @@ static nprfx_result get_state(const nprfx_render_args *args,
         if (atomic_compare_exchange_strong(slot, &expected, fresh)) {
             s = fresh;
         } else {
-            nprfx_stipple_node_state_free(fresh);
+            nprfx_stipple_state_free(fresh);
             s = expected;
         }
     }
@@ -62,8 +63,7 @@ static nprfx_result get_state(const nprfx_render_args *args,
  * completed with what the node derives, the instance's sequence and the tone curve when the
  * params ask for it (curve: the caller's storage). */
 static nprfx_result core_params(const nprfx_render_args *args, const nprfx_stipple_node_params *np,
-                                nprfx_stipple_sequence_fn make_sequence, nprfx_stipple_params *p,
-                                float *curve)
+                                nprfx_stipple_params *p, float *curve)
 {
     nprfx_stipple_params def;
     nprfx_stipple_params_default(&def);
@@ -85,7 +85,7 @@ static nprfx_result core_params(const nprfx_render_args *args, const nprfx_stipp
     nprfx_result r = NPRFX_OK;
     if (p->mode == NPRFX_STIPPLE_MULTITONE) r = nprfx_stipple_parse_tones(args->ctx, np->tones, p);
     node_state *s = NULL;
-    if (r == NPRFX_OK) r = get_state(args, make_sequence, &s);
+    if (r == NPRFX_OK) r = get_state(args, np->make_sequence, &s);
     if (r != NPRFX_OK) return r;
     p->sequence = s ? s->seq : NULL;
     if (np->tone_correction) {
@@ -105,33 +105,31 @@ static nprfx_stipple_inputs node_inputs(const nprfx_render_args *args)
     return in;
 }
 
-nprfx_result nprfx_stipple_node_render(const nprfx_render_args *args,
-                                       const nprfx_stipple_node_params *np,
-                                       nprfx_stipple_sequence_fn make_sequence)
+nprfx_result nprfx_stipple_render(const nprfx_render_args *args,
+                                  const nprfx_stipple_node_params *np)
 {
     if (!args || !np || !args->inputs || !args->output)
         return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
                            "stipple: incomplete render arguments");
     nprfx_stipple_params p;
     float curve[NPRFX_STIPPLE_CURVE_SIZE];
-    nprfx_result r = core_params(args, np, make_sequence, &p, curve);
+    nprfx_result r = core_params(args, np, &p, curve);
     if (r != NPRFX_OK) return r;
     nprfx_stipple_inputs in = node_inputs(args);
     p.count = args->items;
-    return nprfx_stipple_render(args->ctx, &p, &in, args->window, args->output);
+    return nprfx_stipple_draw(args->ctx, &p, &in, args->window, args->output);
 }
 
 nprfx_result nprfx_stipple_node_collect(const nprfx_render_args *args,
-                                        const nprfx_stipple_node_params *np,
-                                        nprfx_stipple_sequence_fn make_sequence,
-                                        nprfx_stipple **list, size_t *count)
+                                        const nprfx_stipple_node_params *np, nprfx_stipple **list,
+                                        size_t *count)
 {
     if (!args || !np || !args->inputs)
         return nprfx_error(args ? args->ctx : NULL, NPRFX_ERR_INVALID_ARGUMENT,
                            "stipple: incomplete render arguments");
     nprfx_stipple_params p;
     float curve[NPRFX_STIPPLE_CURVE_SIZE];
-    nprfx_result r = core_params(args, np, make_sequence, &p, curve);
+    nprfx_result r = core_params(args, np, &p, curve);
     if (r != NPRFX_OK) return r;
     nprfx_stipple_inputs in = node_inputs(args);
     return nprfx_stipple_collect(args->ctx, &p, &in, args->frame, list, count);

@@ -35,6 +35,7 @@
 
 #include "nprfx/image.h"
 #include "nprfx/ivs.h"
+#include "nprfx/node.h"
 #include "nprfx/export.h"
 
 #ifdef __cplusplus
@@ -85,7 +86,7 @@ typedef struct nprfx_stipple_params {
      * sqrt(aspect) in v (the same area A0 = tile^2), which makes its copies square on such
      * surfaces; otherwise the dots are stretched with the UV map and line up in rows. */
     double aspect;
-    /* NULL, or a counter nprfx_stipple_render adds the number of stipples drawn to: those
+    /* NULL, or a counter nprfx_stipple_draw adds the number of stipples drawn to: those
      * whose centre lies in the window (so tiles of a frame add up to the frame's count). */
     long long *count;
     /* Testing: 0 the fastest loops the CPU has, 1 the baseline ISA's (SSE2 on x86-64), 2 AVX2
@@ -119,12 +120,13 @@ typedef struct nprfx_stipple_inputs {
     nprfx_rect frame;        /* the whole image domain */
 } nprfx_stipple_inputs;
 
-/* Render the pixels of `window` into out (4 channels RGBA, or 5 with coverage_channel). Inputs
+/* The algorithm (the node's render, nprfx_stipple_render below, completes its params and calls
+ * it): draw the pixels of `window` into out (4 channels RGBA, or 5 with coverage_channel). Inputs
  * are read around the window as far as the stipples reaching it need. Parallel through the
  * context's executor. */
-NPRFX_API nprfx_result nprfx_stipple_render(nprfx_context *ctx, const nprfx_stipple_params *p,
-                                            const nprfx_stipple_inputs *in, nprfx_rect window,
-                                            nprfx_image *out);
+NPRFX_API nprfx_result nprfx_stipple_draw(nprfx_context *ctx, const nprfx_stipple_params *p,
+                                          const nprfx_stipple_inputs *in, nprfx_rect window,
+                                          nprfx_image *out);
 
 /* One stipple, as the vector export (plugins/support/stipple_export.h, outside core) writes it. */
 typedef struct nprfx_stipple {
@@ -196,11 +198,15 @@ enum {
     NPRFX_STIPPLE_IN_COUNT
 };
 
+/* Makes the dot sequence a node instance keeps, on its first render: e.g. one preloaded from the
+ * shipped data file (plugins/support/data_files.h), which core does not read. */
+typedef nprfx_result (*nprfx_stipple_sequence_fn)(nprfx_context *ctx, nprfx_stipple_sequence **out);
+
 /* The node's params, as its descriptor binds them (by offset; areas already multiplied by the
  * render scale squared). docs/nodes.md describes each. The algorithm's params are embedded:
  * stipple's mode, area (the param size), a0, delta_min, tile, aspect and coverage_channel (the
- * param coverage) are the params themselves; nprfx_stipple_node_render sets the rest of it (size,
- * the pens from `tones`, plane_scale, ink, paper, seed, the sequence, tone curve and count). */
+ * param coverage) are the params themselves; nprfx_stipple_render sets the rest of it (size, the
+ * pens from `tones`, plane_scale, ink, paper, seed, the sequence, tone curve and count). */
 typedef struct nprfx_stipple_node_params {
     nprfx_stipple_params stipple;
     const char *tones;       /* multitone: pen darknesses, "0.33,0.67,1" */
@@ -208,32 +214,33 @@ typedef struct nprfx_stipple_node_params {
     int seed;                /* stipple.seed */
     int tone_correction;     /* measure and invert the darkness overlapping dots give */
     const char *export_path; /* the front end writes the node's text export there ("": none) */
+    /* Bound to no param: where the instance's dot sequence comes from, made on its first use
+     * (NULL: generated; a shipped file gives the same points, only sooner). The descriptor fills
+     * it with the maker that reads the shipped ivs.bin: nprfx_node_render hands the descriptor a
+     * zeroed struct, so this reads NULL wherever the descriptor has not set it (output() never
+     * reads it). It is a param of the node as packaged, the same for every front end, so it
+     * travels with the params rather than on the context: the context already carries the data
+     * directory the maker reads, and a front end need not know a stipple detail to get it. */
+    nprfx_stipple_sequence_fn make_sequence;
 } nprfx_stipple_node_params;
 
-/* Makes the dot sequence a node instance keeps, on its first render: e.g. one preloaded from the
- * shipped data file (plugins/support/data_files.h), which core does not read. */
-typedef nprfx_result (*nprfx_stipple_sequence_fn)(nprfx_context *ctx, nprfx_stipple_sequence **out);
-
-struct nprfx_render_args; /* nprfx/node.h */
-
-/* Render args->window of the stipple node (args as nprfx_node_render hands them on, checked, with
- * np its bound params): the tones parsed (multitone; errors name stipple.tones), the pixels
- * without a uv input in units of NPRFX_STIPPLE_PLANE_PIXELS * render scale, the dots drawn
- * counted into args->items. The instance state (args->state, NULL: none, each call then
- * generates what it needs) keeps the sequence, made by make_sequence (NULL: generated) on first
- * use; the tone-correction curves are kept by the sequence (shared with every instance that
- * shares it); neither ever changes a result. Free it
- * with nprfx_stipple_node_state_free. Safe on several tiles of one instance at once. */
-NPRFX_API nprfx_result nprfx_stipple_node_render(const struct nprfx_render_args *args,
-                                                 const nprfx_stipple_node_params *np,
-                                                 nprfx_stipple_sequence_fn make_sequence);
+/* Render args->window of args->output, inputs NPRFX_STIPPLE_IN_* (args as nprfx_node_render hands
+ * them on, checked): the tones parsed (multitone; errors name stipple.tones), the pixels without a
+ * uv input in units of NPRFX_STIPPLE_PLANE_PIXELS * render scale, then nprfx_stipple_draw.
+ * *args->items, when not NULL, grows by the dots drawn. The instance state (args->state, NULL:
+ * none, each call then generates what it needs) keeps the sequence, made by p->make_sequence on
+ * first use; the tone-correction curves are kept by the sequence (shared with every instance that
+ * shares it); neither ever changes a result. Free it with nprfx_stipple_state_free. Safe on
+ * several tiles of one instance at once. */
+NPRFX_API nprfx_result nprfx_stipple_render(const nprfx_render_args *args,
+                                            const nprfx_stipple_node_params *p);
 /* The stipples of the whole frame (args->frame; window is ignored) for the same arguments, as
  * nprfx_stipple_collect lists them: what the node's vector export writes. */
-NPRFX_API nprfx_result nprfx_stipple_node_collect(const struct nprfx_render_args *args,
-                                                  const nprfx_stipple_node_params *np,
-                                                  nprfx_stipple_sequence_fn make_sequence,
+NPRFX_API nprfx_result nprfx_stipple_node_collect(const nprfx_render_args *args,
+                                                  const nprfx_stipple_node_params *p,
                                                   nprfx_stipple **list, size_t *count);
-NPRFX_API void nprfx_stipple_node_state_free(void *state);
+/* Free a state left in the node's slot. */
+NPRFX_API void nprfx_stipple_state_free(void *state);
 
 #ifdef __cplusplus
 }

@@ -53,8 +53,8 @@ static int srgb8(float v)
 }
 
 nprfx_result internal_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
-                                  nprfx_rect frame, nprfx_stipple_format_kind kind,
-                                  const float *ink, const float *paper, char **text, size_t *len)
+                                     nprfx_rect frame, nprfx_stipple_format_kind kind,
+                                     const float *ink, const float *paper, char **text, size_t *len)
 {
     if (!text || (count && !list))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "stipple export: NULL argument");
@@ -138,30 +138,30 @@ static nprfx_result format_for_path(nprfx_context *ctx, const char *path,
 }
 
 nprfx_result internal_stipple_export_text(const nprfx_render_args *args,
-                                       const nprfx_stipple_node_params *np,
-                                       nprfx_stipple_sequence_fn make_sequence, const char *path,
-                                       char **text, size_t *len)
+                                          const nprfx_stipple_node_params *np, const char *path,
+                                          char **text, size_t *len)
 {
     nprfx_stipple_format_kind kind = NPRFX_STIPPLE_CSV;
     nprfx_result r = format_for_path(args->ctx, path, &kind);
     if (r != NPRFX_OK) return r;
     nprfx_stipple *list = NULL;
     size_t count = 0;
-    r = nprfx_stipple_node_collect(args, np, make_sequence, &list, &count);
+    r = nprfx_stipple_node_collect(args, np, &list, &count);
     if (r == NPRFX_OK) {
         float ink[4], paper[4];
         for (int c = 0; c < 4; c++) {
             ink[c] = (float)np->ink[c];
             paper[c] = (float)np->paper[c];
         }
-        r = internal_stipple_format(args->ctx, list, count, args->frame, kind, ink, paper, text, len);
+        r = internal_stipple_format(args->ctx, list, count, args->frame, kind, ink, paper, text,
+                                    len);
     }
     free(list);
     return r;
 }
 
 nprfx_result internal_stipple_node_export(const nprfx_render_args *args,
-                                       nprfx_stipple_format_kind kind, char **text, size_t *len)
+                                          nprfx_stipple_format_kind kind, char **text, size_t *len)
 {
     nprfx_context *ctx = args ? args->ctx : NULL;
     if (kind != NPRFX_STIPPLE_CSV && kind != NPRFX_STIPPLE_SVG)

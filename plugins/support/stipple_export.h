@@ -27,24 +27,24 @@ typedef enum nprfx_stipple_format_kind {
 /* Format a stipple list as text (malloc'd, NUL-terminated; *len excludes the NUL). ink/paper are
  * RGBA (display-referred values in [0, 1] are expected for SVG; they are clamped). */
 nprfx_result internal_stipple_format(nprfx_context *ctx, const nprfx_stipple *list, size_t count,
-                                  nprfx_rect frame, nprfx_stipple_format_kind kind,
-                                  const float *ink, const float *paper, char **text, size_t *len);
+                                     nprfx_rect frame, nprfx_stipple_format_kind kind,
+                                     const float *ink, const float *paper, char **text,
+                                     size_t *len);
 
-/* The stipple node's export hook (desc->export_text, np its bound params): the stipples of the
- * whole frame (nprfx_stipple_node_collect, the sequence from make_sequence) in the format of
- * path's extension, .csv or .svg in any case; another extension, or none, is an error that says
- * which to use. */
+/* The stipple node's export hook (desc->export_text, np its bound params with make_sequence
+ * filled): the stipples of the whole frame (nprfx_stipple_node_collect) in the format of path's
+ * extension, .csv or .svg in any case; another extension, or none, is an error that says which
+ * to use. */
 nprfx_result internal_stipple_export_text(const nprfx_render_args *args,
-                                       const nprfx_stipple_node_params *np,
-                                       nprfx_stipple_sequence_fn make_sequence, const char *path,
-                                       char **text, size_t *len);
+                                          const nprfx_stipple_node_params *np, const char *path,
+                                          char **text, size_t *len);
 
 /* The stipple node's vector export for render arguments of the `stipple` node (its inputs and
  * params at the frame's time; window is ignored), formatted as `kind`: nprfx_node_export with
  * a path of kind's extension, so the arguments get the checks of any node call (an output image
  * of the node's channels included). */
 nprfx_result internal_stipple_node_export(const nprfx_render_args *args,
-                                       nprfx_stipple_format_kind kind, char **text, size_t *len);
+                                          nprfx_stipple_format_kind kind, char **text, size_t *len);
 
 #ifdef __cplusplus
 }

@@ -46,7 +46,7 @@ static double tone_psnr(nprfx_context *ctx, const nprfx_stipple_params *p, const
     nprfx_image out = th_image(w, h, 4, NULL), bl = th_image(w, h, 1, NULL);
     nprfx_stipple_inputs in = plain_inputs(tone);
     double psnr = 0;
-    CHECK_OK(nprfx_stipple_render(ctx, p, &in, tone->bounds, &out));
+    CHECK_OK(nprfx_stipple_draw(ctx, p, &in, tone->bounds, &out));
     nprfx_image r = nprfx_image_channels(&out, 0, 1);
     CHECK_OK(nprfx_gaussian_blur(ctx, &r, &bl, sigma, NPRFX_BORDER_CLAMP));
     nprfx_rect inner = nprfx_rect_make(12, 12, w - 12, h - 12);
@@ -382,11 +382,11 @@ static int simd_differs(const nprfx_stipple_inputs *in, double tile)
         p.tile = tile;
         p.mode = mode;
         p.simd = 1;
-        CHECK_OK(nprfx_stipple_render(ctx4, &p, in, ref.bounds, &ref));
+        CHECK_OK(nprfx_stipple_draw(ctx4, &p, in, ref.bounds, &ref));
         for (int simd = 0; simd <= 2; simd += 2) {
             p.simd = simd;
             memset(out.data, 0, bytes);
-            CHECK_OK(nprfx_stipple_render(ctx4, &p, in, out.bounds, &out));
+            CHECK_OK(nprfx_stipple_draw(ctx4, &p, in, out.bounds, &out));
             bad += memcmp(ref.data, out.data, bytes) != 0;
         }
     }
@@ -586,7 +586,7 @@ static void test_disc_area(void)
     for (int seed = 0; seed < 4; seed++) {
         p.seed = (uint64_t)seed;
         CHECK_OK(nprfx_stipple_collect(ctx1, &p, &in, tone.bounds, &list, &count));
-        CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, tone.bounds, &out));
+        CHECK_OK(nprfx_stipple_draw(ctx4, &p, &in, tone.bounds, &out));
         for (size_t i = 0; i < count; i++)
             for (size_t k = i + 1; k < count; k++)
                 rmin = fmin(rmin, hypot(list[i].x - list[k].x, list[i].y - list[k].y));
@@ -675,11 +675,11 @@ static void test_sequence(void)
     p.coverage_channel = 1;
     nprfx_image r1 = th_image(w, h, 5, NULL), r2 = th_image(w, h, 5, NULL),
                 r3 = th_image(w, h, 5, NULL);
-    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r1.bounds, &r1));
+    CHECK_OK(nprfx_stipple_draw(ctx4, &p, &in, r1.bounds, &r1));
     p.sequence = s2;
-    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r2.bounds, &r2));
+    CHECK_OK(nprfx_stipple_draw(ctx4, &p, &in, r2.bounds, &r2));
     p.sequence = NULL;
-    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r3.bounds, &r3));
+    CHECK_OK(nprfx_stipple_draw(ctx4, &p, &in, r3.bounds, &r3));
     CHECK(memcmp(r1.data, r2.data, sizeof(float) * 5 * w * h) == 0);
     CHECK(memcmp(r1.data, r3.data, sizeof(float) * 5 * w * h) == 0);
     nprfx_stipple_sequence_destroy(s2);
@@ -689,12 +689,12 @@ static void test_sequence(void)
      * but for the rare one whose centre sits exactly on the frame's right or bottom edge */
     long long whole = 0, tiled = 0;
     p.count = &whole;
-    CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, r1.bounds, &r1));
+    CHECK_OK(nprfx_stipple_draw(ctx4, &p, &in, r1.bounds, &r1));
     p.count = &tiled;
     for (int ty = 0; ty < h; ty += 37)
         for (int tx = 0; tx < w; tx += 53)
-            CHECK_OK(nprfx_stipple_render(ctx4, &p, &in, nprfx_rect_make(tx, ty, tx + 53, ty + 37),
-                                          &r2));
+            CHECK_OK(
+                nprfx_stipple_draw(ctx4, &p, &in, nprfx_rect_make(tx, ty, tx + 53, ty + 37), &r2));
     p.count = NULL;
     nprfx_stipple *owned = NULL;
     size_t nowned = 0;
@@ -820,7 +820,8 @@ static void test_export(void)
     /* errors name what is wrong */
     nprfx_image none[3] = {{0}, {0}, {0}};
     a.inputs = none;
-    CHECK(internal_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len) == NPRFX_ERR_MISSING_INPUT);
+    CHECK(internal_stipple_node_export(&a, NPRFX_STIPPLE_CSV, &csv, &len) ==
+          NPRFX_ERR_MISSING_INPUT);
     CHECK(node_render(ctx1, none, pv, &out, out.bounds) == NPRFX_ERR_MISSING_INPUT);
     pv[th_param(node, "mode")].v[0] = NPRFX_STIPPLE_MULTITONE;
     pv[th_param(node, "tones")].s = "0.5, banana";
