@@ -1,4 +1,4 @@
-/* nprfx CLI — the frame-buffer pool of frame_pool.h. A graph has few distinct frame sizes (a
+/* nprfx graph engine — the frame-buffer pool of frame_pool.h. A graph has few distinct frame sizes (a
  * plate, a few channel counts), so the idle buffers are a short list searched linearly, most
  * recently released first (its pages are the likeliest to be in cache). */
 #include "frame_pool.h"

@@ -1,4 +1,4 @@
-/* nprfx CLI — a pool of frame buffers for the runner (docs/design.md §1 "Memory").
+/* nprfx graph engine — a pool of frame buffers for the graph engine (docs/design.md §1 "Memory").
  *
  * A graph allocates the same frames every frame: each node's output has the same size and
  * channels as at the frame before. Fresh frames above glibc's mmap threshold (32 MiB: one 1080p
@@ -8,7 +8,7 @@
  * them, so a node sees exactly what it saw before and outputs stay bit-identical. Idle buffers
  * are bounded: the caller trims them (frame_pool_trim) under its byte bounds.
  *
- * Not thread-safe: the runner allocates frames from its one evaluation thread. */
+ * Not thread-safe: the engine allocates frames from its one evaluation thread. */
 #ifndef NPRFX_CLI_FRAME_POOL_H
 #define NPRFX_CLI_FRAME_POOL_H
 

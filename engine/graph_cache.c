@@ -1,4 +1,4 @@
-/* nprfx CLI — the cache of node results, one entry per (node, frame): a hash table to find an
+/* nprfx graph engine — the cache of node results, one entry per (node, frame): a hash table to find an
  * entry in constant time, whatever the graph's size, and a list in least-recently-used order with
  * a tail pointer, so that eviction starts at the oldest entry without walking the list. Bounded by
  * bytes (the frames) and by entries (graphs of many tiny frames: the bookkeeping of 100,000 4x4

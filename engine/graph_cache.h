@@ -1,4 +1,4 @@
-/* nprfx CLI — the per-(node, frame) result cache with its bounds and least-recently-used eviction
+/* nprfx graph engine — the per-(node, frame) result cache with its bounds and least-recently-used eviction
  * (graph_cache.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_CACHE_H
 #define NPRFX_CLI_GRAPH_CACHE_H

@@ -1,4 +1,4 @@
-/* nprfx CLI — cycle detection at load: one depth-first search over the whole graph with an
+/* nprfx graph engine — cycle detection at load: one depth-first search over the whole graph with an
  * explicit stack, O(nodes + references), so neither the graph's depth nor its number of paths
  * matters (a per-node walk of every path gave up on wide fan-outs and let cycles through). A
  * cycle is reported with the names of the nodes on it, in the direction the data flows. */

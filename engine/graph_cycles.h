@@ -1,4 +1,4 @@
-/* nprfx CLI — the check that a linked graph has no cycle (graph_cycles.c). Never installed. */
+/* nprfx graph engine — the check that a linked graph has no cycle (graph_cycles.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_CYCLES_H
 #define NPRFX_CLI_GRAPH_CYCLES_H
 

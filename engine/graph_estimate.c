@@ -1,4 +1,4 @@
-/* nprfx CLI — nprfx_graph_plan: the memory a frame needs, estimated before frame 1 from the
+/* nprfx graph engine — nprfx_graph_plan: the memory a frame needs, estimated before frame 1 from the
  * graph and the frames' sizes alone (plates' headers, synth sizes, "format"), by running the
  * memory plan on shapes instead of pixels; strips when whole frames would pass the limit. */
 #include <stdint.h>

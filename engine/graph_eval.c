@@ -1,4 +1,4 @@
-/* nprfx CLI — graph evaluation: a node's result at a frame, from the cache or rendered, its
+/* nprfx graph engine — graph evaluation: a node's result at a frame, from the cache or rendered, its
  * inputs evaluated first on an explicit work stack; processing nodes run through
  * nprfx_node_render (or the render hook), temporal inputs fetched through the cache and pinned
  * while a render call uses them. */

@@ -1,4 +1,4 @@
-/* nprfx CLI — evaluating a node at a frame (graph_eval.c). Never installed. */
+/* nprfx graph engine — evaluating a node at a frame (graph_eval.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_EVAL_H
 #define NPRFX_CLI_GRAPH_EVAL_H
 

@@ -1,4 +1,4 @@
-/* nprfx CLI — the files a graph reads and writes: its read patterns and the shot it declares
+/* nprfx graph engine — the files a graph reads and writes: its read patterns and the shot it declares
  * (what nprfx farm checks before it submits a shot in chunks: every chunk must find its plates
  * and see the same shot), the patterns it writes, and the refusal to write over an input. */
 #define _DEFAULT_SOURCE /* realpath */

@@ -1,4 +1,4 @@
-/* nprfx CLI — the files a graph reads and writes (graph_files.c). Never installed. */
+/* nprfx graph engine — the files a graph reads and writes (graph_files.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_FILES_H
 #define NPRFX_CLI_GRAPH_FILES_H
 

@@ -1,4 +1,4 @@
-/* nprfx CLI — the frames a graph holds: each frame buffer counted against the memory limit as
+/* nprfx graph engine — the frames a graph holds: each frame buffer counted against the memory limit as
  * it is handed out, adopted or given back, the caches stateful nodes keep, the peak, the window of
  * frames temporal sources are read at, and the per-node costs (nprfx_graph_stats). */
 #include <stdint.h>

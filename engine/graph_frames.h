@@ -1,4 +1,4 @@
-/* nprfx CLI — the frames a graph holds, counted against the memory limit, and the temporal window
+/* nprfx graph engine — the frames a graph holds, counted against the memory limit, and the temporal window
  * (graph_frames.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_FRAMES_H
 #define NPRFX_CLI_GRAPH_FRAMES_H

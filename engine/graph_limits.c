@@ -1,4 +1,4 @@
-/* nprfx CLI — a graph's frames against the image memory bound (io_limits.h), checked when the
+/* nprfx graph engine — a graph's frames against the image memory bound (io_limits.h), checked when the
  * graph is loaded: a synth node or a "format" asking for a frame larger than NPRFX_READ_LIMIT
  * allows is refused before the first frame instead of failing in calloc after gigabytes. Frames
  * whose size comes from a file are checked when the file is read (io_validate.h), and every

@@ -1,4 +1,4 @@
-/* nprfx CLI — synth sizes and "format" against the image memory bound (graph_limits.c). Never
+/* nprfx graph engine — synth sizes and "format" against the image memory bound (graph_limits.c). Never
  * installed. */
 #ifndef NPRFX_CLI_GRAPH_LIMITS_H
 #define NPRFX_CLI_GRAPH_LIMITS_H

@@ -1,5 +1,5 @@
 #define _DEFAULT_SOURCE /* realpath */
-/* nprfx CLI — node graphs: parsing (internal_json) and validation against the descriptors,
+/* nprfx graph engine — node graphs: parsing (internal_json) and validation against the descriptors,
  * overrides
  * (--set, --shot, synthesized reads), the frames to render, and freeing a graph; evaluation is in
  * graph_eval.c, writing in graph_write.c.

@@ -1,4 +1,4 @@
-/* nprfx CLI — frames under the memory limit (docs/design.md §1 "Memory"): a frame is handed out
+/* nprfx graph engine — frames under the memory limit (docs/design.md §1 "Memory"): a frame is handed out
  * only when it fits, after the pool's idle buffers and unpinned cached results, least recently
  * used first, have made room; a result leaves the cache once its last consumer at the frame has
  * run, and after each frame every result outside the temporal sources' window goes. */

@@ -1,4 +1,4 @@
-/* nprfx CLI — frames handed out under the memory limit, and results freed once consumed
+/* nprfx graph engine — frames handed out under the memory limit, and results freed once consumed
  * (graph_memory.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_MEMORY_H
 #define NPRFX_CLI_GRAPH_MEMORY_H

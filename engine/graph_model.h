@@ -1,4 +1,4 @@
-/* nprfx CLI — the graph engine's bottom: the parsed graph (nodes, references, the result cache's
+/* nprfx graph engine — the graph engine's bottom: the parsed graph (nodes, references, the result cache's
  * entries, the memory plan's and the statistics' fields) that every file of the engine shares.
  * Never installed. */
 #ifndef NPRFX_CLI_GRAPH_MODEL_H

@@ -1,4 +1,4 @@
-/* nprfx CLI — the graph's node names: a hash index built while parsing, so references resolve in
+/* nprfx graph engine — the graph's node names: a hash index built while parsing, so references resolve in
  * constant time (a linear search per reference made validation quadratic: minutes for a 30,000-node
  * chain) and a name given twice is found as it is added. the JSON reader keeps every duplicate key
  * of an object, so without this check the second node of a name would silently be unreachable. */

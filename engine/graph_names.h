@@ -1,4 +1,4 @@
-/* nprfx CLI — the hash index of node names (graph_names.c). Never installed. */
+/* nprfx graph engine — the hash index of node names (graph_names.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_NAMES_H
 #define NPRFX_CLI_GRAPH_NAMES_H
 

@@ -1,7 +1,7 @@
-/* nprfx CLI — the graph's memory plan (docs/design.md §1 "Memory").
+/* nprfx graph engine — the graph's memory plan (docs/design.md §1 "Memory").
  *
  * The cache alone kept every result until its byte bound pushed it out: a graph over 1080p plates
- * held 2 GiB of frames it would never read again. The runner knows the graph, so it plans:
+ * held 2 GiB of frames it would never read again. The engine knows the graph, so it plans:
  *  - each result knows how many inputs read it at its frame (plan_uses); when the last of them
  *    has rendered, the result leaves the cache at once and its buffer goes back to the pool;
  *  - a node that some temporal node reads at other frames (what the node declares through

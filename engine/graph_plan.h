@@ -1,4 +1,4 @@
-/* nprfx CLI — the memory plan: consumer counts, temporal sources, the channels plates keep
+/* nprfx graph engine — the memory plan: consumer counts, temporal sources, the channels plates keep
  * (graph_plan.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_PLAN_H
 #define NPRFX_CLI_GRAPH_PLAN_H

@@ -1,4 +1,4 @@
-/* nprfx CLI — a graph's plates: read nodes (the channels the graph uses, the motion channels a
+/* nprfx graph engine — a graph's plates: read nodes (the channels the graph uses, the motion channels a
  * convention appends, colour conversion; whole frames or a strip of rows) and synth nodes. */
 #define _DEFAULT_SOURCE
 #include <math.h>

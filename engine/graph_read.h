@@ -1,4 +1,4 @@
-/* nprfx CLI — read and synth nodes' plates, whole or by rows (graph_read.c). Never installed. */
+/* nprfx graph engine — read and synth nodes' plates, whole or by rows (graph_read.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_READ_H
 #define NPRFX_CLI_GRAPH_READ_H
 

@@ -1,4 +1,4 @@
-/* nprfx CLI — resolving a graph's references: file patterns at a frame, the channels each input
+/* nprfx graph engine — resolving a graph's references: file patterns at a frame, the channels each input
  * takes from its source, and the motion-vector conventions of read nodes. The evaluation, the
  * memory plan, strip renders and host projects all resolve them the same way. */
 #include <math.h>

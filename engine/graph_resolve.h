@@ -1,4 +1,4 @@
-/* nprfx CLI — file patterns at a frame, the channels each input takes, motion conventions
+/* nprfx graph engine — file patterns at a frame, the channels each input takes, motion conventions
  * (graph_resolve.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_RESOLVE_H
 #define NPRFX_CLI_GRAPH_RESOLVE_H

@@ -1,4 +1,4 @@
-/* nprfx CLI — strip renders (docs/design.md §1 "Memory").
+/* nprfx graph engine — strip renders (docs/design.md §1 "Memory").
  *
  * A write whose whole chain renders by rows (reads of EXR files, nodes with NPRFX_NODE_ROWS and
  * a footprint) goes a strip of rows at a time: every node of the chain renders the strip's rows

@@ -1,4 +1,4 @@
-/* nprfx CLI — rendering write nodes a strip of rows at a time (graph_strips.c). Never installed. */
+/* nprfx graph engine — rendering write nodes a strip of rows at a time (graph_strips.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_STRIPS_H
 #define NPRFX_CLI_GRAPH_STRIPS_H
 

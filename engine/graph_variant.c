@@ -1,4 +1,4 @@
-/* nprfx CLI — the graph variants that nprfx measure compares a look with (graph.h): the same
+/* nprfx graph engine — the graph variants that nprfx measure compares a look with (graph.h): the same
  * graph with its patterns stuck to the screen (shower door), or drawn anew every frame (white).
  * Only the plates and the seeds change, so any graph gets its baselines without editing it. */
 #include <stdint.h>

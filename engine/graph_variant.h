@@ -1,4 +1,4 @@
-/* nprfx CLI — how measure's variants alter plates and params (graph_variant.c). Never installed. */
+/* nprfx graph engine — how measure's variants alter plates and params (graph_variant.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_VARIANT_H
 #define NPRFX_CLI_GRAPH_VARIANT_H
 

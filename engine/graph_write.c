@@ -1,4 +1,4 @@
-/* nprfx CLI — the graph's outputs: write nodes (EXR and preview through temporary names, never
+/* nprfx graph engine — the graph's outputs: write nodes (EXR and preview through temporary names, never
  * onto one of the graph's inputs), rendering a frame, and the small queries the runner and bench
  * use. */
 #define _DEFAULT_SOURCE

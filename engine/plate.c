@@ -1,4 +1,4 @@
-/* nprfx CLI — plate and file-info helpers (plate.h): plain C, independent of the image library
+/* nprfx graph engine — plate and file-info helpers (plate.h): plain C, independent of the image library
  * behind the readers. */
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* nprfx CLI — colour (OpenColorIO): conversions between colour spaces of a config, or the
+/* nprfx I/O (libnprfx-io) — colour (OpenColorIO): conversions between colour spaces of a config, or the
  * built-in linear and sRGB without one, and the transfer functions previews use. */
 #include "io_colour.h"
 

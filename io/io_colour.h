@@ -1,4 +1,4 @@
-/* nprfx CLI — colour-space conversion (io_colour.cpp, OpenColorIO). */
+/* nprfx I/O (libnprfx-io) — colour-space conversion (io_colour.cpp, OpenColorIO). */
 #ifndef NPRFX_CLI_IO_COLOUR_H
 #define NPRFX_CLI_IO_COLOUR_H
 

@@ -1,4 +1,4 @@
-/* nprfx CLI — the guard every reader calls first (io_guard.h): EXRs through the OpenEXRCore
+/* nprfx I/O (libnprfx-io) — the guard every reader calls first (io_guard.h): EXRs through the OpenEXRCore
  * checks of io_validate.c, other formats by their header's size through OpenImageIO, and the
  * per-thread read deadline. C++ only because OpenImageIO is; like the readers and writers, every
  * entry point is extern "C" and catches every exception. */

@@ -1,4 +1,4 @@
-/* nprfx CLI — the guard every reader calls before OpenImageIO touches a file (io_guard.cpp): the
+/* nprfx I/O (libnprfx-io) — the guard every reader calls before OpenImageIO touches a file (io_guard.cpp): the
  * EXR checks of io_validate.h, a size check of other formats, and the read deadline. */
 #ifndef NPRFX_CLI_IO_GUARD_H
 #define NPRFX_CLI_IO_GUARD_H

@@ -1,4 +1,4 @@
-/* nprfx CLI — what a file holds and what a read takes of it (OpenImageIO): its parts, views and
+/* nprfx I/O (libnprfx-io) — what a file holds and what a read takes of it (OpenImageIO): its parts, views and
  * windows, the channels a group of parts delivers under plate-unique names, and the choice of
  * parts and view (docs/design.md §2.3). */
 #include "io_parts.h"

@@ -1,4 +1,4 @@
-/* nprfx CLI — what a file holds and what a read takes of it (io_parts.cpp, OpenImageIO): the
+/* nprfx I/O (libnprfx-io) — what a file holds and what a read takes of it (io_parts.cpp, OpenImageIO): the
  * parts, views and channels the reader and the writer share. C++ only. */
 #ifndef NPRFX_CLI_IO_PARTS_H
 #define NPRFX_CLI_IO_PARTS_H

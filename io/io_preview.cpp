@@ -1,4 +1,4 @@
-/* nprfx CLI — 8-bit PNG previews of scene-linear images, through an OCIO display and view or the
+/* nprfx I/O (libnprfx-io) — 8-bit PNG previews of scene-linear images, through an OCIO display and view or the
  * sRGB transfer function. */
 #include "nprfx/io_oiio.h"
 #include "io_colour.h"

@@ -1,4 +1,4 @@
-/* nprfx CLI — reading image files (OpenImageIO): whole plates, the channels a caller picks, a
+/* nprfx I/O (libnprfx-io) — reading image files (OpenImageIO): whole plates, the channels a caller picks, a
  * strip of rows at a time, header facts for nprfx info and attributes. Every entry point is
  * extern "C", catches every exception (a C caller cannot unwind through it) and reports through
  * nprfx_error, naming the file and, where one is at fault, the channel. */

@@ -1,4 +1,4 @@
-/* nprfx CLI — the EXR checks of io_validate.h, on OpenEXRCore's C API.
+/* nprfx I/O (libnprfx-io) — the EXR checks of io_validate.h, on OpenEXRCore's C API.
  *
  * Everything here reads headers and the 8-20 byte chunk leaders, never pixel data, so a valid
  * 4K plate of 135 chunks costs 135 small reads. Messages name the file, the part and the chunk;

@@ -1,4 +1,4 @@
-/* nprfx CLI — checks a file before OpenImageIO touches it (damaged files).
+/* nprfx I/O (libnprfx-io) — checks a file before OpenImageIO touches it (damaged files).
  *
  * OpenImageIO trusts a header: a damaged EXR that declares a 2000000000x3 window, a chunk table
  * larger than the file or chunks that inflate a thousandfold makes it allocate gigabytes, rebuild

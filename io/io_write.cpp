@@ -1,4 +1,4 @@
-/* nprfx CLI — writing image files (OpenImageIO): whole images and a strip of rows at a time in
+/* nprfx I/O (libnprfx-io) — writing image files (OpenImageIO): whole images and a strip of rows at a time in
  * the channels' own types, and text files; always through a temporary name beside the target
  * and a rename. Every entry point is extern "C", catches every exception and reports through
  * nprfx_error. */

@@ -1,4 +1,4 @@
-/* nprfx CLI — writing image files, whole or a strip of rows at a time, and text files, through a
+/* nprfx I/O (libnprfx-io) — writing image files, whole or a strip of rows at a time, and text files, through a
  * temporary name and a rename (io_write.cpp, OpenImageIO). */
 #ifndef NPRFX_CLI_IO_WRITE_H
 #define NPRFX_CLI_IO_WRITE_H
