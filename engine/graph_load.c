@@ -1,16 +1,16 @@
 #define _DEFAULT_SOURCE /* realpath */
-/* nprfx graph engine — node graphs: parsing (internal_json) and validation against the descriptors,
- * overrides
- * (--set, --shot, synthesized reads), the frames to render, and freeing a graph; evaluation is in
- * graph_eval.c, writing in graph_write.c.
+/* nprfx graph engine — node graphs: parsing (json.c) and validation against the descriptors,
+ * overrides (--set, --shot, synthesized reads), the frames to render, and freeing a graph;
+ * evaluation is in graph_eval.c, writing in graph_write.c.
  *
  * A graph is {"frames": "1-24", "nodes": {NAME: {...}, ...}}. Processing nodes are
  * {"node": ID, "inputs": {INPUT: REF}, "params": {PARAM: VALUE}}; the built-in I/O nodes are
- * read {"node": "read", "path": SEQ, "colorspace": CS, "vectors": CONVENTION, "part": PART,
- * "view": VIEW},
+ * read {"node": "read", "path": SEQ, "colorspace": CS, "vectors": CONVENTION, "aovs": PROFILE,
+ * "part": PART, "view": VIEW},
  * synth {"node": "synth", "scene": NAME, "size": "WxH"} and
  * write {"node": "write", "inputs": {"image": REF}, "path": SEQ, "preview": SEQ}.
- * A REF is "name" or "name:channels" (see channels.h).
+ * A REF is "name" or "name:channels" (nprfx/channels.h); on a plate, CHANNELS may be a canonical
+ * AOV (nprfx/aov.h: "plate:depth") that its profile resolves.
  *
  * Evaluation pulls from the write nodes. Results are cached per (node, frame) under a byte bound
  * with least-recently-used eviction (graph_cache.c); temporal nodes fetch their inputs at other
@@ -35,6 +35,7 @@
 #include "nprfx/seq.h"
 #include "engine_util.h"
 #include "json.h"
+#include "nprfx/aov.h"
 #include "graph_io.h"
 
 /* ---------------------------------------------------------------- parsing ---- */
@@ -129,6 +130,7 @@ static const io_field io_fields[] = {
     {"preview", offsetof(gnode, preview), 0, KB(GK_WRITE)},
     {"colorspace", offsetof(gnode, colorspace), 0, KB(GK_READ) | KB(GK_WRITE)},
     {"vectors", offsetof(gnode, vectors), 0, KB(GK_READ)},
+    {"aovs", offsetof(gnode, aovs), 0, KB(GK_READ)},
     {"compression", offsetof(gnode, compression), 0, KB(GK_WRITE)},
     {"display", offsetof(gnode, display), 0, KB(GK_WRITE)},
     {"view", offsetof(gnode, view), 0, KB(GK_WRITE)},
@@ -173,6 +175,15 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
         if (!s)
             return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': %s must be a string", n->name,
                                key);
+        if (!strcmp(key, "aovs") && strcmp(s, "auto") && nprfx_aov_profile_find(s) < 0) {
+            char list[256] = "auto";
+            for (int p = 0; p < NPRFX_PROFILE_COUNT; p++) {
+                strcat(list, ", ");
+                strcat(list, nprfx_aov_profile_name(p));
+            }
+            return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': aovs '%s' is not one of: %s",
+                               n->name, s, list);
+        }
         char **dst = (char **)((char *)n + f->offset);
         free(*dst);
         *dst = engine_strdup(s);
@@ -548,6 +559,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->preview);
         free(n->colorspace);
         free(n->vectors);
+        free(n->aovs);
         free(n->compression);
         free(n->scene);
         free(n->display);

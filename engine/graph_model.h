@@ -36,6 +36,7 @@ typedef struct gnode {
     char *path, *preview, *colorspace, *vectors, *compression, *scene;
     char *display, *view;
     char *part, *read_view; /* read: the file's part and view ("view" of a write is OCIO's) */
+    char *aovs;             /* read: its renderer profile (nprfx/aov.h); NULL or "auto": detected */
     int half, raw, width, height;
     int noted; /* read: its note on parts and views was given (once per run) */
     /* read: the channels the graph asks of it by name (references' selections, the vectors

@@ -8,6 +8,7 @@
 #include "nprfx/graph.h"
 #include "graph_model.h"
 #include "graph_resolve.h"
+#include "nprfx/aov.h"
 #include "nprfx/channels.h"
 #include "engine_util.h"
 
@@ -81,6 +82,46 @@ nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const
 
 /* Which channels of a source with `names` input k of node n takes (its reference's selection,
  * else its AOV hint, else all), checked against the input's channel count. */
+/* A plate's channels for canonical AOV `name` (nprfx/aov.h), through its read node's profile
+ * ("aovs"; detected from the channel names when unset or "auto", the generic names after the
+ * detected profile's): the count, or -1 when name is no canonical AOV or the plate has none of
+ * its channels. Motion is left to the read node's vector convention, which turns a renderer's
+ * vectors into nprfx's; its raw channels would have the wrong signs. *profile gets the profile
+ * looked in. Only plates (read, synth) are resolved: a node's output is named by the node. */
+static int canonical_channels(const gnode *src, const char *name, const char *const *names,
+                              int nc, int *idx, int max, int *profile)
+{
+    int aov = nprfx_aov_find(name);
+    *profile = NPRFX_PROFILE_GENERIC;
+    if (aov < 0 || aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT) return -1;
+    if (src->kind != GK_READ && src->kind != GK_SYNTH) return -1;
+    int chosen = src->aovs && strcmp(src->aovs, "auto");
+    *profile = chosen ? nprfx_aov_profile_find(src->aovs)
+                      : nprfx_aov_detect(names, nc, NULL, NULL, 0);
+    const char *cand = nprfx_aov_candidates(*profile, aov);
+    int count = cand ? nprfx_channels_from_hint(names, nc, cand, idx, max) : -1;
+    if (count < 0 && !chosen && *profile != NPRFX_PROFILE_GENERIC)
+        count = nprfx_channels_from_hint(names, nc,
+                                         nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, aov), idx,
+                                         max);
+    return count;
+}
+
+/* The hint's alternatives that are canonical AOVs, tried through the plate's profile after its
+ * literal names found nothing. */
+static int canonical_from_hint(const gnode *src, const char *hint, const char *const *names,
+                               int nc, int *idx, int max)
+{
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s", hint);
+    for (char *save = NULL, *alt = strtok_r(buf, "|", &save); alt;
+         alt = strtok_r(NULL, "|", &save)) {
+        int profile, k = canonical_channels(src, alt, names, nc, idx, max, &profile);
+        if (k > 0) return k;
+    }
+    return -1;
+}
+
 nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k,
                                            const char *const *names, int nc, int *idx, int *countp)
 {
@@ -91,8 +132,28 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
     int count = -1;
     char bad[256];
     int amb = 0;
+    const gnode *srcn = &g->nodes[ref->src];
     if (ref->sel) {
         count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
+        int profile = NPRFX_PROFILE_GENERIC;
+        if (count < 0 && !amb) {
+            int k = canonical_channels(srcn, ref->sel, names, nc, idx, 256, &profile);
+            if (k > 0) count = k;
+        }
+        if (count < 0 && nprfx_aov_find(ref->sel) >= 0 &&
+            (srcn->kind == GK_READ || srcn->kind == GK_SYNTH)) {
+            int aov = nprfx_aov_find(ref->sel);
+            const char *cand = nprfx_aov_candidates(profile, aov);
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': input '%s': plate '%s' has no %s: its %s profile "
+                               "looks for %s; name the channels (\"%s:CHANNELS\"), or the "
+                               "profile (\"aovs\" on the read node)",
+                               n->name, iname, src, ref->sel, nprfx_aov_profile_name(profile),
+                               aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT
+                                   ? "the vectors its \"vectors\" convention makes"
+                                   : (cand ? cand : "no fixed channel name"),
+                               src);
+        }
         if (count < 0) {
             char list[1024] = "";
             for (int c = 0; c < nc && strlen(list) < 900; c++) {
@@ -106,6 +167,8 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
         }
     } else if (in && in->aov) {
         count = nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
+        if (count < 0)
+            count = canonical_from_hint(srcn, in->aov, names, nc, idx, NPRFX_MAX_CHANNELS + 1);
         if (count < 0 && nc <= 4 && (in->channels == 0 || in->channels == nc)) {
             count = nc;
             for (int c = 0; c < nc; c++)

@@ -37,6 +37,10 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "                      longer shot than the graph was written for\n"
         "  --set N.P=VALUE     override param P of node N (repeatable), e.g. --set "
         "blend.opacity=0.5\n"
+        "  --aovs PROFILE      the renderer every read node's plates come from, for the\n"
+        "                      canonical AOVs graphs name (plate:depth): auto (detected from\n"
+        "                      the channel names), generic, blender, arnold, renderman, karma,\n"
+        "                      vray, redshift, nuke; as --set READ.aovs=PROFILE on each\n"
         "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
         "  --output-dir DIR    put relative write paths under DIR\n"
         "  --cache-mb N        memory for cached node results and idle frame buffers\n"
@@ -97,6 +101,7 @@ typedef struct run_opts {
     const char *prog, *frames, *shot;
     const char *const *sets;
     int nsets, keep_going, quiet, several, wait, stats, check, shared_lock;
+    const char *aovs; /* --aovs: every read node's profile */
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -203,6 +208,17 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         status = 2;
         goto done;
     }
+    for (int i = 0; ro->aovs && i < nprfx_graph_node_count(g); i++) {
+        nprfx_graph_node_info info = {sizeof info};
+        char set[512];
+        if (nprfx_graph_node(g, i, &info) || info.kind != NPRFX_GRAPH_READ) continue;
+        snprintf(set, sizeof set, "%s.aovs=%s", info.name, ro->aovs);
+        if (nprfx_graph_set(g, set)) {
+            fprintf(stderr, "%s run: --aovs: %s\n", prog, cli_message(env.ctx));
+            status = 2;
+            goto done;
+        }
+    }
     for (int i = 0; i < nsets; i++)
         if ((!ro->several || graph_has_node_of(g, sets[i])) && nprfx_graph_set(g, sets[i])) {
             fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
@@ -279,7 +295,7 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
     int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0;
-    const char *mem_limit = NULL;
+    const char *mem_limit = NULL, *aovs = NULL;
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -291,6 +307,8 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
             frames = argv[++i];
         else if (!strcmp(a, "--shot") && has)
             shot = argv[++i];
+        else if (!strcmp(a, "--aovs") && has)
+            aovs = argv[++i];
         else if (!strcmp(a, "--set") && has && nsets < 256)
             sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--threads") && has)
@@ -344,8 +362,8 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     opt.no_pool = no_pool;
     opt.strip_rows = strip_rows;
     int status = 0;
-    run_opts ro = {prog,  frames,      shot, sets,  nsets, keep_going,
-                   quiet, ngraphs > 1, wait, stats, check, shared_lock};
+    run_opts ro = {prog,  frames,      shot, sets,  nsets,       keep_going,
+                   quiet, ngraphs > 1, wait, stats, check, shared_lock, aovs};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

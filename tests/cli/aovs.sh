@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Canonical AOVs through renderer profiles (nprfx/aov.h, docs/design.md §2.4): a graph that names
+# what it means ("plate:depth", "plate:normal", "plate:id", "plate:coverage") renders the same
+# pixels on a Blender-named plate and on the same plate under Arnold's names, whether the profile
+# is detected or given (--aovs, "aovs"); descriptors' AOV hints find Arnold's names too; a plate
+# without an AOV fails, writing nothing, naming the AOV, the profile and the names it looked for.
+set -u
+NPRFX=$1; SRC=$2; W=$3
+rm -rf "$W"; mkdir -p "$W"; cd "$W"
+passes=0; fails=0
+pass() { passes=$((passes+1)); }
+fail() { echo "FAIL: $*"; fails=$((fails+1)); }
+
+"$NPRFX" synth orbit --layout blender --size 96x64 --frames 1-2 -o bl/orbit.####.exr > /dev/null ||
+  { echo "FAIL: synth"; exit 1; }
+# The same numbers under Arnold's AOV names (Arnold Developer Guide, "AOVs").
+VL=ViewLayer
+mkdir -p ar nonormal
+for f in 0001 0002; do
+  oiiotool bl/orbit.$f.exr --ch "R=$VL.Combined.R,G=$VL.Combined.G,B=$VL.Combined.B,A=$VL.Combined.A,Z=$VL.Depth.Z,N.R=$VL.Normal.X,N.G=$VL.Normal.Y,N.B=$VL.Normal.Z,P.R=$VL.Position.X,P.G=$VL.Position.Y,P.B=$VL.Position.Z,ID=$VL.IndexOB.X,diffuse_albedo.R=$VL.DiffCol.R,diffuse_albedo.G=$VL.DiffCol.G,diffuse_albedo.B=$VL.DiffCol.B" \
+    -o ar/orbit.$f.exr > /dev/null 2>&1 || { echo "FAIL: oiiotool"; exit 1; }
+  # and a plate without normals
+  oiiotool ar/orbit.$f.exr --ch "R,G,B,A,Z,ID" -o nonormal/orbit.$f.exr > /dev/null 2>&1
+done
+
+cat > canon.json <<'G'
+{"frames": "1-2", "nodes": {
+ "plate": {"node": "read", "path": "bl/orbit.####.exr"},
+ "ink": {"node": "lines", "inputs": {"id": "plate:id", "coverage": "plate:coverage",
+         "depth": "plate:depth", "normal": "plate:normal"}, "params": {"width": 1.5}},
+ "w": {"node": "write", "inputs": {"image": "ink"}, "path": "out/ink.####.exr"}}}
+G
+cat > hints.json <<'G'
+{"frames": "1-2", "nodes": {
+ "plate": {"node": "read", "path": "bl/orbit.####.exr"},
+ "ink": {"node": "lines", "inputs": {"id": "plate", "coverage": "plate:coverage", "depth": "plate",
+         "normal": "plate"}, "params": {"width": 1.5}},
+ "w": {"node": "write", "inputs": {"image": "ink"}, "path": "out/ink.####.exr"}}}
+G
+same() { # DIR_A DIR_B WHAT: every EXR equal at zero tolerance
+  local n=0
+  for f in 0001 0002; do
+    n=$((n+1))
+    "$NPRFX" diff "$1/ink.$f.exr" "$2/ink.$f.exr" --fail 0 > d.txt 2>&1 || { fail "$3: frame $f differs:"; cat d.txt; return; }
+  done
+  pass
+}
+run() { # OUTDIR GRAPH [args...]
+  local out=$1 graph=$2; shift 2
+  "$NPRFX" run "$graph" --quiet --output-dir "$out" "$@" > "$out.log" 2>&1 || { fail "run $graph $*:"; cat "$out.log"; }
+}
+run blender canon.json
+run arnold canon.json --set plate.path=ar/orbit.####.exr
+run arnold_given canon.json --set plate.path=ar/orbit.####.exr --aovs arnold
+run arnold_set canon.json --set plate.path=ar/orbit.####.exr --set plate.aovs=arnold
+run hints_blender hints.json
+run hints_arnold hints.json --set plate.path=ar/orbit.####.exr
+same blender/out arnold/out "canonical names, Blender and Arnold plates (detected)"
+same blender/out arnold_given/out "canonical names, --aovs arnold"
+same blender/out arnold_set/out "canonical names, plate.aovs=arnold"
+same blender/out hints_blender/out "descriptor hints against canonical names on Blender plates"
+same blender/out hints_arnold/out "descriptor hints on Arnold plates"
+
+# A plate without the AOV: refused, nothing written, with the AOV, the profile and its names.
+"$NPRFX" run canon.json --quiet --output-dir missing --set plate.path=nonormal/orbit.####.exr \
+  --aovs arnold > missing.log 2>&1
+st=$?
+msg="node 'ink': input 'normal': plate 'plate' has no normal: its arnold profile looks for N"
+[ $st -ne 0 ] && grep -qF "$msg" missing.log && [ ! -e missing/out/ink.0001.exr ] && pass ||
+  { fail "missing normal: status $st, expected '$msg':"; cat missing.log; }
+# A profile that is none.
+"$NPRFX" run canon.json --quiet --output-dir bad --aovs maya > bad.log 2>&1
+grep -qF "node 'plate': aovs 'maya' is not one of: auto, generic, blender, arnold, renderman, karma, vray, redshift, nuke" bad.log &&
+  pass || { fail "bad profile:"; cat bad.log; }
+# A profile given wrongly is the user's word: Blender plates read as V-Ray have no V-Ray names.
+"$NPRFX" run canon.json --quiet --output-dir wrong --aovs vray > wrong.log 2>&1
+grep -qF "has no id: its vray profile looks for VRayObjectID" wrong.log && pass ||
+  { fail "wrong profile:"; cat wrong.log; }
+echo "$passes passed, $fails failed"
+[ $fails -eq 0 ]
