@@ -228,3 +228,49 @@ int nprfx_aov_detect(const char *const *names, int n, const char *const *attr_na
     if (karma_c && karma_crypto) return NPRFX_PROFILE_KARMA;
     return NPRFX_PROFILE_GENERIC;
 }
+
+/* Blender's Vector pass (docs/design.md §2.1, measured on the sample renders), image y up:
+ * (X, Y) = position at frame i-1 minus position at i, (Z, W) = position at i minus position at
+ * i+1, so motion_prev = (X, -Y) and motion_next = (-Z, W). Nuke's backward and forward vectors
+ * point from this frame to the previous and the next one, in pixels, y up. Arnold's, Karma's and
+ * Redshift's single vector points to the next frame, in pixels, y up (§2.4 lists what of this
+ * their documentation leaves open). */
+static const nprfx_aov_vectors vectors[] = {
+    {"blender", "Vector.X,Vector.Y,Vector.Z,Vector.W", {1, -1, -1, 1}, 0},
+    {"nuke", "backward.u,backward.v,forward.u,forward.v", {1, -1, 1, -1}, 0},
+    {"arnold", "motionvector.R,motionvector.G,motionvector.R,motionvector.G", {-1, 1, 1, -1}, 1},
+    {"karma", "motionvector.R,motionvector.G,motionvector.R,motionvector.G", {-1, 1, 1, -1}, 1},
+    {"redshift", "MotionVectors.R,MotionVectors.G,MotionVectors.R,MotionVectors.G",
+     {-1, 1, 1, -1},
+     1},
+};
+enum { VECTORS_COUNT = (int)(sizeof vectors / sizeof vectors[0]) };
+
+const nprfx_aov_vectors *nprfx_aov_vectors_at(int i)
+{
+    return i >= 0 && i < VECTORS_COUNT ? &vectors[i] : NULL;
+}
+
+const nprfx_aov_vectors *nprfx_aov_vectors_find(const char *name)
+{
+    for (int i = 0; name && i < VECTORS_COUNT; i++)
+        if (!strcmp(name, vectors[i].name)) return &vectors[i];
+    return NULL;
+}
+
+const nprfx_aov_vectors *nprfx_aov_profile_vectors(int profile)
+{
+    switch (profile) {
+    case NPRFX_PROFILE_BLENDER: return nprfx_aov_vectors_find("blender");
+    case NPRFX_PROFILE_NUKE: return nprfx_aov_vectors_find("nuke");
+    case NPRFX_PROFILE_ARNOLD: return nprfx_aov_vectors_find("arnold");
+    case NPRFX_PROFILE_KARMA: return nprfx_aov_vectors_find("karma");
+    case NPRFX_PROFILE_REDSHIFT: return nprfx_aov_vectors_find("redshift");
+    default: return NULL;
+    }
+}
+
+int nprfx_aov_profile_depth(int profile)
+{
+    return profile == NPRFX_PROFILE_NUKE ? NPRFX_DEPTH_INVERSE : NPRFX_DEPTH_Z;
+}

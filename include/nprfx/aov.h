@@ -58,6 +58,35 @@ NPRFX_API int nprfx_aov_profile_find(const char *name);
  * renderer writes none under a fixed name (a rest position is a custom pass in Blender). */
 NPRFX_API const char *nprfx_aov_candidates(int profile, int aov);
 
+/* How a renderer writes screen motion, and how nprfx reads it into motion_prev and motion_next
+ * (pixels, image y down; motion_prev points from a pixel to where its surface point was one
+ * frame earlier, motion_next to where it will be one frame later). */
+typedef struct nprfx_aov_vectors {
+    const char *name; /* the read node's "vectors" value: "blender", "nuke", "arnold", ... */
+    /* Four channel selections, ',' between them, for prev.x, prev.y, next.x, next.y (the raw
+     * channels, as nprfx/channels.h selects them). */
+    const char *channels;
+    double scale[4]; /* nprfx's value = raw value * scale, per slot */
+    /* 1: the renderer writes one vector, towards the next frame; the prev slots read the same
+     * channels negated (motion_prev = -motion_next: exact for motion steady over the two
+     * frames, and announced as a fallback). */
+    int prev_from_next;
+} nprfx_aov_vectors;
+
+/* The conventions in turn (NULL past the last), and by name (NULL when none). */
+NPRFX_API const nprfx_aov_vectors *nprfx_aov_vectors_at(int i);
+NPRFX_API const nprfx_aov_vectors *nprfx_aov_vectors_find(const char *name);
+/* The convention a profile's renderer writes its vectors in; NULL when it has none under a
+ * fixed name (then the temporal nodes fall back on optical flow). */
+NPRFX_API const nprfx_aov_vectors *nprfx_aov_profile_vectors(int profile);
+
+/* How a profile's renderer stores the depth AOV. */
+typedef enum nprfx_aov_depth_kind {
+    NPRFX_DEPTH_Z = 0,      /* camera depth itself; background very large or infinite */
+    NPRFX_DEPTH_INVERSE = 1 /* 1/depth (Nuke's ScanlineRender): background 0 */
+} nprfx_aov_depth_kind;
+NPRFX_API int nprfx_aov_profile_depth(int profile);
+
 /* The profile a plate comes from: its header attributes first (nattr name/value pairs as text,
  * e.g. "arnold/version"), then its channel names (a Blender view layer's "Combined" pass, V-Ray's
  * "VRay*" elements, ...); NPRFX_PROFILE_GENERIC when nothing tells. */
