@@ -188,9 +188,8 @@ size_t nprfx_cryptomatte_manifest(const char *const *names, int n, char *buf, si
         if (!names[i]) continue; /* no name, nothing a manifest could say of it */
         char hex[9];
         const char *name = names[i];
-        hex8(nprfx_cryptomatte_bits(
-                 nprfx_cryptomatte_float(nprfx_cryptomatte_hash(name, strlen(name)))),
-             hex);
+        float stored = nprfx_cryptomatte_float(nprfx_cryptomatte_hash(name, strlen(name)));
+        hex8(nprfx_cryptomatte_bits(stored), hex);
         hex[8] = 0;
         if (!first) put(&s, ',');
         first = 0;
@@ -521,6 +520,7 @@ int nprfx_cryptomatte_find(const char *const *names, int n, const char *const *a
                            const char *const *attr_values, int nattr, nprfx_cryptomatte_layer *out,
                            int max)
 {
+    /* Quadratic in n, without allocating: a plate has tens to a few hundred channels. */
     int count = 0;
     for (int i = 0; names && i < n; i++) {
         size_t len;
