@@ -10,9 +10,9 @@ static const struct {
     const char *name;
     int channels;
 } aovs[NPRFX_AOV_COUNT] = {
-    {"beauty", 4},   {"albedo", 3}, {"diffuse_light", 3}, {"depth", 1},
-    {"normal", 3},   {"position", 3}, {"rest", 3},        {"uv", 2},
-    {"id", 1},       {"coverage", 1}, {"motion_prev", 2}, {"motion_next", 2},
+    {"beauty", 4}, {"albedo", 3},   {"diffuse_light", 3}, {"depth", 1},
+    {"normal", 3}, {"position", 3}, {"rest", 3},          {"uv", 2},
+    {"id", 1},     {"coverage", 1}, {"motion_prev", 2},   {"motion_next", 2},
 };
 
 static const char *const profiles[NPRFX_PROFILE_COUNT] = {
@@ -41,7 +41,7 @@ static const char *const candidates[NPRFX_PROFILE_COUNT][NPRFX_AOV_COUNT] = {
         {
             "Combined.RGBA|Combined.RGB",
             "DiffCol|Diffuse Color|Denoising Albedo",
-            NULL, /* DiffDir + DiffInd: a sum, not a channel */
+            "DiffDir|Diffuse Direct", /* the direct part: DiffInd adds bounced light */
             "Depth.Z",
             "Normal",
             "Position",
@@ -99,17 +99,9 @@ static const char *const candidates[NPRFX_PROFILE_COUNT][NPRFX_AOV_COUNT] = {
         },
     [NPRFX_PROFILE_VRAY] =
         {
-            "R,G,B,A",
-            "VRayDiffuseFilter",
-            "VRayRawLighting",
+            "R,G,B,A", "VRayDiffuseFilter", "VRayRawLighting",
             NULL, /* VRayZDepth is grey between user distances, not a depth */
-            "VRayNormals",
-            "VRayWorldPosition",
-            NULL,
-            NULL,
-            "VRayObjectID",
-            "A",
-            NULL,
+            "VRayNormals", "VRayWorldPosition", NULL, NULL, "VRayObjectID", "A", NULL,
             NULL, /* VRayVelocity is encoded (0.5 grey = still, scaled by a max) */
         },
     [NPRFX_PROFILE_REDSHIFT] =
@@ -240,7 +232,8 @@ static const nprfx_aov_vectors vectors[] = {
     {"nuke", "backward.u,backward.v,forward.u,forward.v", {1, -1, 1, -1}, 0},
     {"arnold", "motionvector.R,motionvector.G,motionvector.R,motionvector.G", {-1, 1, 1, -1}, 1},
     {"karma", "motionvector.R,motionvector.G,motionvector.R,motionvector.G", {-1, 1, 1, -1}, 1},
-    {"redshift", "MotionVectors.R,MotionVectors.G,MotionVectors.R,MotionVectors.G",
+    {"redshift",
+     "MotionVectors.R,MotionVectors.G,MotionVectors.R,MotionVectors.G",
      {-1, 1, 1, -1},
      1},
 };
@@ -261,12 +254,18 @@ const nprfx_aov_vectors *nprfx_aov_vectors_find(const char *name)
 const nprfx_aov_vectors *nprfx_aov_profile_vectors(int profile)
 {
     switch (profile) {
-    case NPRFX_PROFILE_BLENDER: return nprfx_aov_vectors_find("blender");
-    case NPRFX_PROFILE_NUKE: return nprfx_aov_vectors_find("nuke");
-    case NPRFX_PROFILE_ARNOLD: return nprfx_aov_vectors_find("arnold");
-    case NPRFX_PROFILE_KARMA: return nprfx_aov_vectors_find("karma");
-    case NPRFX_PROFILE_REDSHIFT: return nprfx_aov_vectors_find("redshift");
-    default: return NULL;
+    case NPRFX_PROFILE_BLENDER:
+        return nprfx_aov_vectors_find("blender");
+    case NPRFX_PROFILE_NUKE:
+        return nprfx_aov_vectors_find("nuke");
+    case NPRFX_PROFILE_ARNOLD:
+        return nprfx_aov_vectors_find("arnold");
+    case NPRFX_PROFILE_KARMA:
+        return nprfx_aov_vectors_find("karma");
+    case NPRFX_PROFILE_REDSHIFT:
+        return nprfx_aov_vectors_find("redshift");
+    default:
+        return NULL;
     }
 }
 

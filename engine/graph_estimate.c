@@ -7,6 +7,7 @@
 #include <string.h>
 #include "nprfx/graph.h"
 #include "graph_frames.h"
+#include "graph_extras.h"
 #include "graph_model.h"
 #include "graph_plan.h"
 #include "graph_resolve.h"
@@ -95,9 +96,9 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         nprfx_file_info info;
         memset(&info, 0, sizeof info);
         if (g->io.info(g->ctx, file, &info)) return 1;
-        int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
+        int extra = internal_graph_extra_count(n);
         /* The read delivers only the channels it picks (internal_graph_read_plate), then appends
-         * the motion channels; the trim drops what only those were read for. */
+         * its own (graph_extras.c); the trim drops what only those were read for. */
         int pick[1024], nread = info.nchannels;
         int m = info.nchannels <= 1024
                     ? internal_graph_read_pick(g, i, (const char *const *)info.names,
@@ -112,7 +113,7 @@ static int shape_of(nprfx_graph *g, int i, int frame, shape *sh, uint64_t *scrat
         for (int c = 0; sh->names && c < nread; c++)
             sh->names[c] = engine_strdup(info.names[pick[c]]);
         for (int c = 0; sh->names && c < extra; c++)
-            sh->names[nread + c] = engine_strdup(internal_graph_motion_names[c]);
+            sh->names[nread + c] = engine_strdup(internal_graph_extra_name(n, c));
         sh->w = nprfx_rect_width(info.bounds);
         sh->h = nprfx_rect_height(info.bounds);
         sh->channels = nread + extra;

@@ -3,6 +3,8 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "graph_aovs.h"
+#include "graph_extras.h"
 #include "graph_model.h"
 #include "graph_names.h"
 #include "graph_resolve.h"
@@ -76,6 +78,25 @@ nprfx_result nprfx_graph_input_channels(nprfx_graph *g, int node, int k, const c
     if (!g || node < 0 || node >= g->count || k < 0 || k >= g->nodes[node].ninputs)
         return NPRFX_ERR_INVALID_ARGUMENT;
     return internal_graph_input_channels(g, &g->nodes[node], k, names, nc, idx, count);
+}
+
+nprfx_result nprfx_graph_settle(nprfx_graph *g, int frame)
+{
+    return internal_graph_prepare(g, frame, 0);
+}
+
+const char *nprfx_graph_read_vectors(const nprfx_graph *g, int node)
+{
+    if (!g || node < 0 || node >= g->count) return NULL;
+    const nprfx_aov_vectors *v = internal_graph_vectors(&g->nodes[node]);
+    return v ? v->name : NULL;
+}
+
+int nprfx_graph_read_decodes(const nprfx_graph *g, int node)
+{
+    if (!g || node < 0 || node >= g->count) return 0;
+    const gnode *n = &g->nodes[node];
+    return n->kind == GK_READ ? (n->crypto != NULL) + (n->depth_inverse != NULL) : 0;
 }
 
 const char *nprfx_graph_motion_name(int k)

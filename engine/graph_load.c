@@ -131,6 +131,7 @@ static const io_field io_fields[] = {
     {"colorspace", offsetof(gnode, colorspace), 0, KB(GK_READ) | KB(GK_WRITE)},
     {"vectors", offsetof(gnode, vectors), 0, KB(GK_READ)},
     {"aovs", offsetof(gnode, aovs), 0, KB(GK_READ)},
+    {"cryptomatte", offsetof(gnode, cryptomatte), 0, KB(GK_READ)},
     {"compression", offsetof(gnode, compression), 0, KB(GK_WRITE)},
     {"display", offsetof(gnode, display), 0, KB(GK_WRITE)},
     {"view", offsetof(gnode, view), 0, KB(GK_WRITE)},
@@ -175,6 +176,16 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
         if (!s)
             return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': %s must be a string", n->name,
                                key);
+        if (!strcmp(key, "vectors") && strcmp(s, "auto") && strcmp(s, "none") &&
+            !nprfx_aov_vectors_find(s)) {
+            char list[256] = "none, auto";
+            for (int v = 0; nprfx_aov_vectors_at(v); v++) {
+                strcat(list, ", ");
+                strcat(list, nprfx_aov_vectors_at(v)->name);
+            }
+            return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': vectors '%s' is not one of: %s",
+                               n->name, s, list);
+        }
         if (!strcmp(key, "aovs") && strcmp(s, "auto") && nprfx_aov_profile_find(s) < 0) {
             char list[256] = "auto";
             for (int p = 0; p < NPRFX_PROFILE_COUNT; p++) {
@@ -560,6 +571,9 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->colorspace);
         free(n->vectors);
         free(n->aovs);
+        free(n->cryptomatte);
+        free(n->crypto);
+        free(n->depth_inverse);
         free(n->compression);
         free(n->scene);
         free(n->display);
@@ -596,7 +610,12 @@ nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment)
                            name);
     gnode *n = &g->nodes[i];
     g->plan_ready = 0; /* params decide which inputs are read at other frames */
-    if (n->kind != GK_NODE) return set_io_field(g, n, key, eq + 1, NULL);
+    if (n->kind != GK_NODE) {
+        /* the plates are settled again from what the read now points at */
+        g->plates_settled = 0;
+        n->prepared = 0;
+        return set_io_field(g, n, key, eq + 1, NULL);
+    }
     int pi = nprfx_node_param_index(n->desc, key);
     if (pi < 0)
         return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_PARAM,

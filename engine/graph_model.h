@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "nprfx/graph.h"
+#include "nprfx/aov.h"
 #include "nprfx/io.h"
 #include "nprfx/nprfx.h"
 
@@ -43,6 +44,13 @@ typedef struct gnode {
      * convention), gathered for all reads at the first one; they pick the default part. */
     char **wants;
     int nwants, wants_known;
+    /* read: what its plates are, from the first frame's header (graph_aovs.c): the profile, the
+     * motion convention the read applies (NULL: none), the Cryptomatte channels its ids are
+     * decoded from ("crypto_object00.R,crypto_object00.G") and the 1/z channel its depth is made
+     * of (NULL: none), and the layer the graph asks for ("cryptomatte"). */
+    int prepared, profile_known, profile;
+    const nprfx_aov_vectors *vec;
+    char *crypto, *depth_inverse, *cryptomatte;
 } gnode;
 
 /* What a result carries besides pixels: the display window and pixel aspect a write puts back,
@@ -111,6 +119,7 @@ struct nprfx_graph {
      * per strip the plan chose (0: whole frames). */
     int strip_option, strip_rows;
     int plan_ready;
+    int plates_settled; /* graph_aovs.c: the read nodes' plates are known, every input resolved */
     int *plan_uses;               /* per node: inputs reading it at the same frame */
     unsigned char *plan_temporal; /* per node: some temporal node reads it at other frames */
     /* per node, its readers: (node, input) pairs plan_readers[plan_first[i] .. plan_first[i+1]) */

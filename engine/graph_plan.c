@@ -26,6 +26,7 @@
 #include "graph_frames.h"
 #include "graph_memory.h"
 #include "graph_model.h"
+#include "graph_extras.h"
 #include "graph_plan.h"
 #include "graph_resolve.h"
 #include "nprfx/channels.h"
@@ -145,29 +146,43 @@ static int same_pick(const char *sel, const char *const *whole, int nw, const ch
     return 1;
 }
 
+/* Whether the extras made from channels `sub` (through map) come from the channels they come from
+ * in the whole plate. */
+static int same_extras(const gextra *whole, const gextra *sub, const int *map)
+{
+    if (whole->count != sub->count) return 0;
+    for (int k = 0; k < whole->count; k++)
+        for (int j = 0; j < 2; j++)
+            if ((whole->src[k][j] < 0) != (sub->src[k][j] < 0) ||
+                (sub->src[k][j] >= 0 && map[sub->src[k][j]] != whole->src[k][j]))
+                return 0;
+    return 1;
+}
+
 int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names, int nc, int *pick)
 {
     const gnode *n = &g->nodes[node];
-    int motion = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
-    if (nc < 1 || nc + motion > 1024) return -1; /* wider plates are read whole */
+    int extra = internal_graph_extra_count(n);
+    if (nc < 1 || nc + extra > 1024) return -1; /* wider plates are read whole */
     const char *all[1024], *sub[1024];
     unsigned char keep[1024];
     int map[1024];
     for (int c = 0; c < nc; c++)
         all[c] = names[c];
-    for (int k = 0; k < motion; k++)
-        all[nc + k] = internal_graph_motion_names[k];
-    int na = nc + motion;
+    for (int k = 0; k < extra; k++)
+        all[nc + k] = internal_graph_extra_name(n, k);
+    int na = nc + extra;
     if (internal_graph_plate_channels(g, node, all, na, keep) <= 0) return -1;
-    /* What the read makes of its plate needs its sources: the channels the motion channels are
+    /* What the read makes of its plate needs its sources: the channels the appended channels are
      * made of (the read fails without them), and R,G,B when it converts colour (OCIO may mix
      * them), so the channels read are converted exactly as in the whole plate. */
-    int src[4] = {0}, rgb[3], amb;
-    double sign[4];
+    int rgb[3], amb;
     char bad[64];
-    if (motion && internal_graph_motion_sources(g, n, "", names, nc, src, sign)) return -1;
-    for (int k = 0; k < motion; k++)
-        keep[src[k]] = 1;
+    gextra xw, xs;
+    if (extra && internal_graph_extras(g, n, "", names, nc, &xw)) return -1;
+    for (int k = 0; extra && k < xw.count; k++)
+        for (int j = 0; j < 2; j++)
+            if (xw.src[k][j] >= 0) keep[xw.src[k][j]] = 1;
     int have_rgb = n->colorspace &&
                    nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad, sizeof bad, &amb) == 3;
     for (int c = 0; have_rgb && c < 3; c++)
@@ -180,7 +195,7 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
             pick[m++] = c;
         }
     if (m == nc) return -1;
-    for (int k = 0; k < motion; k++) {
+    for (int k = 0; k < extra; k++) {
         map[m + k] = nc + k;
         sub[m + k] = all[nc + k];
     }
@@ -188,13 +203,11 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
      * ambiguous in the whole plate could become unique); else the whole plate is read. */
     for (int r = g->plan_first[node]; r < g->plan_first[node + 1]; r++)
         if (!same_selection(g, &g->nodes[g->plan_readers[r][0]], g->plan_readers[r][1], all, na,
-                            sub, m + motion, map))
+                            sub, m + extra, map))
             return -1;
-    int sub_src[4];
-    if (motion && internal_graph_motion_sources(g, n, "", sub, m, sub_src, sign)) return -1;
-    for (int k = 0; k < motion; k++)
-        if (map[sub_src[k]] != src[k]) return -1;
-    if (n->colorspace && !same_pick("R,G,B", all, na, sub, m + motion, map)) return -1;
+    if (extra && (internal_graph_extras(g, n, "", sub, m, &xs) || !same_extras(&xw, &xs, map)))
+        return -1;
+    if (n->colorspace && !same_pick("R,G,B", all, na, sub, m + extra, map)) return -1;
     return m;
 }
 

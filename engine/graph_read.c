@@ -1,11 +1,13 @@
-/* nprfx graph engine — a graph's plates: read nodes (the channels the graph uses, the motion channels a
- * convention appends, colour conversion; whole frames or a strip of rows) and synth nodes. */
+/* nprfx graph engine — a graph's plates: read nodes (the channels the graph uses, the motion
+ * channels a convention appends, colour conversion; whole frames or a strip of rows) and synth
+ * nodes. */
 #define _DEFAULT_SOURCE
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "nprfx/graph.h"
+#include "graph_extras.h"
 #include "graph_frames.h"
 #include "graph_memory.h"
 #include "graph_model.h"
@@ -19,15 +21,15 @@
 #include "nprfx/io.h"
 #include "engine_util.h"
 
-static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *file,
-                                        nprfx_plate *plate)
+/* The channels the read appends (graph_extras.c), after the plate's own. */
+static nprfx_result add_extra_channels(nprfx_graph *g, gnode *n, const char *file,
+                                       nprfx_plate *plate)
 {
-    int idx[4];
-    double sign[4];
-    nprfx_result r = internal_graph_motion_sources(g, n, file, (const char *const *)plate->names,
-                                                   plate->nchannels, idx, sign);
-    if (r) return r;
-    int nc = plate->nchannels, nn = nc + 4;
+    gextra x;
+    nprfx_result r =
+        internal_graph_extras(g, n, file, (const char *const *)plate->names, plate->nchannels, &x);
+    if (r || !x.count) return r;
+    int nc = plate->nchannels, nn = nc + x.count;
     size_t npix =
         (size_t)nprfx_rect_width(plate->bounds) * (size_t)nprfx_rect_height(plate->bounds);
     float *px = malloc(npix * (size_t)nn * sizeof(float));
@@ -38,16 +40,13 @@ static nprfx_result add_motion_channels(nprfx_graph *g, gnode *n, const char *fi
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
     }
     plate->names = names;
-    for (int k = 0; k < 4; k++)
-        names[nc + k] = engine_strdup(internal_graph_motion_names[k]);
+    for (int k = 0; k < x.count; k++)
+        names[nc + k] = engine_strdup(internal_graph_extra_name(n, k));
     for (size_t p = 0; p < npix; p++) {
         const float *s = plate->pixels + p * (size_t)nc;
         float *d = px + p * (size_t)nn;
         memcpy(d, s, (size_t)nc * sizeof(float));
-        for (int k = 0; k < 4; k++) {
-            float v = s[idx[k]] * (float)sign[k];
-            d[nc + k] = isfinite(v) ? v : 0.0f;
-        }
+        internal_graph_extra_apply(&x, s, d + nc);
     }
     free(plate->pixels);
     plate->pixels = px;
@@ -80,10 +79,11 @@ static nprfx_result gather_wants(nprfx_graph *g)
             if (!push_want(&g->nodes[ref->src], ref->sel))
                 return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         }
-        const char *layer =
-            n->kind == GK_READ && n->vectors ? internal_graph_motion_layer(n->vectors) : NULL;
-        if (layer && !push_want(n, (char *)layer))
-            return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        /* what the appended channels are made of */
+        const char *w;
+        for (int k = 0; n->kind == GK_READ && (w = internal_graph_extra_want(n, k)); k++)
+            if (!push_want(n, (char *)w))
+                return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
     return NPRFX_OK;
 }
@@ -111,8 +111,7 @@ static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, npr
         g->notice(g->notice_user, msg);
     }
     n->noted = 1;
-    if (n->vectors && strcmp(n->vectors, "none") && (r = add_motion_channels(g, n, file, plate)))
-        return r;
+    if ((r = add_extra_channels(g, n, file, plate))) return r;
     if (n->colorspace) {
         int idx[3], amb;
         char bad[64];
@@ -216,12 +215,11 @@ nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprf
     internal_graph_variant_plate(g, im, *names);
     meta->display = plate.display;
     meta->pixel_aspect = plate.pixel_aspect;
-    /* The appended motion channels are floats of their own. */
+    /* The appended channels are floats of their own. */
     unsigned char *types = realloc(plate.types, (size_t)plate.nchannels);
     if (types) {
         for (int c = 0; c < plate.nchannels; c++)
-            if (c >= plate.nchannels - (n->vectors && strcmp(n->vectors, "none") ? 4 : 0))
-                types[c] = NPRFX_PIXEL_FLOAT;
+            if (c >= plate.nchannels - internal_graph_extra_count(n)) types[c] = NPRFX_PIXEL_FLOAT;
         meta->types = types;
         plate.types = NULL;
     }

@@ -1,5 +1,5 @@
-/* nprfx graph engine — resolving a graph's references: file patterns at a frame, the channels each input
- * takes from its source, and the motion-vector conventions of read nodes. The evaluation, the
+/* nprfx graph engine — resolving a graph's references: file patterns at a frame, the channels each
+ * input takes from its source, and the motion-vector conventions of read nodes. The evaluation, the
  * memory plan, strip renders and host projects all resolve them the same way. */
 #include <math.h>
 #include <stdio.h>
@@ -7,6 +7,7 @@
 #include <string.h>
 #include "nprfx/graph.h"
 #include "graph_model.h"
+#include "graph_extras.h"
 #include "graph_resolve.h"
 #include "nprfx/aov.h"
 #include "nprfx/channels.h"
@@ -33,126 +34,201 @@ void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const ch
     (void)g;
 }
 
-/* The motion-vector conventions a read node can map onto nprfx's (docs/design.md §2: pixels, y
- * down, motion_prev points to where the surface point was at frame-1). */
-typedef struct vec_convention {
-    const char *name;
-    const char *layer; /* channels to look for: prev.x, prev.y, next.x, next.y */
-    double sign[4];    /* multipliers applied to those channels */
-} vec_convention;
-/* Blender's Vector pass (measured on the sample renders, see samples/plates/README.md), image y
- * up: (X, Y) = position at frame i-1 minus position at i; (Z, W) = position at i minus position
- * at i+1. So motion_prev = (X, -Y) and motion_next = (-Z, W). Nuke's backward/forward vectors
- * point from this frame to the previous/next one, y up. */
-const char *const internal_graph_motion_names[4] = {"motion_prev.X", "motion_prev.Y",
-                                                    "motion_next.X", "motion_next.Y"};
-
-static const vec_convention vec_conventions[] = {
-    {"blender", "Vector.X,Vector.Y,Vector.Z,Vector.W", {1, -1, -1, 1}},
-    {"nuke", "backward.u,backward.v,forward.u,forward.v", {1, -1, 1, -1}},
-};
-
-const char *internal_graph_motion_layer(const char *vectors)
+/* A component letter's position inside a canonical AOV: colour, vector and texture letters. */
+static int component_index(char c)
 {
-    for (size_t i = 0; i < sizeof vec_conventions / sizeof vec_conventions[0]; i++)
-        if (!strcmp(vectors, vec_conventions[i].name)) return vec_conventions[i].layer;
-    return NULL;
+    switch (c) {
+    case 'R':
+    case 'r':
+    case 'X':
+    case 'x':
+    case 'U':
+    case 'u':
+        return 0;
+    case 'G':
+    case 'g':
+    case 'Y':
+    case 'y':
+    case 'V':
+    case 'v':
+        return 1;
+    case 'B':
+    case 'b':
+    case 'Z':
+    case 'z':
+        return 2;
+    case 'A':
+    case 'a':
+    case 'W':
+    case 'w':
+        return 3;
+    default:
+        return -1;
+    }
 }
 
-nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const char *file,
-                                           const char *const *names, int nc, int *idx, double *sign)
+int internal_graph_canonical_parse(const char *item, char *components, size_t n)
 {
-    const vec_convention *vc = NULL;
-    for (size_t i = 0; i < sizeof vec_conventions / sizeof vec_conventions[0]; i++)
-        if (!strcmp(n->vectors, vec_conventions[i].name)) vc = &vec_conventions[i];
-    if (!vc)
-        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
-                           "node '%s': vectors '%s' is not one of: none, blender, nuke", n->name,
-                           n->vectors);
-    int amb;
-    char bad[256];
-    if (nprfx_channels_select(names, nc, vc->layer, idx, 4, bad, sizeof bad, &amb) != 4)
-        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                           "node '%s': %s has no %s channel '%s' for vectors=%s", n->name, file,
-                           amb ? "unique" : "", bad, n->vectors);
-    for (int k = 0; k < 4; k++)
-        sign[k] = vc->sign[k];
-    return NPRFX_OK;
-}
-
-/* Which channels of a source with `names` input k of node n takes (its reference's selection,
- * else its AOV hint, else all), checked against the input's channel count. */
-/* A plate's channels for canonical AOV `name` (nprfx/aov.h), through its read node's profile
- * ("aovs"; detected from the channel names when unset or "auto", the generic names after the
- * detected profile's): the count, or -1 when name is no canonical AOV or the plate has none of
- * its channels. Motion is left to the read node's vector convention, which turns a renderer's
- * vectors into nprfx's; its raw channels would have the wrong signs. *profile gets the profile
- * looked in. Only plates (read, synth) are resolved: a node's output is named by the node. */
-static int canonical_channels(const gnode *src, const char *name, const char *const *names,
-                              int nc, int *idx, int max, int *profile)
-{
+    char name[64];
+    const char *dot = strchr(item, '.');
+    size_t len = dot ? (size_t)(dot - item) : strlen(item);
+    if (len >= sizeof name) return -1;
+    memcpy(name, item, len);
+    name[len] = 0;
     int aov = nprfx_aov_find(name);
+    if (aov < 0) return -1;
+    const char *comp = dot ? dot + 1 : "";
+    if (strlen(comp) >= n || strlen(comp) > 4) return -1;
+    for (const char *c = comp; *c; c++)
+        if (component_index(*c) < 0 || component_index(*c) >= nprfx_aov_channels(aov)) return -1;
+    snprintf(components, n, "%s", comp);
+    return aov;
+}
+
+int internal_graph_plate_profile(const gnode *src, const char *const *names, int nc)
+{
+    if (src->profile_known) return src->profile;
+    if (src->aovs && strcmp(src->aovs, "auto")) return nprfx_aov_profile_find(src->aovs);
+    return nprfx_aov_detect(names, nc, NULL, NULL, 0);
+}
+
+/* A plate's channels for canonical AOV `aov` (nprfx/aov.h), through its read node's profile
+ * ("aovs", else detected; the generic names after a detected profile's): the count, or -1 when
+ * the plate has none of its channels. What the read derives comes first: motion in nprfx's
+ * convention, ids decoded from Cryptomatte, depth from 1/z. Only plates (read, synth) are
+ * resolved: a node's output is named by the node. */
+static int canonical_channels(const gnode *src, int aov, const char *const *names, int nc, int *idx,
+                              int max, int *profile)
+{
     *profile = NPRFX_PROFILE_GENERIC;
-    if (aov < 0 || aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT) return -1;
     if (src->kind != GK_READ && src->kind != GK_SYNTH) return -1;
-    int chosen = src->aovs && strcmp(src->aovs, "auto");
-    *profile = chosen ? nprfx_aov_profile_find(src->aovs)
-                      : nprfx_aov_detect(names, nc, NULL, NULL, 0);
+    *profile = internal_graph_plate_profile(src, names, nc);
+    const char *derived = internal_graph_extra_for(src, aov);
+    if (derived) return nprfx_channels_from_hint(names, nc, derived, idx, max);
+    if (aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT)
+        /* A renderer's raw vectors would read with the wrong signs: only the read's own (above)
+         * or a synth plate's, which are nprfx's convention already. */
+        return src->kind == GK_SYNTH
+                   ? nprfx_channels_from_hint(names, nc, nprfx_aov_name(aov), idx, max)
+                   : -1;
     const char *cand = nprfx_aov_candidates(*profile, aov);
     int count = cand ? nprfx_channels_from_hint(names, nc, cand, idx, max) : -1;
+    /* a profile the graph names is its word; a detected one may miss a custom pass's name */
+    int chosen = src->kind == GK_READ && src->aovs && strcmp(src->aovs, "auto");
     if (count < 0 && !chosen && *profile != NPRFX_PROFILE_GENERIC)
-        count = nprfx_channels_from_hint(names, nc,
-                                         nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, aov), idx,
-                                         max);
-    return count;
+        count = nprfx_channels_from_hint(
+            names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, aov), idx, max);
+    /* a layer may carry more (Blender's Pref AOV has coverage in A): the AOV's own */
+    return count > nprfx_aov_channels(aov) ? nprfx_aov_channels(aov) : count;
+}
+
+/* One item of a selection that names a canonical AOV, with components ("beauty.RGB",
+ * "normal.ZX"): the count, or -1. *aovp gets the AOV (-1: the item names none). */
+static int canonical_item(const gnode *src, const char *item, const char *const *names, int nc,
+                          int *idx, int max, int *profile, int *aovp)
+{
+    char comp[8];
+    int aov = internal_graph_canonical_parse(item, comp, sizeof comp);
+    *aovp = aov;
+    *profile = NPRFX_PROFILE_GENERIC;
+    if (aov < 0) return -1;
+    int all[NPRFX_MAX_CHANNELS + 1];
+    int count = canonical_channels(src, aov, names, nc, all, NPRFX_MAX_CHANNELS + 1, profile);
+    if (count < 0) return -1;
+    if (!comp[0]) {
+        if (count > max) return -1;
+        memcpy(idx, all, (size_t)count * sizeof *idx);
+        return count;
+    }
+    int m = 0;
+    for (const char *c = comp; *c; c++) {
+        int k = component_index(*c);
+        if (k >= count || m >= max) return -1;
+        idx[m++] = all[k];
+    }
+    return m;
+}
+
+/* A selection of canonical AOVs and channel names, ',' between items ("rest,coverage",
+ * "beauty.RGB"): the count, or -1 with *failed the first canonical item that has no channels
+ * (-1 when an item is neither a channel nor canonical). */
+static int canonical_select(const gnode *src, const char *sel, const char *const *names, int nc,
+                            int *idx, int max, int *profile, int *failed, int *single)
+{
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s", sel);
+    int m = 0, items = 0, any = 0;
+    *failed = -1;
+    *profile = NPRFX_PROFILE_GENERIC;
+    for (char *save = NULL, *item = strtok_r(buf, ",", &save); item;
+         item = strtok_r(NULL, ",", &save)) {
+        items++;
+        int amb, aov, k;
+        char bad[64];
+        k = nprfx_channels_select(names, nc, item, idx + m, max - m, bad, sizeof bad, &amb);
+        if (k < 0) {
+            k = canonical_item(src, item, names, nc, idx + m, max - m, profile, &aov);
+            if (aov >= 0) any = 1;
+            if (k < 0) {
+                *failed = aov;
+                return -1;
+            }
+        }
+        m += k;
+    }
+    *single = items == 1;
+    return any ? m : -1;
 }
 
 /* The hint's alternatives that are canonical AOVs, tried through the plate's profile after its
  * literal names found nothing. */
-static int canonical_from_hint(const gnode *src, const char *hint, const char *const *names,
-                               int nc, int *idx, int max)
+static int canonical_from_hint(const gnode *src, const char *hint, const char *const *names, int nc,
+                               int *idx, int max)
 {
     char buf[1024];
     snprintf(buf, sizeof buf, "%s", hint);
     for (char *save = NULL, *alt = strtok_r(buf, "|", &save); alt;
          alt = strtok_r(NULL, "|", &save)) {
-        int profile, k = canonical_channels(src, alt, names, nc, idx, max, &profile);
+        int profile, aov, k = canonical_item(src, alt, names, nc, idx, max, &profile, &aov);
         if (k > 0) return k;
     }
     return -1;
 }
 
-nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k,
-                                           const char *const *names, int nc, int *idx, int *countp)
+/* The resolution of internal_graph_input_channels, its error as text in msg instead of raised:
+ * the plan tries inputs against plates before it knows which fallback they need. */
+nprfx_result internal_graph_input_channels_quiet(const nprfx_graph *g, const gnode *n, int k,
+                                                 const char *const *names, int nc, int *idx,
+                                                 int *countp, char *msg, size_t msgn)
 {
     const gref *ref = &n->inputs[k];
     const nprfx_input_desc *in = n->kind == GK_NODE ? &n->desc->inputs[k] : NULL;
     const char *iname = in ? in->name : "image";
     const char *src = g->nodes[ref->src].name;
-    int count = -1;
+    int count = -1, canonical_one = 0;
     char bad[256];
     int amb = 0;
     const gnode *srcn = &g->nodes[ref->src];
     if (ref->sel) {
         count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
-        int profile = NPRFX_PROFILE_GENERIC;
+        int profile = NPRFX_PROFILE_GENERIC, failed = -1;
         if (count < 0 && !amb) {
-            int k = canonical_channels(srcn, ref->sel, names, nc, idx, 256, &profile);
-            if (k > 0) count = k;
+            int k2 = canonical_select(srcn, ref->sel, names, nc, idx, 256, &profile, &failed,
+                                      &canonical_one);
+            if (k2 > 0) count = k2;
         }
-        if (count < 0 && nprfx_aov_find(ref->sel) >= 0 &&
-            (srcn->kind == GK_READ || srcn->kind == GK_SYNTH)) {
-            int aov = nprfx_aov_find(ref->sel);
-            const char *cand = nprfx_aov_candidates(profile, aov);
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                               "node '%s': input '%s': plate '%s' has no %s: its %s profile "
-                               "looks for %s; name the channels (\"%s:CHANNELS\"), or the "
-                               "profile (\"aovs\" on the read node)",
-                               n->name, iname, src, ref->sel, nprfx_aov_profile_name(profile),
-                               aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT
-                                   ? "the vectors its \"vectors\" convention makes"
-                                   : (cand ? cand : "no fixed channel name"),
-                               src);
+        if (count < 0 && failed >= 0) {
+            const char *cand = nprfx_aov_candidates(profile, failed);
+            int motion = failed == NPRFX_AOV_MOTION_PREV || failed == NPRFX_AOV_MOTION_NEXT;
+            snprintf(msg, msgn,
+                     "node '%s': input '%s': plate '%s' has no %s: its %s profile looks for %s; "
+                     "name the channels (\"%s:CHANNELS\"), or the profile (\"aovs\" on the read "
+                     "node)",
+                     n->name, iname, src, nprfx_aov_name(failed), nprfx_aov_profile_name(profile),
+                     motion ? "the vectors of its \"vectors\" convention"
+                            : (cand ? cand : "no fixed channel name"),
+                     src);
+            return NPRFX_ERR_MISSING_INPUT;
         }
         if (count < 0) {
             char list[1024] = "";
@@ -160,25 +236,28 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
                 if (c) strcat(list, " ");
                 strncat(list, names[c], sizeof list - strlen(list) - 1);
             }
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                               "node '%s': input '%s': '%s' %s in '%s' (channels: %s)", n->name,
-                               iname, bad, amb ? "matches several channels" : "is not a channel",
-                               src, list);
+            snprintf(msg, msgn, "node '%s': input '%s': '%s' %s in '%s' (channels: %s)", n->name,
+                     iname, bad, amb ? "matches several channels" : "is not a channel", src, list);
+            return NPRFX_ERR_MISSING_INPUT;
         }
     } else if (in && in->aov) {
         count = nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
-        if (count < 0)
+        if (count < 0) {
             count = canonical_from_hint(srcn, in->aov, names, nc, idx, NPRFX_MAX_CHANNELS + 1);
+            canonical_one = count > 0;
+        }
         if (count < 0 && nc <= 4 && (in->channels == 0 || in->channels == nc)) {
             count = nc;
             for (int c = 0; c < nc; c++)
                 idx[c] = c;
         }
-        if (count < 0)
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                               "node '%s': input '%s': '%s' has no channel matching %s; name the "
-                               "channels, e.g. \"%s:CHANNELS\"",
-                               n->name, iname, src, in->aov, src);
+        if (count < 0) {
+            snprintf(msg, msgn,
+                     "node '%s': input '%s': '%s' has no channel matching %s; name the channels, "
+                     "e.g. \"%s:CHANNELS\"",
+                     n->name, iname, src, in->aov, src);
+            return NPRFX_ERR_MISSING_INPUT;
+        }
     } else if (nc <= 4 || !in) {
         count = nc < 256 ? nc : 256; /* a write takes everything */
         for (int c = 0; c < count; c++)
@@ -186,29 +265,45 @@ nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k
     } else {
         count = nprfx_channels_from_hint(names, nc, "R,G,B,A|R,G,B|Combined.RGBA|Combined.RGB", idx,
                                          NPRFX_MAX_CHANNELS + 1);
-        if (count < 0)
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                               "node '%s': input '%s': '%s' has %d channels and no R,G,B; name "
-                               "the channels to use, e.g. \"%s:R,G,B\"",
-                               n->name, iname, src, nc, src);
+        if (count < 0) {
+            snprintf(msg, msgn,
+                     "node '%s': input '%s': '%s' has %d channels and no R,G,B; name the channels "
+                     "to use, e.g. \"%s:R,G,B\"",
+                     n->name, iname, src, nc, src);
+            return NPRFX_ERR_MISSING_INPUT;
+        }
     }
     if (in) {
-        if (in->channels > 0 && count != in->channels)
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                               "node '%s': input '%s' needs %d channel%s, '%s%s%s' gives %d",
-                               n->name, iname, in->channels, in->channels > 1 ? "s" : "", src,
-                               ref->sel ? ":" : "", ref->sel ? ref->sel : "", count);
-        if (in->channels == 0 && count > 4)
-            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                               "node '%s': input '%s' takes 1 to 4 channels, '%s%s%s' gives %d",
-                               n->name, iname, src, ref->sel ? ":" : "", ref->sel ? ref->sel : "",
-                               count);
+        /* One canonical colour AOV for an input of fewer channels: its first ones ("beauty" for
+         * an RGB input is its R,G,B). */
+        if (canonical_one && in->channels > 0 && count > in->channels) count = in->channels;
+        if (in->channels > 0 && count != in->channels) {
+            snprintf(msg, msgn, "node '%s': input '%s' needs %d channel%s, '%s%s%s' gives %d",
+                     n->name, iname, in->channels, in->channels > 1 ? "s" : "", src,
+                     ref->sel ? ":" : "", ref->sel ? ref->sel : "", count);
+            return NPRFX_ERR_MISSING_INPUT;
+        }
+        if (in->channels == 0 && count > 4) {
+            snprintf(msg, msgn, "node '%s': input '%s' takes 1 to 4 channels, '%s%s%s' gives %d",
+                     n->name, iname, src, ref->sel ? ":" : "", ref->sel ? ref->sel : "", count);
+            return NPRFX_ERR_MISSING_INPUT;
+        }
     }
-    if (count < 1)
-        return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
-                           "node '%s': input '%s' selects no channels", n->name, iname);
+    if (count < 1) {
+        snprintf(msg, msgn, "node '%s': input '%s' selects no channels", n->name, iname);
+        return NPRFX_ERR_MISSING_INPUT;
+    }
     *countp = count;
     return NPRFX_OK;
+}
+
+nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k,
+                                           const char *const *names, int nc, int *idx, int *countp)
+{
+    char msg[2048];
+    nprfx_result r =
+        internal_graph_input_channels_quiet(g, n, k, names, nc, idx, countp, msg, sizeof msg);
+    return r ? nprfx_error(g->ctx, r, "%s", msg) : NPRFX_OK;
 }
 
 int internal_graph_packs(int src_channels, const int *idx, int count, unsigned flags)

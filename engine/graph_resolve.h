@@ -19,17 +19,17 @@ void internal_graph_resolve_path(const nprfx_graph *g, const char *dir, const ch
 nprfx_result internal_graph_input_channels(nprfx_graph *g, const gnode *n, int k,
                                            const char *const *names, int nc, int *idx, int *count);
 
-/* The names of the 4 channels a read node with "vectors" appends to its plates. */
-extern const char *const internal_graph_motion_names[4];
+/* input_channels's resolution, its error written to msg rather than raised. */
+nprfx_result internal_graph_input_channels_quiet(const nprfx_graph *g, const gnode *n, int k,
+                                                 const char *const *names, int nc, int *idx,
+                                                 int *count, char *msg, size_t msgn);
 
-/* The channels motion convention `vectors` ("blender", "nuke") reads, as a selection
- * ("Vector.X,Vector.Y,Vector.Z,Vector.W"); NULL for an unknown convention. */
-const char *internal_graph_motion_layer(const char *vectors);
-/* Read node n's motion convention ("vectors"): the plate channels (indices into names) the 4
- * appended channels are made of, and the factor each is multiplied by. */
-nprfx_result internal_graph_motion_sources(nprfx_graph *g, const gnode *n, const char *file,
-                                           const char *const *names, int nc, int *idx,
-                                           double *sign);
+/* The canonical AOV an item of a selection names ("beauty.RGB": beauty, components "RGB"), or
+ * -1. */
+int internal_graph_canonical_parse(const char *item, char *components, size_t n);
+/* The profile a plate's channels are looked up in (its read's "aovs", else what its first
+ * frame showed, else detected from names). */
+int internal_graph_plate_profile(const gnode *src, const char *const *names, int nc);
 
 /* Whether an input (flags: its NPRFX_INPUT_* flags, 0 for a write node's image) gets the count
  * channels idx of a source of src_channels packed into a frame of their own rather than read in

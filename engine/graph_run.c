@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "engine_util.h"
+#include "graph_aovs.h"
 #include "graph_model.h"
 #include "nprfx/graph.h"
 
@@ -17,7 +18,8 @@ nprfx_result nprfx_graph_check(nprfx_graph *g, const nprfx_frame_list *frames,
         return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "the graph has no write node, so it would produce nothing");
     if (!frames || frames->count <= 0) return NPRFX_OK;
-    return nprfx_graph_plan(g, frames->frames[0], plan);
+    nprfx_result r = internal_graph_prepare(g, frames->frames[0], 0);
+    return r ? r : nprfx_graph_plan(g, frames->frames[0], plan);
 }
 
 nprfx_result nprfx_graph_run(nprfx_graph *g, const nprfx_frame_list *frames,

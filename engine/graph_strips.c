@@ -19,6 +19,7 @@
 #include "graph_files.h"
 #include "graph_frames.h"
 #include "graph_memory.h"
+#include "graph_extras.h"
 #include "graph_model.h"
 #include "graph_read.h"
 #include "graph_resolve.h"
@@ -213,8 +214,7 @@ static nprfx_result strips_prepare(nprfx_graph *g, const int *writes, int nw, in
             r = internal_graph_read_rows_open(g, s->node, frame, s->file, sizeof s->file, &s->shape,
                                               &s->rr);
             if (r) break;
-            int motion = nd->vectors && strcmp(nd->vectors, "none") ? 4 : 0;
-            s->channels = s->shape.nchannels + motion;
+            s->channels = s->shape.nchannels + internal_graph_extra_count(nd);
             s->names = calloc((size_t)s->channels, sizeof *s->names);
             s->types = calloc((size_t)s->channels, 1);
             if (!s->names || !s->types) {
@@ -224,7 +224,7 @@ static nprfx_result strips_prepare(nprfx_graph *g, const int *writes, int nw, in
             for (int c = 0; c < s->channels; c++) {
                 const char *name = c < s->shape.nchannels
                                        ? s->shape.names[c]
-                                       : internal_graph_motion_names[c - s->shape.nchannels];
+                                       : internal_graph_extra_name(nd, c - s->shape.nchannels);
                 s->names[c] = engine_strdup(name);
                 s->types[c] = c < s->shape.nchannels ? s->shape.types[c] : NPRFX_PIXEL_FLOAT;
                 if (!s->names[c]) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");

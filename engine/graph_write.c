@@ -16,6 +16,7 @@
 #include "graph_files.h"
 #include "graph_frames.h"
 #include "graph_memory.h"
+#include "graph_aovs.h"
 #include "graph_model.h"
 #include "graph_names.h"
 #include "graph_plan.h"
@@ -134,7 +135,8 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
 static nprfx_result render_frame(nprfx_graph *g, int frame, int files, int *written)
 {
     *written = 0;
-    nprfx_result r = internal_graph_plan_build(g);
+    nprfx_result r = internal_graph_prepare(g, frame, 0);
+    if (!r) r = internal_graph_plan_build(g);
     internal_graph_frame_begin(g, frame);
     int *group = NULL;
     for (int i = 0; !r && i < g->count; i++) {
@@ -236,7 +238,8 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
         return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to evaluate",
                            name);
     /* The previous call's view is no longer promised: sweep as after a frame, then begin one. */
-    nprfx_result r = internal_graph_plan_build(g);
+    nprfx_result r = internal_graph_prepare(g, frame, 0);
+    if (!r) r = internal_graph_plan_build(g);
     if (r) return r;
     internal_graph_frame_sweep(g);
     internal_graph_frame_begin(g, frame);

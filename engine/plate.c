@@ -60,5 +60,7 @@ void nprfx_file_info_free(nprfx_file_info *info)
     }
     free(info->parts);
     free_names(info->views, info->nviews);
+    free_names(info->attr_names, info->nattributes);
+    free_names(info->attr_values, info->nattributes);
     memset(info, 0, sizeof *info);
 }

@@ -468,9 +468,19 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
         out->nchannels = (int)names.size();
         out->views = dup_names(h.views);
         out->nviews = out->views ? (int)h.views.size() : 0;
+        std::vector<std::string> an, av;
+        for (const OIIO::ParamValue &pv : first.extra_attribs) {
+            an.push_back(pv.name().string());
+            av.push_back(pv.type() == TypeDesc::STRING ? std::string(pv.get_ustring().string())
+                                                       : pv.get_string());
+        }
+        out->attr_names = dup_names(an);
+        out->attr_values = dup_names(av);
+        out->nattributes = (int)an.size();
         out->parts =
             static_cast<nprfx_part_info *>(std::calloc(h.parts.size(), sizeof(nprfx_part_info)));
-        bool ok = out->names && out->types && out->views && out->parts;
+        bool ok = out->names && out->types && out->views && out->parts && out->attr_names &&
+                  out->attr_values;
         for (size_t i = 0; ok && i < h.parts.size(); i++) {
             const part &p = h.parts[i];
             nprfx_part_info &pi = out->parts[i];

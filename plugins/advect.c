@@ -23,7 +23,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "Per pixel, the offset in pixels (y down) to where the same surface point was at the "
              "previous frame (docs/design.md §2): a renderer's vectors or the flow node's "
              "estimate. Sets the output's size. Not finite: the pixel is re-seeded.",
-     .aov = "motion_prev.X,motion_prev.Y|motion_prev",
+     .aov = "motion_prev",
      .channels = 2,
      .flags = NPRFX_INPUT_TEMPORAL,
      .fetch_before = NPRFX_FETCH_UNBOUNDED,

@@ -68,7 +68,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "Object coverage (the cookbook's isBackground, antialiased): out = coverage * blended"
              " + (1 - coverage) * background, coverage clamped to [0, 1], on every channel "
              "including alpha. Not connected: coverage 1 everywhere.",
-     .aov = "coverage|Coverage|A",
+     .aov = "coverage|A",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
 };

@@ -69,20 +69,20 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
     {"depth", "Depth",
      "Depth per pixel (camera distance or view-space z, larger = farther). Background: +inf, "
      "NaN or any value >= 1e9 (Blender writes 1e10, inf in half-float files): background pixels "
-     "get fresh noise every frame. Nuke's ScanlineRender writes 1/z: invert it first. Footage "
+     "get fresh noise every frame. A Nuke plate's 1/z is inverted by its read. Footage "
      "has none: connect confidence instead (one of the two is needed).",
-     "Z|depth.Z|Depth.Z", 1, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL | NPRFX_INPUT_IN_PLACE,
+     "depth", 1, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL | NPRFX_INPUT_IN_PLACE,
      NPRFX_FETCH_UNBOUNDED, NPRFX_FETCH_UNBOUNDED},
     {"motion_prev", "Motion Prev",
      "Per-pixel offset in pixels (y down) from a pixel to where the same surface point was in "
      "the previous frame. Blender Vector pass: (Vector.X, -Vector.Y). Nuke: (backward.u, "
      "-backward.v).",
-     "motion_prev.X,motion_prev.Y", 2, NPRFX_INPUT_TEMPORAL | NPRFX_INPUT_IN_PLACE,
+     "motion_prev", 2, NPRFX_INPUT_TEMPORAL | NPRFX_INPUT_IN_PLACE,
      NPRFX_FETCH_UNBOUNDED, 0},
     {"motion_next", "Motion Next",
      "symmetric mode: offset in pixels (y down) to where the surface point will be in the next "
      "frame. Blender: (-Vector.Z, Vector.W). Nuke: (forward.u, -forward.v).",
-     "motion_next.X,motion_next.Y", 2, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, 0,
+     "motion_next", 2, NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_TEMPORAL, 0,
      NPRFX_FETCH_UNBOUNDED},
     {"zvel", "Z Velocity",
      "Optional: change of depth per frame of the surface seen at each pixel (depth units per "

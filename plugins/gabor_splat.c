@@ -95,7 +95,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
              "layers come as R, G, B, A (plate:Pref). The default picks a Pref layer, so for UV "
              "anchors always name the channels. Use full float data: half-float anchors "
              "(1/2000 of a unit) make the per-pixel Jacobian noisy at high resolutions.",
-     .aov = "Pref|Pref.XYZ|rest|UV|uv|P|Position",
+     .aov = "rest",
      .channels = 0,
      .flags = NPRFX_INPUT_MAIN | NPRFX_INPUT_IN_PLACE},
     {.name = "depth",
@@ -103,14 +103,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "Depth (view-space z or camera distance, larger = farther) for the depth test and "
              "to find surface edges. Background: <= 0, >= 1e9, inf or NaN (Blender writes 1e10, "
              "inf in half-float files): no noise there.",
-     .aov = "Z|depth.Z|Depth.Z|depth",
+     .aov = "depth",
      .channels = 1,
      .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "id",
      .label = "Object ID",
      .help = "Object index (integers): a kernel reaches only pixels of its own object, and "
              "anchors of different objects get independent points. Not connected: one object.",
-     .aov = "id|IndexOB.X|IndexOB|ObjectIndex|object_id",
+     .aov = "id",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "orientation",

@@ -24,14 +24,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .label = "Depth",
      .help = "View depth: background where it is not finite, not positive or at least 'far' "
              "(Blender writes 1e10, or inf once stored as half).",
-     .aov = "Z|Depth.Z|depth.Z|depth",
+     .aov = "depth",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_MAIN},
     {.name = "id",
      .label = "Object ID",
      .help = "Object index: background where it rounds to background_id (Blender's IndexOB is 0 "
              "where no object was hit).",
-     .aov = "IndexOB.X|IndexOB|id",
+     .aov = "id",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL},
 };

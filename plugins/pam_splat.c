@@ -60,7 +60,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "The surface coordinates the splats are anchored to, as anchor_space says: Pref "
              "(3 channels) or UV (2), an optional coverage channel after them. As gabor-splat's "
              "anchor: name UV channels explicitly (plate:UV.U,UV.V).",
-     .aov = "Pref|Pref.XYZ|rest|UV|uv",
+     .aov = "rest",
      .channels = 0,
      .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "tone",
@@ -90,14 +90,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .label = "Depth",
      .help = "Depth (larger = farther; background <= 0, >= 1e9, inf or NaN): the visibility "
              "buffer of the first pass and the surface edges of the scatter.",
-     .aov = "Z|depth.Z|Depth.Z|depth",
+     .aov = "depth",
      .channels = 1,
      .flags = NPRFX_INPUT_IN_PLACE},
     {.name = "id",
      .label = "Object ID",
      .help = "Object index: a splat reaches only pixels of its own object. Not connected: one "
              "object.",
-     .aov = "id|IndexOB.X|IndexOB|ObjectIndex|object_id",
+     .aov = "id",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_IN_PLACE},
     {.name = "pam",

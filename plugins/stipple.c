@@ -58,14 +58,14 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .label = "UV",
      .help = "Surface parameterisation the dots are anchored to (2 channels). Not connected: "
              "the image is its own UV space (uv = pixel / 1024), which stipples a 2D image.",
-     .aov = "UV.UV|uv.UV|UV.U,UV.V|UV.XY|uv.XY|uv",
+     .aov = "uv",
      .channels = 2,
      .flags = NPRFX_INPUT_OPTIONAL},
     {.name = "id",
      .label = "Object ID",
      .help = "Object index (1 channel, rounded). Derivatives never cross an id edge, and each "
              "object gets its own part of the sequence. Not connected: one object.",
-     .aov = "id|IndexOB.X|IndexOB|ID|object_id",
+     .aov = "id",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL},
 };

@@ -44,7 +44,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .label = "Tone",
      .help = "The shading to map: the beauty (Combined), a light pass, a diffuse pass. RGB(A) is "
              "taken as Rec. 709 luminance, one channel as it is.",
-     .aov = "Combined.RGB|RGB",
+     .aov = "beauty",
      .channels = 0,
      .flags = NPRFX_INPUT_MAIN | NPRFX_INPUT_TEMPORAL,
      .fetch_before = NPRFX_FETCH_UNBOUNDED,

@@ -64,7 +64,7 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .help = "Object coverage K in [0, 1] (1 channel): the colour is painted over white paper, "
              "Q = K image + (1 - K), so silhouettes wobble and darken like any colour edge and "
              "the background stays paper-white. Not connected: the image is painted as it is.",
-     .aov = "coverage|Coverage|A",
+     .aov = "coverage|A",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL},
 };

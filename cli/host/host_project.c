@@ -123,7 +123,14 @@ static nprfx_result read_info(builder *b, int gi, src_info *s)
     memset(&fi, 0, sizeof fi);
     nprfx_result r = nprfx_io_info(n->ctx, file, &fi);
     if (r) return r;
-    int extra = n->vectors && strcmp(n->vectors, "none") ? 4 : 0;
+    int extra = nprfx_graph_read_vectors(g, gi) ? 4 : 0;
+    if (nprfx_graph_read_decodes(g, gi)) {
+        nprfx_file_info_free(&fi);
+        return nprfx_error(n->ctx, NPRFX_ERR_UNSUPPORTED,
+                           "%s: its ids come from Cryptomatte or its depth from 1/z, which a "
+                           "host project does not decode yet; render it with nprfx run",
+                           file);
+    }
     s->names = calloc((size_t)fi.nchannels + 4, sizeof *s->names);
     s->rank = calloc((size_t)fi.nchannels + 1, sizeof *s->rank);
     if (!s->names || !s->rank) {
@@ -389,6 +396,9 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
     if (!nprfx_graph_shot(g, &hp->first_frame, &hp->last_frame) && fl.count)
         hp->first_frame = hp->last_frame = fl.frames[0];
     nprfx_seq_frames_free(&fl);
+    /* the reads' plates as the runner would read them (profiles, conventions, fallbacks) */
+    nprfx_result sr = nprfx_graph_settle(g, hp->first_frame);
+    if (sr) return sr;
     /* the project format's name: the output file's, without folder and extension */
     const char *leaf = strrchr(out_file, '/');
     char stem[64];

@@ -255,6 +255,17 @@ NPRFX_API void nprfx_graph_resolve_path(const nprfx_graph *g, const char *dir, c
 NPRFX_API nprfx_result nprfx_graph_input_channels(nprfx_graph *g, int node, int k,
                                                   const char *const *names, int nc, int *idx,
                                                   int *count);
+/* Settle what the read nodes' plates are, from `frame`'s headers: each one's renderer profile,
+ * motion convention, decoded ids and depth, and the fallbacks inputs take for AOVs a plate lacks
+ * (announced through the notice callback). nprfx_graph_check does it; a front end that
+ * translates a graph calls it before asking about reads. */
+NPRFX_API nprfx_result nprfx_graph_settle(nprfx_graph *g, int frame);
+/* The motion convention read node `node` applies, as settled ("blender", "nuke", ...); NULL:
+ * none. */
+NPRFX_API const char *nprfx_graph_read_vectors(const nprfx_graph *g, int node);
+/* How many channels read node `node` decodes beyond motion (object ids from Cryptomatte, depth
+ * from 1/z): what a translation to another host would have to rebuild. */
+NPRFX_API int nprfx_graph_read_decodes(const nprfx_graph *g, int node);
 /* Name k (0..3) of the channels a read node with "vectors" appends to its plates
  * ("motion_prev.X", ...). */
 NPRFX_API const char *nprfx_graph_motion_name(int k);

@@ -93,6 +93,10 @@ typedef struct nprfx_file_info {
     nprfx_part_info *parts;
     int nviews; /* the multiView attribute, or the parts' views; views[0] is the default */
     char **views;
+    /* The header attributes of the part a default read takes first, as text (a renderer's
+     * "arnold/version", Cryptomatte's "cryptomatte/KEY/manifest"): names and values. */
+    int nattributes;
+    char **attr_names, **attr_values;
 } nprfx_file_info;
 
 /* A header attribute, given as text and stored with its type (EXR: int, float or string). */

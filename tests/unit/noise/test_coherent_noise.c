@@ -1065,8 +1065,8 @@ static void test_errors(nprfx_context *ctx)
     CHECK(render_full(&s, ctx, pv, 2, 1, 5, &state, &o) == NPRFX_ERR_MISSING_INPUT);
     CHECK(strstr(th_error(ctx), "source") != NULL);
     /* descriptor facts the runner relies on */
-    CHECK(strcmp(node->inputs[IN_DEPTH].aov, "Z|depth.Z|Depth.Z") == 0);
-    CHECK(strcmp(node->inputs[IN_MPREV].aov, "motion_prev.X,motion_prev.Y") == 0);
+    CHECK(strcmp(node->inputs[IN_DEPTH].aov, "depth") == 0);
+    CHECK(strcmp(node->inputs[IN_MPREV].aov, "motion_prev") == 0);
     CHECK(strstr(node->help, "8,760,466") != NULL);
     int ich[IN_COUNT] = {1, 2, 0, 0, 3};
     nprfx_output_info oi;

@@ -1,0 +1,317 @@
+/* nprfx graph engine — what a graph's plates are. A graph names what it needs (depth, id, rest,
+ * ...; nprfx/aov.h); each read node's first frame says under which names and conventions its
+ * renderer wrote them. This settles, once and before anything renders, the plate's profile, the
+ * motion convention it is read with, where its ids come from (an index pass or Cryptomatte) and
+ * how its depth is stored, then checks that every input finds its channels, falling back where a
+ * plate lacks an AOV and saying so once. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine_util.h"
+#include "graph_aovs.h"
+#include "graph_extras.h"
+#include "graph_model.h"
+#include "graph_resolve.h"
+#include "nprfx/aov.h"
+#include "nprfx/channels.h"
+#include "nprfx/cryptomatte.h"
+#include "nprfx/io.h"
+#include "nprfx/synth.h"
+
+/* What stands in for an AOV a plate lacks, in order of preference. */
+static const struct {
+    int aov;
+    int with[2];
+    const char *why;
+} fallbacks[] = {
+    {NPRFX_AOV_REST,
+     {NPRFX_AOV_UV, NPRFX_AOV_POSITION},
+     "patterns stick to the surface only as well as it does"},
+    {NPRFX_AOV_ALBEDO, {NPRFX_AOV_BEAUTY, -1}, "the colour carries its light"},
+    {NPRFX_AOV_DIFFUSE_LIGHT, {NPRFX_AOV_BEAUTY, -1}, "the light carries the colour"},
+};
+
+/* The canonical AOV input k of n asks for: its selection's (one item), else the first canonical
+ * alternative of its hint; -1 when none. comp gets the selection's components. */
+static int wanted_aov(const gnode *n, int k, char *comp, size_t size)
+{
+    const gref *ref = &n->inputs[k];
+    comp[0] = 0;
+    if (ref->sel)
+        return strchr(ref->sel, ',') ? -1 : internal_graph_canonical_parse(ref->sel, comp, size);
+    if (n->kind != GK_NODE || !n->desc->inputs[k].aov) return -1;
+    char buf[1024], c[8];
+    snprintf(buf, sizeof buf, "%s", n->desc->inputs[k].aov);
+    for (char *save = NULL, *alt = strtok_r(buf, "|", &save); alt;
+         alt = strtok_r(NULL, "|", &save)) {
+        int aov = internal_graph_canonical_parse(alt, c, sizeof c);
+        if (aov >= 0) return aov;
+    }
+    return -1;
+}
+
+/* Whether some input reading plate i asks for `aov` (by its selection or its hint), or
+ * `literal` appears in a selection. */
+static int plate_needs(const nprfx_graph *g, int i, int aov)
+{
+    for (int j = 0; j < g->count; j++) {
+        const gnode *n = &g->nodes[j];
+        for (int k = 0; k < n->ninputs; k++) {
+            if (n->inputs[k].src != i) continue;
+            char comp[8];
+            if (wanted_aov(n, k, comp, sizeof comp) == aov) return 1;
+            const char *text = n->inputs[k].sel     ? n->inputs[k].sel
+                               : n->kind == GK_NODE ? n->desc->inputs[k].aov
+                                                    : NULL;
+            if (text && strstr(text, nprfx_aov_name(aov))) return 1;
+        }
+    }
+    return 0;
+}
+
+static int selects(const char *const *names, int nc, const char *hint)
+{
+    int idx[NPRFX_MAX_CHANNELS + 1];
+    return hint && nprfx_channels_from_hint(names, nc, hint, idx, NPRFX_MAX_CHANNELS + 1) > 0;
+}
+
+static void notice(nprfx_graph *g, const char *fmt, const char *a, const char *b, const char *c,
+                   const char *d)
+{
+    if (!g->notice) return;
+    char msg[2048];
+    snprintf(msg, sizeof msg, fmt, a, b, c, d);
+    g->notice(g->notice_user, msg);
+}
+
+/* Read node i's profile, motion, ids and depth from one header. */
+static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *info)
+{
+    gnode *n = &g->nodes[i];
+    const char *const *names = (const char *const *)info->names;
+    int nc = info->nchannels;
+    n->profile = n->aovs && strcmp(n->aovs, "auto")
+                     ? nprfx_aov_profile_find(n->aovs)
+                     : nprfx_aov_detect(names, nc, (const char *const *)info->attr_names,
+                                        (const char *const *)info->attr_values, info->nattributes);
+    n->profile_known = 1;
+    const char *profile = nprfx_aov_profile_name(n->profile);
+    /* Motion: the convention "vectors" names, or with "auto" (or none given, when the graph reads
+     * motion from the plate) the profile's, else the first whose channels the plate has. A plate
+     * that has nprfx's own motion channels is read as it is. */
+    n->vec = NULL;
+    if (n->vectors && strcmp(n->vectors, "auto"))
+        n->vec = nprfx_aov_vectors_find(n->vectors); /* "none": NULL */
+    else if (plate_needs(g, i, NPRFX_AOV_MOTION_PREV) || plate_needs(g, i, NPRFX_AOV_MOTION_NEXT)) {
+        if (!selects(names, nc, "motion_prev.X,motion_prev.Y")) {
+            const nprfx_aov_vectors *v = nprfx_aov_profile_vectors(n->profile);
+            if (v && selects(names, nc, v->channels)) n->vec = v;
+            for (int k = 0;
+                 !n->vec && n->profile == NPRFX_PROFILE_GENERIC && nprfx_aov_vectors_at(k); k++)
+                if (selects(names, nc, nprfx_aov_vectors_at(k)->channels))
+                    n->vec = nprfx_aov_vectors_at(k);
+        }
+        if (n->vec && n->vec->prev_from_next && plate_needs(g, i, NPRFX_AOV_MOTION_PREV))
+            notice(g,
+                   "note: plate '%s' (%s): the renderer writes one motion vector, to the next "
+                   "frame; motion_prev is its opposite (%s)%s",
+                   n->name, profile, n->vec->channels, "");
+    }
+    /* Ids: the profile's index pass, else a Cryptomatte layer ("cryptomatte" picks one). */
+    free(n->crypto);
+    n->crypto = NULL;
+    int want_layer = n->cryptomatte && n->cryptomatte[0];
+    if (want_layer || plate_needs(g, i, NPRFX_AOV_ID)) {
+        int chosen = n->aovs && strcmp(n->aovs, "auto");
+        int have_index =
+            selects(names, nc, nprfx_aov_candidates(n->profile, NPRFX_AOV_ID)) ||
+            (!chosen &&
+             selects(names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, NPRFX_AOV_ID)));
+        if (want_layer || !have_index) {
+            nprfx_cryptomatte_layer layers[16];
+            int nl = nprfx_cryptomatte_find(names, nc, (const char *const *)info->attr_names,
+                                            (const char *const *)info->attr_values,
+                                            info->nattributes, layers, 16);
+            if (nl > 16) nl = 16;
+            int pick = nprfx_cryptomatte_pick(layers, nl, want_layer ? n->cryptomatte : NULL);
+            if (want_layer && pick < 0) {
+                char list[1024] = "";
+                for (int l = 0; l < nl; l++) {
+                    if (l) strncat(list, ", ", sizeof list - strlen(list) - 1);
+                    strncat(list, layers[l].name, sizeof list - strlen(list) - 1);
+                }
+                return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                                   "node '%s': plate has no Cryptomatte layer '%s' (it has: %s)",
+                                   n->name, n->cryptomatte, nl ? list : "none");
+            }
+            if (pick >= 0) {
+                char sel[1024];
+                snprintf(sel, sizeof sel, "%s,%s", names[layers[pick].id0],
+                         names[layers[pick].cov0]);
+                n->crypto = engine_strdup(sel);
+                notice(g, "note: plate '%s' (%s): object ids from Cryptomatte layer %s%s", n->name,
+                       profile, layers[pick].name, "");
+            }
+        }
+    }
+    /* Depth stored as 1/z. */
+    free(n->depth_inverse);
+    n->depth_inverse = NULL;
+    if (nprfx_aov_profile_depth(n->profile) == NPRFX_DEPTH_INVERSE) {
+        int idx[2];
+        const char *cand = nprfx_aov_candidates(n->profile, NPRFX_AOV_DEPTH);
+        if (cand && nprfx_channels_from_hint(names, nc, cand, idx, 2) == 1)
+            n->depth_inverse = engine_strdup(names[idx[0]]);
+    }
+    n->prepared = 1;
+    return NPRFX_OK;
+}
+
+/* A plate's channel names as its readers see them: the header's and what the read appends. */
+typedef struct plate_names {
+    char **names;
+    int n;
+} plate_names;
+
+static void plate_names_free(plate_names *p)
+{
+    for (int c = 0; p->names && c < p->n; c++)
+        free(p->names[c]);
+    free(p->names);
+    memset(p, 0, sizeof *p);
+}
+
+/* Give input k of node j its channels, or a fallback, or fail. */
+static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names *plates,
+                                 unsigned char (*announced)[NPRFX_AOV_COUNT])
+{
+    gnode *n = &g->nodes[j];
+    gref *ref = &n->inputs[k];
+    const gnode *src = &g->nodes[ref->src];
+    const plate_names *p = &plates[ref->src];
+    const char *const *names = (const char *const *)p->names;
+    int idx[256], count;
+    char msg[2048], comp[8];
+    nprfx_result r =
+        internal_graph_input_channels_quiet(g, n, k, names, p->n, idx, &count, msg, sizeof msg);
+    if (!r) return NPRFX_OK;
+    int aov = wanted_aov(n, k, comp, sizeof comp);
+    const char *profile = nprfx_aov_profile_name(internal_graph_plate_profile(src, names, p->n));
+    for (size_t f = 0; aov >= 0 && f < sizeof fallbacks / sizeof fallbacks[0]; f++) {
+        if (fallbacks[f].aov != aov) continue;
+        for (int w = 0; w < 2 && fallbacks[f].with[w] >= 0; w++) {
+            char sel[64];
+            snprintf(sel, sizeof sel, "%s%s%s", nprfx_aov_name(fallbacks[f].with[w]),
+                     comp[0] ? "." : "", comp);
+            char *old = ref->sel;
+            ref->sel = engine_strdup(sel);
+            if (!internal_graph_input_channels_quiet(g, n, k, names, p->n, idx, &count, msg,
+                                                     sizeof msg)) {
+                free(old);
+                if (!announced[ref->src][aov]++) {
+                    char what[300];
+                    snprintf(what, sizeof what, "'%s' (%s profile) has no %s", src->name, profile,
+                             nprfx_aov_name(aov));
+                    notice(g, "warning: plate %s: %s stands in for it (%s)%s", what,
+                           nprfx_aov_name(fallbacks[f].with[w]), fallbacks[f].why, "");
+                }
+                return NPRFX_OK;
+            }
+            free(ref->sel);
+            ref->sel = old;
+        }
+    }
+    /* An object id an input can do without: lines and mattes then cut where depth and normals
+     * jump. */
+    if (aov == NPRFX_AOV_ID && n->kind == GK_NODE &&
+        (n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) {
+        if (!announced[ref->src][aov]++) {
+            char what[300];
+            snprintf(what, sizeof what, "'%s' (%s profile) has no id", src->name, profile);
+            notice(g, "warning: plate %s (no index pass, no Cryptomatte layer): %s%s%s", what,
+                   "the inputs that take ids are left unconnected, and edges come from depth ",
+                   "and normal discontinuities", "");
+        }
+        free(ref->sel);
+        ref->sel = NULL;
+        ref->src = -1;
+        return NPRFX_OK;
+    }
+    return nprfx_error(g->ctx, r, "%s", msg);
+}
+
+nprfx_result internal_graph_prepare(nprfx_graph *g, int frame, int strict)
+{
+    if (g->plates_settled) return NPRFX_OK;
+    plate_names *plates = calloc((size_t)g->count, sizeof *plates);
+    unsigned char(*announced)[NPRFX_AOV_COUNT] = calloc((size_t)g->count, sizeof *announced);
+    if (!plates || !announced) {
+        free(plates);
+        free(announced);
+        return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    nprfx_result r = NPRFX_OK;
+    int waiting = 0;
+    for (int i = 0; i < g->count && !r; i++) {
+        gnode *n = &g->nodes[i];
+        plate_names *p = &plates[i];
+        if (n->kind == GK_SYNTH) {
+            p->n = nprfx_synth_channel_count();
+            p->names = internal_graph_names_dup(nprfx_synth_channel_names(), p->n);
+            continue;
+        }
+        if (n->kind != GK_READ) continue;
+        char file[4096];
+        internal_graph_resolve_path(g, g->base_dir, n->path, frame, file, sizeof file);
+        nprfx_file_info info;
+        memset(&info, 0, sizeof info);
+        nprfx_context *quiet = NULL;
+        /* a header that cannot be read yet is the frame's read's to report */
+        if (!strict && nprfx_context_create(NULL, &quiet) == NPRFX_OK) {
+            nprfx_result e = g->io.info(quiet, file, &info);
+            nprfx_context_destroy(quiet);
+            if (e) {
+                waiting = 1;
+                continue;
+            }
+        } else if ((r = g->io.info(n->ctx, file, &info))) {
+            break;
+        }
+        if (!n->prepared && (r = settle_read(g, i, &info))) {
+            nprfx_file_info_free(&info);
+            break;
+        }
+        int extra = internal_graph_extra_count(n);
+        p->names = calloc((size_t)(info.nchannels + extra), sizeof *p->names);
+        for (int c = 0; p->names && c < info.nchannels; c++)
+            p->names[c] = engine_strdup(info.names[c]);
+        for (int c = 0; p->names && c < extra; c++)
+            p->names[info.nchannels + c] = engine_strdup(internal_graph_extra_name(n, c));
+        p->n = p->names ? info.nchannels + extra : 0;
+        nprfx_file_info_free(&info);
+    }
+    /* Every input that reads a plate, once all plates are known. */
+    for (int j = 0; j < g->count && !r && !waiting; j++)
+        for (int k = 0; k < g->nodes[j].ninputs && !r; k++) {
+            int s = g->nodes[j].inputs[k].src;
+            if (s < 0 || (g->nodes[s].kind != GK_READ && g->nodes[s].kind != GK_SYNTH)) continue;
+            r = settle_input(g, j, k, plates, announced);
+        }
+    if (!r && !waiting) {
+        g->plates_settled = 1;
+        /* the plan and the reads' wants follow the inputs as settled */
+        g->plan_ready = 0;
+        for (int i = 0; i < g->count; i++) {
+            free(g->nodes[i].wants);
+            g->nodes[i].wants = NULL;
+            g->nodes[i].nwants = 0;
+            g->nodes[i].wants_known = 0;
+        }
+    }
+    for (int i = 0; i < g->count; i++)
+        plate_names_free(&plates[i]);
+    free(plates);
+    free(announced);
+    return r;
+}
