@@ -302,8 +302,7 @@ static int layout_build(int profile, synth_layout *L, char *err, size_t errn)
              it = strtok_r(NULL, ",", &save))
             item[k++] = it;
         if (k != 4) {
-            snprintf(err, errn, "layout %s: vectors '%s' are not 4 channels", pname,
-                     vec->channels);
+            snprintf(err, errn, "layout %s: vectors '%s' are not 4 channels", pname, vec->channels);
             return -1;
         }
         for (int s = vec->prev_from_next ? 2 : 0; s < 4; s++) {
@@ -322,8 +321,8 @@ static int layout_build(int profile, synth_layout *L, char *err, size_t errn)
         for (int s = 0; s < 4; s++)
             if (got != 4 || idx[s] != want[s]) {
                 snprintf(err, errn,
-                         "layout %s: vectors '%s' do not select the channels made for them",
-                         pname, vec->channels);
+                         "layout %s: vectors '%s' do not select the channels made for them", pname,
+                         vec->channels);
                 return -1;
             }
     }
@@ -335,12 +334,10 @@ static int layout_build(int profile, synth_layout *L, char *err, size_t errn)
         static const char *const what[4] = {"name", "hash", "conversion", "manifest"};
         nprfx_cryptomatte_key(L->crypto, L->key);
         for (int i = 0; i < 4; i++)
-            snprintf(L->attr_name[i], sizeof L->attr_name[i], "cryptomatte/%s/%s", L->key,
-                     what[i]);
+            snprintf(L->attr_name[i], sizeof L->attr_name[i], "cryptomatte/%s/%s", L->key, what[i]);
         L->attrs[na++] = (nprfx_attribute){L->attr_name[0], NPRFX_ATTR_STRING, L->crypto};
         L->attrs[na++] = (nprfx_attribute){L->attr_name[1], NPRFX_ATTR_STRING, "MurmurHash3_32"};
-        L->attrs[na++] =
-            (nprfx_attribute){L->attr_name[2], NPRFX_ATTR_STRING, "uint32_to_float32"};
+        L->attrs[na++] = (nprfx_attribute){L->attr_name[2], NPRFX_ATTR_STRING, "uint32_to_float32"};
         L->attrs[na++] = (nprfx_attribute){L->attr_name[3], NPRFX_ATTR_STRING, "{}"};
     }
     L->nattrs = na;
@@ -407,26 +404,35 @@ static void to_layout(const synth_layout *L, const nprfx_image *src, nprfx_image
                 const out_channel *o = &L->ch[c];
                 float v = o->src >= 0 ? s[o->src] : 0.0f;
                 switch (o->kind) {
-                case OUT_COPY: d[c] = v * o->mul; break;
-                case OUT_INVERSE: d[c] = v >= 1e10f ? 0.0f : 1.0f / v; break;
+                case OUT_COPY:
+                    d[c] = v * o->mul;
+                    break;
+                case OUT_INVERSE:
+                    d[c] = v >= 1e10f ? 0.0f : 1.0f / v;
+                    break;
                 case OUT_CRYPTO_ID:
                     d[c] = id <= 0 ? 0.0f : id < 256 ? crypto[id] : object_float(id);
                     break;
-                case OUT_CRYPTO_COV: d[c] = id > 0 ? v : 0.0f; break;
-                default: d[c] = 0.0f;
+                case OUT_CRYPTO_COV:
+                    d[c] = id > 0 ? v : 0.0f;
+                    break;
+                default:
+                    d[c] = 0.0f;
                 }
             }
         }
 }
 
-/* "synth|blender|arnold|..." : the layouts, the renderers' from the profile table. */
-static void layout_names(char *buf, size_t n, const char *sep)
+/* "synth, blender, arnold, ...": the layouts, the renderers' named by the profile table (with
+ * synth and blender when `all`). */
+static void layout_names(char *buf, size_t n, const char *sep, int all)
 {
-    snprintf(buf, n, "synth%sblender", sep);
+    snprintf(buf, n, "%s", all ? "synth" : "");
+    if (all) snprintf(buf + strlen(buf), n - strlen(buf), "%sblender", sep);
     for (int p = 0; p < NPRFX_PROFILE_COUNT; p++)
         if (renderer_row(p) >= 0) {
             size_t l = strlen(buf);
-            snprintf(buf + l, n - l, "%s%s", sep, nprfx_aov_profile_name(p));
+            snprintf(buf + l, n - l, "%s%s", l ? sep : "", nprfx_aov_profile_name(p));
         }
 }
 
@@ -470,7 +476,7 @@ static void usage_layouts(FILE *f)
 static void usage(FILE *f)
 {
     char layouts[256];
-    layout_names(layouts, sizeof layouts, "|");
+    layout_names(layouts, sizeof layouts, "|", 0);
     fprintf(f,
             "usage: nprfx synth SCENE -o PATH [--frames LIST] [--size WxH] [--half]\n"
             "                   [--layout L] [--compression C] [--threads N]\n"
@@ -486,12 +492,12 @@ static void usage(FILE *f)
             "                   any size, so motion in pixels scales with the width\n"
             "  --half           store channels as half floats (Z's 1e10 background becomes inf;\n"
             "                   Cryptomatte layers stay float)\n"
-            "  --layout L       channel names, L one of %s:\n"
-            "                   synth (below, the default); blender (Blender's multilayer names\n"
-            "                   and Vector convention, as samples/plates has: a graph written for\n"
-            "                   Blender plates runs with only its read path changed; the read\n"
-            "                   node needs \"vectors\": \"blender\"); or a renderer's names as\n"
-            "                   its profile (\"aovs\") looks for them, see layouts below\n"
+            "  --layout L       channel names: synth (below, the default); blender (Blender's\n"
+            "                   multilayer names and Vector convention, as samples/plates has: a\n"
+            "                   graph written for Blender plates runs with only its read path\n"
+            "                   changed; the read node needs \"vectors\": \"blender\"); or a\n"
+            "                   renderer's, as its profile (\"aovs\") looks for them:\n"
+            "                   %s (renderer layouts, below)\n"
             "  --compression C  EXR compression: zip (default), piz, none, dwaa, ...\n"
             "  --threads N      worker threads (default $NPRFX_THREADS, else all cores)\n"
             "  --list           list the scenes\n\n"
@@ -551,7 +557,7 @@ int cli_cmd_synth(int argc, char **argv)
             int p = nprfx_aov_profile_find(l);
             if (strcmp(l, "synth") && p != NPRFX_PROFILE_BLENDER && renderer_row(p) < 0) {
                 char list[256];
-                layout_names(list, sizeof list, ", ");
+                layout_names(list, sizeof list, ", ", 1);
                 fprintf(stderr, "nprfx synth: --layout must be one of %s, not '%s'\n", list, l);
                 return SYNTH_USAGE;
             }

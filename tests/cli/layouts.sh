@@ -364,7 +364,7 @@ done
 # Usage: the layouts are listed; an unknown one (or the generic profile) is refused.
 "$NPRFX" synth --help > help.txt
 for L in synth blender $LAYOUTS; do grep -q "$L" help.txt && pass || fail "--help lacks $L"; done
-grep -qF -e "--layout L       channel names, L one of synth|blender|arnold|renderman|karma|vray|redshift|nuke" help.txt &&
+grep -qxF "                   arnold|renderman|karma|vray|redshift|nuke (renderer layouts, below)" help.txt &&
   pass || fail "--help: layout list"
 for bad in generic maya; do
   "$NPRFX" synth orbit --layout $bad -o bad.exr > bad.log 2>&1
