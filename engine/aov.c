@@ -121,7 +121,7 @@ static const char *const candidates[NPRFX_PROFILE_COUNT][NPRFX_AOV_COUNT] = {
         },
     [NPRFX_PROFILE_NUKE] =
         {
-            "rgba|R,G,B,A",
+            "R,G,B,A|rgba",
             NULL,
             NULL,
             "depth.Z", /* ScanlineRender's is 1/z: near is large */
@@ -197,8 +197,14 @@ int nprfx_aov_detect(const char *const *names, int n, const char *const *attr_na
         if (starts_with(a, "arnold/")) return NPRFX_PROFILE_ARNOLD;
         if (starts_with(a, "vrayInfo/")) return NPRFX_PROFILE_VRAY;
     }
-    /* Then the pass names only one renderer uses. */
+    /* Then the pass names only one renderer uses. Karma's beauty is C, which no other renderer
+     * writes; it shares motionvector with Arnold, so it is looked for first. */
     int karma_c = 0, karma_crypto = 0;
+    for (int i = 0; names && i < n; i++) {
+        karma_c |= names[i] && (!strcmp(names[i], "C.R") || ends_with_part(names[i], "C.R"));
+        karma_crypto |= names[i] && starts_with(names[i], "CryptoObject00.");
+    }
+    if (karma_c) return NPRFX_PROFILE_KARMA;
     for (int i = 0; names && i < n; i++) {
         const char *c = names[i];
         if (!c) continue;
@@ -214,10 +220,8 @@ int nprfx_aov_detect(const char *const *names, int n, const char *const *attr_na
             return NPRFX_PROFILE_RENDERMAN;
         if (!strcmp(c, "DiffuseLightingRaw.R") || !strcmp(c, "MotionVectors.R"))
             return NPRFX_PROFILE_REDSHIFT;
-        karma_c |= !strcmp(c, "C.R");
-        karma_crypto |= starts_with(c, "CryptoObject00.");
     }
-    if (karma_c && karma_crypto) return NPRFX_PROFILE_KARMA;
+    (void)karma_crypto;
     return NPRFX_PROFILE_GENERIC;
 }
 

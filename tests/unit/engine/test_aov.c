@@ -108,7 +108,7 @@ int main(void)
                                        "backward.v"};
     static const char *const rman[] = {"Ci.R", "Ci.G", "Ci.B", "a", "z", "id"};
     CHECK(nprfx_aov_detect(karma, COUNT(karma), NULL, NULL, 0) == NPRFX_PROFILE_KARMA);
-    CHECK(nprfx_aov_detect(karma, 4, NULL, NULL, 0) == NPRFX_PROFILE_GENERIC);
+    CHECK(nprfx_aov_detect(karma, 4, NULL, NULL, 0) == NPRFX_PROFILE_KARMA);
     CHECK(nprfx_aov_detect(nuke, COUNT(nuke), NULL, NULL, 0) == NPRFX_PROFILE_NUKE);
     CHECK_RESOLVES(NPRFX_PROFILE_NUKE, NPRFX_AOV_MOTION_PREV, nuke, "backward.u,backward.v");
     CHECK_RESOLVES(NPRFX_PROFILE_NUKE, NPRFX_AOV_COVERAGE, nuke, "rgba.alpha");
