@@ -13,6 +13,8 @@
 
 #include <string.h>
 
+#include "nprfx/channels.h"
+
 #include "nprfx/node.h"
 
 /* The node whose output derived inputs come from. */
@@ -41,19 +43,18 @@ static inline int ofx_aov_match(const nprfx_input_desc *in, int alt, const nprfx
     if (!s) return -1;
     const char *end = strchr(s, '|');
     if (!end) end = s + strlen(s);
-    int n = 0;
-    while (s < end) {
-        const char *comma = memchr(s, ',', (size_t)(end - s));
-        const char *e = comma ? comma : end;
-        size_t len = (size_t)(e - s);
-        int found = -1;
-        for (int j = 0; j < src->channels && found < 0; j++)
-            if (src->names[j] && strlen(src->names[j]) == len && !strncmp(src->names[j], s, len))
-                found = j;
-        if (found < 0 || n >= 4) return 0;
-        idx[n++] = found;
-        s = comma ? comma + 1 : end;
-    }
+    /* the alternative as a channel selection (exact names, or a layer: "motion_prev") */
+    char sel[256], bad[64];
+    size_t len = (size_t)(end - s);
+    if (len >= sizeof sel) return 0;
+    memcpy(sel, s, len);
+    sel[len] = 0;
+    const char *names[NPRFX_MAX_CHANNELS];
+    int nc = src->channels < NPRFX_MAX_CHANNELS ? src->channels : NPRFX_MAX_CHANNELS, amb = 0;
+    for (int j = 0; j < nc; j++)
+        names[j] = src->names[j] ? src->names[j] : "";
+    int n = nprfx_channels_select(names, nc, sel, idx, 4, bad, sizeof bad, &amb);
+    if (n < 0) return 0;
     if (!n || (in->channels > 0 && n != in->channels)) return 0;
     return n;
 }
