@@ -16,8 +16,10 @@
  *     clamped float), which matters only for a name whose hash has exponent 0 or 255; readers
  *     take the key from the header (nprfx_cryptomatte_find), never recompute it.
  * No allocation, no global state: every function may run on several threads at once. */
+#include <stdio.h>
 #include <string.h>
 
+#include "json.h"
 #include "nprfx/cryptomatte.h"
 
 /* ---- hash and float ---------------------------------------------------------------------- */
@@ -206,15 +208,9 @@ size_t nprfx_cryptomatte_manifest(const char *const *names, int n, char *buf, si
 
 /* ---- manifest reader --------------------------------------------------------------------- */
 
-/* The text comes from a file's header or a sidecar: every read below stops at the NUL, and a
- * text that is not a JSON object of string values is refused whole rather than half read. */
-
-static const char *skip_ws(const char *p)
-{
-    while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')
-        p++;
-    return p;
-}
+/* The text comes from a file's header or a sidecar: it is parsed whole by the engine's JSON
+ * reader (strict RFC 8259), and a text that is not an object of string values is refused whole
+ * rather than half read. */
 
 static int hex_digit(char c)
 {
@@ -224,98 +220,10 @@ static int hex_digit(char c)
     return -1;
 }
 
-/* Four hex digits at p into *v; 0 when they are not there. */
-static int hex4(const char *p, uint32_t *v)
-{
-    *v = 0;
-    for (int i = 0; i < 4; i++) {
-        int d = hex_digit(p[i]); /* a NUL is no digit, so this never reads past the text */
-        if (d < 0) return 0;
-        *v = *v << 4 | (uint32_t)d;
-    }
-    return 1;
-}
-
-/* Decode the JSON string whose opening quote is at p: at most cap-1 bytes of it into out (NUL
- * terminated when cap > 0; out may be NULL with cap 0), its whole decoded length in *len. Returns
- * the byte after the closing quote, or NULL when the string is malformed or unterminated. Raw
- * control characters are let through (a lenient reader: some writers leave them), \u0000 and
- * unpaired surrogates are not (no name holds them). */
-static const char *read_string(const char *p, char *out, size_t cap, size_t *len)
-{
-    sink s = {out, out ? cap : 0, 0};
-    if (*p++ != '"') return NULL;
-    for (;;) {
-        char c = *p++;
-        if (c == 0) return NULL;
-        if (c == '"') break;
-        if (c != '\\') {
-            put(&s, c);
-            continue;
-        }
-        c = *p++;
-        switch (c) {
-        case '"':
-        case '\\':
-        case '/':
-            put(&s, c);
-            break;
-        case 'b':
-            put(&s, '\b');
-            break;
-        case 'f':
-            put(&s, '\f');
-            break;
-        case 'n':
-            put(&s, '\n');
-            break;
-        case 'r':
-            put(&s, '\r');
-            break;
-        case 't':
-            put(&s, '\t');
-            break;
-        case 'u': {
-            uint32_t u, lo;
-            if (!hex4(p, &u)) return NULL;
-            p += 4;
-            if (u >= 0xdc00 && u <= 0xdfff) return NULL;
-            if (u >= 0xd800 && u <= 0xdbff) {
-                if (p[0] != '\\' || p[1] != 'u' || !hex4(p + 2, &lo) || lo < 0xdc00 || lo > 0xdfff)
-                    return NULL;
-                p += 6;
-                u = 0x10000 + ((u - 0xd800) << 10) + (lo - 0xdc00);
-            }
-            if (u == 0) return NULL;
-            if (u < 0x80) {
-                put(&s, (char)u);
-            } else if (u < 0x800) {
-                put(&s, (char)(0xc0 | u >> 6));
-                put(&s, (char)(0x80 | (u & 0x3f)));
-            } else if (u < 0x10000) {
-                put(&s, (char)(0xe0 | u >> 12));
-                put(&s, (char)(0x80 | (u >> 6 & 0x3f)));
-                put(&s, (char)(0x80 | (u & 0x3f)));
-            } else {
-                put(&s, (char)(0xf0 | u >> 18));
-                put(&s, (char)(0x80 | (u >> 12 & 0x3f)));
-                put(&s, (char)(0x80 | (u >> 6 & 0x3f)));
-                put(&s, (char)(0x80 | (u & 0x3f)));
-            }
-            break;
-        }
-        default:
-            return NULL; /* an unknown escape, or the text ended after the backslash */
-        }
-    }
-    if (s.cap) s.buf[s.len < s.cap ? s.len : s.cap - 1] = 0;
-    *len = s.len;
-    return p;
-}
-
 /* A manifest value as a uint32: 1 to 8 hex digits and nothing else; 0 when it is not one. */
-static int parse_hex_value(const char *v, size_t len, uint32_t *out)
+static int parse_hex_value(const char *v, uint32_t *out)
 {
+    size_t len = strlen(v);
     if (len < 1 || len > 8) return 0;
     uint32_t x = 0;
     for (size_t i = 0; i < len; i++) {
@@ -330,45 +238,32 @@ static int parse_hex_value(const char *v, size_t len, uint32_t *out)
 int nprfx_cryptomatte_manifest_name(const char *manifest, float stored, char *buf, size_t cap)
 {
     if (!manifest) return -1;
+    nprfx_context *quiet = NULL; /* a malformed manifest is an answer here, not an error */
+    internal_json *root = NULL;
+    if (nprfx_context_create(NULL, &quiet)) return -1;
+    nprfx_result r = internal_json_parse(quiet, manifest, &root);
+    nprfx_context_destroy(quiet);
+    if (r || root->type != INTERNAL_JSON_OBJECT) {
+        internal_json_free(root);
+        return -1;
+    }
     uint32_t want = nprfx_cryptomatte_bits(stored);
     /* The member whose value is the stored bits; failing that, one whose value is a raw hash
      * that clamps to them (some writers list the hash, not the float's bits). */
     const char *exact = NULL, *raw = NULL;
-    const char *p = skip_ws(manifest);
-    if (*p++ != '{') return -1;
-    p = skip_ws(p);
-    if (*p == '}') {
-        p++;
-    } else {
-        for (;;) {
-            const char *key = p;
-            size_t len;
-            char value[16];
-            if (!(p = read_string(p, NULL, 0, &len))) return -1;
-            p = skip_ws(p);
-            if (*p++ != ':') return -1;
-            p = skip_ws(p);
-            if (!(p = read_string(p, value, sizeof value, &len))) return -1;
-            uint32_t v;
-            if (len < sizeof value && parse_hex_value(value, len, &v)) {
-                if (!exact && v == want) exact = key;
-                if (!raw && clamp_bits(v) == want) raw = key;
-            }
-            p = skip_ws(p);
-            if (*p == ',') {
-                p = skip_ws(p + 1);
-                continue;
-            }
-            if (*p++ != '}') return -1;
-            break;
+    int ok = 1;
+    for (const internal_json *m = root->child; m && ok; m = m->next) {
+        uint32_t v;
+        ok = m->type == INTERNAL_JSON_STRING;
+        if (ok && parse_hex_value(m->string, &v)) {
+            if (!exact && v == want) exact = m->key;
+            if (!raw && clamp_bits(v) == want) raw = m->key;
         }
     }
-    if (*skip_ws(p)) return -1; /* something after the object: not a manifest */
-    const char *found = exact ? exact : raw;
-    if (!found) return -1;
-    size_t len;
-    read_string(found, buf, buf ? cap : 0, &len);
-    return 0;
+    const char *found = ok ? (exact ? exact : raw) : NULL;
+    if (found && buf && cap) snprintf(buf, cap, "%s", found);
+    internal_json_free(root);
+    return found ? 0 : -1;
 }
 
 /* ---- layers ------------------------------------------------------------------------------ */

@@ -60,3 +60,11 @@ void engine_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src,
     }
     nprfx_parallel_for(ex, j.parts, 1, bytes_parts, &j);
 }
+
+void engine_names_free(char **names, int n)
+{
+    if (!names) return;
+    for (int i = 0; i < n; i++)
+        free(names[i]);
+    free(names);
+}

@@ -18,6 +18,8 @@ double engine_cpu_now(void);
 
 /* A malloc'd copy of s (NULL for NULL or no memory). */
 char *engine_strdup(const char *s);
+/* Free n strings and the array that holds them (NULL: nothing). */
+void engine_names_free(char **names, int n);
 
 /* Copy src to dst (src NULL: zero dst), `bytes` cut into `parts` spread over ex's threads. */
 void engine_parallel_bytes(const nprfx_executor *ex, void *dst, const void *src, size_t bytes,

@@ -4,6 +4,7 @@
  * motion convention it is read with, where its ids come from (an index pass or Cryptomatte) and
  * how its depth is stored, then checks that every input finds its channels, falling back where a
  * plate lacks an AOV and saying so once. */
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -76,12 +77,14 @@ static int selects(const char *const *names, int nc, const char *hint)
     return hint && nprfx_channels_from_hint(names, nc, hint, idx, NPRFX_MAX_CHANNELS + 1) > 0;
 }
 
-static void notice(nprfx_graph *g, const char *fmt, const char *a, const char *b, const char *c,
-                   const char *d)
+static void notice(nprfx_graph *g, const char *fmt, ...)
 {
     if (!g->notice) return;
     char msg[2048];
-    snprintf(msg, sizeof msg, fmt, a, b, c, d);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
     g->notice(g->notice_user, msg);
 }
 
@@ -97,13 +100,16 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
                                         (const char *const *)info->attr_values, info->nattributes);
     n->profile_known = 1;
     const char *profile = nprfx_aov_profile_name(n->profile);
-    /* Motion: the convention "vectors" names, or with "auto" (or none given, when the graph reads
-     * motion from the plate) the profile's, else the first whose channels the plate has. A plate
-     * that has nprfx's own motion channels is read as it is. */
+    /* Motion: the convention "vectors" names; with "auto" the profile's, else the first whose
+     * channels the plate has (as an explicit convention always reads them, whether or not a node
+     * uses them: tools such as measure compare against the plate's motion); with none given, the
+     * same, only when an input reads motion from the plate. A plate that has nprfx's own motion
+     * channels is read as it is. */
     n->vec = NULL;
     if (n->vectors && strcmp(n->vectors, "auto"))
         n->vec = nprfx_aov_vectors_find(n->vectors); /* "none": NULL */
-    else if (plate_needs(g, i, NPRFX_AOV_MOTION_PREV) || plate_needs(g, i, NPRFX_AOV_MOTION_NEXT)) {
+    else if (n->vectors || plate_needs(g, i, NPRFX_AOV_MOTION_PREV) ||
+             plate_needs(g, i, NPRFX_AOV_MOTION_NEXT)) {
         if (!selects(names, nc, "motion_prev.X,motion_prev.Y")) {
             const nprfx_aov_vectors *v = nprfx_aov_profile_vectors(n->profile);
             if (v && selects(names, nc, v->channels)) n->vec = v;
@@ -115,8 +121,8 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
         if (n->vec && n->vec->prev_from_next && plate_needs(g, i, NPRFX_AOV_MOTION_PREV))
             notice(g,
                    "note: plate '%s' (%s): the renderer writes one motion vector, to the next "
-                   "frame; motion_prev is its opposite (%s)%s",
-                   n->name, profile, n->vec->channels, "");
+                   "frame; motion_prev is its opposite (%s)",
+                   n->name, profile, n->vec->channels);
     }
     /* Ids: the profile's index pass, else a Cryptomatte layer ("cryptomatte" picks one). */
     free(n->crypto);
@@ -150,8 +156,8 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
                 snprintf(sel, sizeof sel, "%s,%s", names[layers[pick].id0],
                          names[layers[pick].cov0]);
                 n->crypto = engine_strdup(sel);
-                notice(g, "note: plate '%s' (%s): object ids from Cryptomatte layer %s%s", n->name,
-                       profile, layers[pick].name, "");
+                notice(g, "note: plate '%s' (%s): object ids from Cryptomatte layer %s", n->name,
+                       profile, layers[pick].name);
             }
         }
     }
@@ -176,9 +182,7 @@ typedef struct plate_names {
 
 static void plate_names_free(plate_names *p)
 {
-    for (int c = 0; p->names && c < p->n; c++)
-        free(p->names[c]);
-    free(p->names);
+    engine_names_free(p->names, p->n);
     memset(p, 0, sizeof *p);
 }
 
@@ -213,8 +217,8 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
                     char what[300];
                     snprintf(what, sizeof what, "'%s' (%s profile) has no %s", src->name, profile,
                              nprfx_aov_name(aov));
-                    notice(g, "warning: plate %s: %s stands in for it (%s)%s", what,
-                           nprfx_aov_name(fallbacks[f].with[w]), fallbacks[f].why, "");
+                    notice(g, "warning: plate %s: %s stands in for it (%s)", what,
+                           nprfx_aov_name(fallbacks[f].with[w]), fallbacks[f].why);
                 }
                 return NPRFX_OK;
             }
@@ -229,9 +233,11 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
         if (!announced[ref->src][aov]++) {
             char what[300];
             snprintf(what, sizeof what, "'%s' (%s profile) has no id", src->name, profile);
-            notice(g, "warning: plate %s (no index pass, no Cryptomatte layer): %s%s%s", what,
-                   "the inputs that take ids are left unconnected, and edges come from depth ",
-                   "and normal discontinuities", "");
+            notice(g,
+                   "warning: plate %s (no index pass, no Cryptomatte layer): the inputs that "
+                   "take ids are left unconnected, and edges come from depth and normal "
+                   "discontinuities",
+                   what);
         }
         free(ref->sel);
         ref->sel = NULL;

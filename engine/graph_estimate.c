@@ -1,5 +1,5 @@
-/* nprfx graph engine — nprfx_graph_plan: the memory a frame needs, estimated before frame 1 from the
- * graph and the frames' sizes alone (plates' headers, synth sizes, "format"), by running the
+/* nprfx graph engine — nprfx_graph_plan: the memory a frame needs, estimated before frame 1 from
+ * the graph and the frames' sizes alone (plates' headers, synth sizes, "format"), by running the
  * memory plan on shapes instead of pixels; strips when whole frames would pass the limit. */
 #include <stdint.h>
 #include <stdio.h>
@@ -26,9 +26,7 @@ typedef struct shape {
 
 static void shape_free(shape *s)
 {
-    for (int c = 0; s->names && c < s->channels; c++)
-        free(s->names[c]);
-    free(s->names);
+    engine_names_free(s->names, s->channels);
     memset(s, 0, sizeof *s);
 }
 

@@ -1,23 +1,15 @@
-/* nprfx graph engine — plate and file-info helpers (plate.h): plain C, independent of the image library
- * behind the readers. */
+/* nprfx graph engine — plate and file-info helpers (plate.h): plain C, independent of the image
+ * library behind the readers. */
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine_util.h"
 #include "nprfx/io.h"
-#include "nprfx/io.h"
-
-static void free_names(char **names, int n)
-{
-    if (!names) return;
-    for (int i = 0; i < n; i++)
-        free(names[i]);
-    free(names);
-}
 
 void nprfx_plate_free(nprfx_plate *p)
 {
     if (!p) return;
-    free_names(p->names, p->nchannels);
+    engine_names_free(p->names, p->nchannels);
     free(p->pixels);
     free(p->types);
     free(p->note);
@@ -52,15 +44,15 @@ int nprfx_plate_channel(const nprfx_plate *p, const char *name)
 void nprfx_file_info_free(nprfx_file_info *info)
 {
     if (!info) return;
-    free_names(info->names, info->nchannels);
-    free_names(info->types, info->nchannels);
+    engine_names_free(info->names, info->nchannels);
+    engine_names_free(info->types, info->nchannels);
     for (int i = 0; info->parts && i < info->nparts; i++) {
-        free_names(info->parts[i].names, info->parts[i].nchannels);
-        free_names(info->parts[i].types, info->parts[i].nchannels);
+        engine_names_free(info->parts[i].names, info->parts[i].nchannels);
+        engine_names_free(info->parts[i].types, info->parts[i].nchannels);
     }
     free(info->parts);
-    free_names(info->views, info->nviews);
-    free_names(info->attr_names, info->nattributes);
-    free_names(info->attr_values, info->nattributes);
+    engine_names_free(info->views, info->nviews);
+    engine_names_free(info->attr_names, info->nattributes);
+    engine_names_free(info->attr_values, info->nattributes);
     memset(info, 0, sizeof *info);
 }
