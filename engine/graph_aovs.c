@@ -226,19 +226,52 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
             ref->sel = old;
         }
     }
-    /* An object id an input can do without: lines and mattes then cut where depth and normals
-     * jump. */
-    if (aov == NPRFX_AOV_ID && n->kind == GK_NODE &&
-        (n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) {
-        if (!announced[ref->src][aov]++) {
-            char what[300];
-            snprintf(what, sizeof what, "'%s' (%s profile) has no id", src->name, profile);
-            notice(g,
-                   "warning: plate %s (no index pass, no Cryptomatte layer): the inputs that "
-                   "take ids are left unconnected, and edges come from depth and normal "
-                   "discontinuities",
-                   what);
+    /* No motion vectors: optical flow on the beauty, as for footage (the read's fallback flow
+     * node, graph_load.c), with its confidence where the node takes one and has none. */
+    if ((aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT) && src->kind == GK_READ &&
+        src->flow >= 0) {
+        int fi = src->flow, si = ref->src;
+        gref *fin = &g->nodes[fi].inputs[0];
+        if (fin->src < 0) {
+            fin->src = si;
+            fin->sel = engine_strdup("beauty.RGB");
+            fin->text = engine_strdup(g->nodes[si].name);
+            g->flows_wired = 1;
         }
+        if (!announced[si][aov]++)
+            notice(g,
+                   "warning: plate '%s' (%s profile) has no motion vectors: optical flow on its "
+                   "beauty stands in (node '%s', as for footage: slower, and it restarts the "
+                   "pattern where the flow is unsure)",
+                   g->nodes[si].name, profile, g->nodes[fi].name);
+        free(ref->sel);
+        ref->sel = NULL;
+        ref->src = fi;
+        free(ref->text);
+        ref->text = engine_strdup(g->nodes[fi].name);
+        for (int c = 0; c < n->ninputs; c++) {
+            gref *conf = &n->inputs[c];
+            if (conf->src >= 0 || n->kind != GK_NODE ||
+                strcmp(n->desc->inputs[c].name, "confidence"))
+                continue;
+            conf->src = fi;
+            free(conf->text);
+            conf->text = engine_strdup(g->nodes[fi].name);
+        }
+        return NPRFX_OK;
+    }
+    /* An AOV an input can do without (an id, a normal: lines and mattes then cut where what
+     * they still have jumps) is left out, unless the node would be left with no input at all. */
+    int others = 0;
+    for (int c = 0; c < n->ninputs; c++)
+        others += c != k && n->inputs[c].src >= 0;
+    if (aov >= 0 && others && n->kind == GK_NODE &&
+        (n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) {
+        if (!announced[ref->src][aov]++)
+            notice(g,
+                   "warning: plate '%s' (%s profile) has no %s: the inputs that take it are left "
+                   "unconnected",
+                   src->name, profile, nprfx_aov_name(aov));
         free(ref->sel);
         ref->sel = NULL;
         ref->src = -1;

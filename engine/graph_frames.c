@@ -1,6 +1,6 @@
-/* nprfx graph engine — the frames a graph holds: each frame buffer counted against the memory limit as
- * it is handed out, adopted or given back, the caches stateful nodes keep, the peak, the window of
- * frames temporal sources are read at, and the per-node costs (nprfx_graph_stats). */
+/* nprfx graph engine — the frames a graph holds: each frame buffer counted against the memory limit
+ * as it is handed out, adopted or given back, the caches stateful nodes keep, the peak, the window
+ * of frames temporal sources are read at, and the per-node costs (nprfx_graph_stats). */
 #include <stdint.h>
 #include <stdlib.h>
 #include "frame_pool.h"
@@ -79,7 +79,8 @@ void internal_graph_touch(nprfx_graph *g, centry *e)
 
 int nprfx_graph_stats(const nprfx_graph *g, const nprfx_graph_node_stats **stats)
 {
-    for (int i = 0; i < g->count; i++) {
+    int count = g->flows_wired ? g->count : g->visible;
+    for (int i = 0; i < count; i++) {
         nprfx_graph_node_stats *s = &g->stats[i];
         const gnode *n = &g->nodes[i];
         s->name = n->name;
@@ -90,7 +91,7 @@ int nprfx_graph_stats(const nprfx_graph *g, const nprfx_graph_node_stats **stats
                                         : "write";
     }
     *stats = g->stats;
-    return g->count;
+    return count;
 }
 
 size_t nprfx_graph_mem_peak(const nprfx_graph *g)

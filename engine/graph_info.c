@@ -12,7 +12,7 @@
 
 int nprfx_graph_node_count(const nprfx_graph *g)
 {
-    return g ? g->count : 0;
+    return g ? (g->flows_wired ? g->count : g->visible) : 0;
 }
 
 int nprfx_graph_node_index(const nprfx_graph *g, const char *name)

@@ -318,6 +318,40 @@ static nprfx_result parse_node(nprfx_graph *g, gnode *n, const internal_json *j)
     return NPRFX_OK;
 }
 
+/* After the graph's nodes, a flow node per read node ("READ:flow", a name no reference can give),
+ * with its defaults and no input: neither planned nor rendered unless the plates' settling wires
+ * it in for a plate that has no motion vectors (graph_aovs.c), as the footage graphs use it. */
+static nprfx_result add_fallback_flows(nprfx_graph *g)
+{
+    if (!nprfx_node_find("flow")) return NPRFX_OK;
+    internal_json *j = NULL;
+    nprfx_result r = internal_json_parse(g->ctx, "{\"node\": \"flow\"}", &j);
+    for (int i = 0, visible = g->count; !r && i < visible; i++) {
+        g->nodes[i].flow = -1;
+        if (g->nodes[i].kind != GK_READ) continue;
+        gnode *f = &g->nodes[g->count];
+        char name[600];
+        snprintf(name, sizeof name, "%s:flow", g->nodes[i].name);
+        f->name = engine_strdup(name);
+        if (!f->name) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        if (r || internal_graph_names_add(g, g->count) >= 0) {
+            free(f->name);
+            f->name = NULL;
+            continue; /* a node of the graph already has the name (written with an escape) */
+        }
+        g->count++; /* what nprfx_graph_free releases */
+        char scope[700];
+        snprintf(scope, sizeof scope, "node '%s'", name);
+        if (nprfx_context_create_scoped(g->ctx, scope, &f->ctx))
+            r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        if (!r) r = parse_node(g, f, j);
+        f->flow = -1;
+        g->nodes[i].flow = g->count - 1;
+    }
+    internal_json_free(j);
+    return r;
+}
+
 /* Resolve references to node indices, check required inputs and cycles. */
 static nprfx_result link_graph(nprfx_graph *g)
 {
@@ -455,13 +489,19 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
                         NPRFX_GRAPH_MAX_NODES);
         goto done;
     }
-    g->nodes = calloc((size_t)(count ? count : 1), sizeof *g->nodes);
+    /* room for a fallback flow node per read node (add_fallback_flows) */
+    int reads = 0;
+    for (const internal_json *e = nodes->child; e; e = e->next) {
+        const internal_json *t = internal_json_member(e, "node");
+        reads += json_is(t, INTERNAL_JSON_STRING) && !strcmp(t->string, "read");
+    }
+    g->nodes = calloc((size_t)(count + reads ? count + reads : 1), sizeof *g->nodes);
     if (!g->nodes) {
         r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         goto done;
     }
-    if ((r = internal_graph_names_init(g, count))) goto done;
-    g->stats = calloc((size_t)(count ? count : 1), sizeof *g->stats);
+    if ((r = internal_graph_names_init(g, count + reads))) goto done;
+    g->stats = calloc((size_t)(count + reads ? count + reads : 1), sizeof *g->stats);
     if (!g->stats) {
         r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         goto done;
@@ -492,6 +532,8 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     r = link_graph(g);
     if (!r) r = internal_graph_check_limits(g);
     if (!r) r = nprfx_image_limit(ctx, &g->mem_limit);
+    g->visible = g->count;
+    if (!r) r = add_fallback_flows(g);
 done:
     internal_json_free(root);
     if (r) {

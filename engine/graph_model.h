@@ -50,6 +50,7 @@ typedef struct gnode {
      * of (NULL: none), and the layer the graph asks for ("cryptomatte"). */
     int prepared, profile_known, profile;
     const nprfx_aov_vectors *vec;
+    int flow; /* read: its fallback flow node, -1 when none */
     char *crypto, *depth_inverse, *cryptomatte;
 } gnode;
 
@@ -120,6 +121,10 @@ struct nprfx_graph {
     int strip_option, strip_rows;
     int plan_ready;
     int plates_settled; /* graph_aovs.c: the read nodes' plates are known, every input resolved */
+    /* The nodes the graph file names come first (visible of them); after them, one flow node per
+     * read node, unconnected until a plate without motion vectors needs it (graph_aovs.c). Front
+     * ends see the visible ones, and the flows once one is wired in (flows_wired). */
+    int visible, flows_wired;
     int *plan_uses;               /* per node: inputs reading it at the same frame */
     unsigned char *plan_temporal; /* per node: some temporal node reads it at other frames */
     /* per node, its readers: (node, input) pairs plan_readers[plan_first[i] .. plan_first[i+1]) */

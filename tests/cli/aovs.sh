@@ -61,24 +61,55 @@ same blender/out arnold_set/out "canonical names, plate.aovs=arnold"
 same blender/out hints_blender/out "descriptor hints against canonical names on Blender plates"
 same blender/out hints_arnold/out "descriptor hints on Arnold plates"
 
-# A plate without the AOV: refused, nothing written, with the AOV, the profile and its names.
-"$NPRFX" run canon.json --quiet --output-dir missing --set plate.path=nonormal/orbit.####.exr \
-  --aovs arnold > missing.log 2>&1
+# A plate without an AOV an input can do without: the lines draw without normals, said once.
+"$NPRFX" run canon.json --output-dir nonormal_run --set plate.path=nonormal/orbit.####.exr \
+  --aovs arnold > nonormal_run.log 2>&1
 st=$?
-msg="node 'ink': input 'normal': plate 'plate' has no normal: its arnold profile looks for N"
-[ $st -ne 0 ] && grep -qF "$msg" missing.log && [ ! -e missing/out/ink.0001.exr ] && pass ||
+[ $st -eq 0 ] && [ -s nonormal_run/out/ink.0002.exr ] &&
+  [ "$(grep -c "warning: plate 'plate' (arnold profile) has no normal: the inputs that take it are left unconnected" nonormal_run.log)" = 1 ] &&
+  pass || { fail "optional normal: status $st"; cat nonormal_run.log; }
+# A plate without an AOV an input needs: refused before a frame is written, with the AOV, the
+# profile and its names.
+cat > needs.json <<'G'
+{"frames": "1-2", "nodes": {
+ "plate": {"node": "read", "path": "nonormal/orbit.####.exr", "aovs": "arnold"},
+ "t": {"node": "time-offset", "inputs": {"image": "plate:normal"}},
+ "w": {"node": "write", "inputs": {"image": "t"}, "path": "out/n.####.exr"}}}
+G
+"$NPRFX" run needs.json --quiet --output-dir missing > missing.log 2>&1
+st=$?
+msg="node 't': input 'image': plate 'plate' has no normal: its arnold profile looks for N"
+[ $st -ne 0 ] && grep -qF "$msg" missing.log && [ ! -e missing/out/n.0001.exr ] && pass ||
   { fail "missing normal: status $st, expected '$msg':"; cat missing.log; }
 # A profile that is none.
 "$NPRFX" run canon.json --quiet --output-dir bad --aovs maya > bad.log 2>&1
 grep -qF "node 'plate': aovs 'maya' is not one of: auto, generic, blender, arnold, renderman, karma, vray, redshift, nuke" bad.log &&
   pass || { fail "bad profile:"; cat bad.log; }
 # A profile given wrongly is the user's word: Blender plates read as V-Ray have no V-Ray names.
-# The id the lines can do without falls back, said once; the coverage they read fails before a
-# frame is written, in V-Ray's terms.
+# The lines do without the id, coverage and depth, each said once; without the normal too they
+# would have nothing to draw from, so the run fails before a frame is written, in V-Ray's terms.
 "$NPRFX" run canon.json --output-dir wrong --aovs vray > wrong.log 2>&1
 st=$?
 [ $st -ne 0 ] && [ "$(grep -c "warning: plate 'plate' (vray profile) has no id" wrong.log)" = 1 ] &&
-  grep -qF "plate 'plate' has no coverage: its vray profile looks for A;" wrong.log &&
+  [ "$(grep -c "warning: plate 'plate' (vray profile) has no depth" wrong.log)" = 1 ] &&
+  grep -qF "plate 'plate' has no normal: its vray profile looks for VRayNormals;" wrong.log &&
   [ ! -e wrong/out/ink.0001.exr ] && pass || { fail "wrong profile: status $st"; cat wrong.log; }
+# A plate with only beauty and depth (an Arnold render's R,G,B,A and Z): toon.json runs unedited
+# but for plate.path, each missing AOV said once with what stands in (optical flow for the
+# vectors), and every frame written.
+mkdir -p bd
+"$NPRFX" synth orbit --layout arnold --size 96x64 --frames 1-3 -o arl/orbit.####.exr > /dev/null || fail "synth arnold"
+for f in 1 2 3; do oiiotool arl/orbit.000$f.exr --ch R,G,B,A,Z -o bd/orbit.000$f.exr || fail "oiiotool"; done
+"$NPRFX" run "$SRC/samples/graphs/toon.json" --set plate.path="$W/bd/orbit.####.exr" --shot 1-3 \
+  --output-dir bdout > bd.log 2>&1
+st=$?
+ok=1
+for w in "has no id: the inputs that take it are left unconnected" \
+  "has no albedo: beauty stands in" "has no motion vectors: optical flow on its beauty stands in" \
+  "has no normal: the inputs that take it are left unconnected"; do
+  [ "$(grep -c "warning: plate 'plate' (arnold profile) $w" bd.log)" = 1 ] || ok=0
+done
+[ $st -eq 0 ] && [ $ok = 1 ] && [ -s bdout/out/toon/toon.0003.exr ] && pass ||
+  { fail "beauty and depth only: status $st"; cat bd.log; }
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]
