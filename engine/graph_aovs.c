@@ -20,27 +20,60 @@
 #include "nprfx/io.h"
 #include "nprfx/synth.h"
 
-/* What stands in for an AOV a plate lacks, in order of preference. */
+/* What stands in for an AOV a plate lacks, in order of preference. optional_out: an optional
+ * input goes without instead (tone divides its light by the albedo: the beauty there would make
+ * the light a flat 1, while without one the light is the beauty's). */
 static const struct {
     int aov;
     int with[2];
+    int optional_out;
     const char *why;
 } fallbacks[] = {
     {NPRFX_AOV_REST,
      {NPRFX_AOV_UV, NPRFX_AOV_POSITION},
+     0,
      "patterns stick to the surface only as well as it does"},
-    {NPRFX_AOV_ALBEDO, {NPRFX_AOV_BEAUTY, -1}, "the colour carries its light"},
-    {NPRFX_AOV_DIFFUSE_LIGHT, {NPRFX_AOV_BEAUTY, -1}, "the light carries the colour"},
+    {NPRFX_AOV_ALBEDO, {NPRFX_AOV_BEAUTY, -1}, 1, "the colour carries its light"},
+    {NPRFX_AOV_DIFFUSE_LIGHT, {NPRFX_AOV_BEAUTY, -1}, 0, "the light carries the colour"},
 };
 
-/* The canonical AOV input k of n asks for: its selection's (one item), else the first canonical
- * alternative of its hint; -1 when none. comp gets the selection's components. */
-static int wanted_aov(const gnode *n, int k, char *comp, size_t size)
+/* Whether a fallback stands in for aov. */
+static int has_fallback(int aov)
+{
+    for (size_t f = 0; f < sizeof fallbacks / sizeof fallbacks[0]; f++)
+        if (fallbacks[f].aov == aov) return 1;
+    return 0;
+}
+
+/* The canonical AOV input k of n asks for: its selection's (the first item that has a fallback,
+ * else the first canonical one: "rest" of "rest,coverage", its place in the selection in *at and
+ * *len), else the first canonical alternative of its hint (*len 0); -1 when none. comp gets the
+ * item's components. */
+static int wanted_aov(const gnode *n, int k, char *comp, size_t size, size_t *at, size_t *len)
 {
     const gref *ref = &n->inputs[k];
     comp[0] = 0;
-    if (ref->sel)
-        return strchr(ref->sel, ',') ? -1 : internal_graph_canonical_parse(ref->sel, comp, size);
+    *at = *len = 0;
+    if (ref->sel) {
+        int found = -1;
+        for (const char *item = ref->sel; *item;) {
+            size_t l = strcspn(item, ",");
+            char buf[128], c[8];
+            if (l < sizeof buf) {
+                memcpy(buf, item, l);
+                buf[l] = 0;
+                int aov = internal_graph_canonical_parse(buf, c, sizeof c);
+                if (aov >= 0 && (found < 0 || (!has_fallback(found) && has_fallback(aov)))) {
+                    found = aov;
+                    *at = (size_t)(item - ref->sel);
+                    *len = l;
+                    snprintf(comp, size, "%s", c);
+                }
+            }
+            item += l + (item[l] == ',');
+        }
+        return found;
+    }
     if (n->kind != GK_NODE || !n->desc->inputs[k].aov) return -1;
     char buf[1024], c[8];
     snprintf(buf, sizeof buf, "%s", n->desc->inputs[k].aov);
@@ -61,7 +94,8 @@ static int plate_needs(const nprfx_graph *g, int i, int aov)
         for (int k = 0; k < n->ninputs; k++) {
             if (n->inputs[k].src != i) continue;
             char comp[8];
-            if (wanted_aov(n, k, comp, sizeof comp) == aov) return 1;
+            size_t at, len;
+            if (wanted_aov(n, k, comp, sizeof comp, &at, &len) == aov) return 1;
             const char *text = n->inputs[k].sel     ? n->inputs[k].sel
                                : n->kind == GK_NODE ? n->desc->inputs[k].aov
                                                     : NULL;
@@ -89,11 +123,10 @@ static void notice(nprfx_graph *g, const char *fmt, ...)
 }
 
 /* Read node i's profile, motion, ids and depth from one header. */
-static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *info)
+static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *info,
+                                const char *const *names, int nc)
 {
     gnode *n = &g->nodes[i];
-    const char *const *names = (const char *const *)info->names;
-    int nc = info->nchannels;
     n->profile = n->aovs && strcmp(n->aovs, "auto")
                      ? nprfx_aov_profile_find(n->aovs)
                      : nprfx_aov_detect(names, nc, (const char *const *)info->attr_names,
@@ -121,8 +154,8 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
         if (n->vec && n->vec->prev_from_next && plate_needs(g, i, NPRFX_AOV_MOTION_PREV))
             notice(g,
                    "note: plate '%s' (%s): the renderer writes one motion vector, to the next "
-                   "frame; motion_prev is its opposite (%s)",
-                   n->name, profile, n->vec->channels);
+                   "frame; motion_prev is its opposite (vectors: %s)",
+                   n->name, profile, n->vec->name);
     }
     /* Ids: the profile's index pass, else a Cryptomatte layer ("cryptomatte" picks one). */
     free(n->crypto);
@@ -170,6 +203,32 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
         if (cand && nprfx_channels_from_hint(names, nc, cand, idx, 2) == 1)
             n->depth_inverse = engine_strdup(names[idx[0]]);
     }
+    /* No position, rest or uv, but depth: a camera-space position from depth stands in for them
+     * (patterns then hold to the camera, as on footage, rather than to the surfaces). */
+    free(n->position_from);
+    n->position_from = NULL;
+    if (plate_needs(g, i, NPRFX_AOV_REST) || plate_needs(g, i, NPRFX_AOV_UV) ||
+        plate_needs(g, i, NPRFX_AOV_POSITION)) {
+        int chosen = n->aovs && strcmp(n->aovs, "auto"), have = 0, idx[2];
+        static const int anchors[] = {NPRFX_AOV_REST, NPRFX_AOV_UV, NPRFX_AOV_POSITION};
+        for (int a = 0; a < 3 && !have; a++)
+            have = selects(names, nc, nprfx_aov_candidates(n->profile, anchors[a])) ||
+                   (!chosen &&
+                    selects(names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, anchors[a])));
+        const char *cand = nprfx_aov_candidates(n->profile, NPRFX_AOV_DEPTH);
+        int d = cand ? nprfx_channels_from_hint(names, nc, cand, idx, 2) : -1;
+        if (d != 1 && !chosen)
+            d = nprfx_channels_from_hint(
+                names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, NPRFX_AOV_DEPTH), idx, 2);
+        if (!have && d == 1 && !n->depth_inverse) {
+            n->position_from = engine_strdup(names[idx[0]]);
+            notice(g,
+                   "warning: plate '%s' (%s profile) has no position, rest or uv: a camera-space "
+                   "position from its depth stands in (patterns hold to the camera, not to the "
+                   "surfaces)",
+                   n->name, profile);
+        }
+    }
     n->prepared = 1;
     return NPRFX_OK;
 }
@@ -186,6 +245,15 @@ static void plate_names_free(plate_names *p)
     memset(p, 0, sizeof *p);
 }
 
+/* Whether what happened to a plate's AOV (a bit: stood in for, replaced by flow, left out) is
+ * news: each is said once per plate and AOV. */
+static int announce(unsigned char *said, int bit)
+{
+    int news = !(*said & bit);
+    *said |= (unsigned char)bit;
+    return news;
+}
+
 /* Give input k of node j its channels, or a fallback, or fail. */
 static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names *plates,
                                  unsigned char (*announced)[NPRFX_AOV_COUNT])
@@ -200,20 +268,26 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
     nprfx_result r =
         internal_graph_input_channels_quiet(g, n, k, names, p->n, idx, &count, msg, sizeof msg);
     if (!r) return NPRFX_OK;
-    int aov = wanted_aov(n, k, comp, sizeof comp);
+    size_t at, len;
+    int aov = wanted_aov(n, k, comp, sizeof comp, &at, &len);
     const char *profile = nprfx_aov_profile_name(internal_graph_plate_profile(src, names, p->n));
+    int optional = n->kind == GK_NODE && (n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL);
     for (size_t f = 0; aov >= 0 && f < sizeof fallbacks / sizeof fallbacks[0]; f++) {
-        if (fallbacks[f].aov != aov) continue;
+        if (fallbacks[f].aov != aov || (optional && fallbacks[f].optional_out)) continue;
         for (int w = 0; w < 2 && fallbacks[f].with[w] >= 0; w++) {
-            char sel[64];
-            snprintf(sel, sizeof sel, "%s%s%s", nprfx_aov_name(fallbacks[f].with[w]),
-                     comp[0] ? "." : "", comp);
+            /* the item replaced in the selection ("rest,coverage" -> "uv,coverage") */
+            char sel[1100];
+            const char *whole = ref->sel ? ref->sel : "";
+            snprintf(sel, sizeof sel, "%.*s%s%s%s%s", (int)at, whole,
+                     nprfx_aov_name(fallbacks[f].with[w]), comp[0] ? "." : "", comp,
+                     len ? whole + at + len : "");
             char *old = ref->sel;
             ref->sel = engine_strdup(sel);
-            if (!internal_graph_input_channels_quiet(g, n, k, names, p->n, idx, &count, msg,
-                                                     sizeof msg)) {
+            char tried[2048];
+            if (!internal_graph_input_channels_quiet(g, n, k, names, p->n, idx, &count, tried,
+                                                     sizeof tried)) {
                 free(old);
-                if (!announced[ref->src][aov]++) {
+                if (announce(&announced[ref->src][aov], 1)) {
                     char what[300];
                     snprintf(what, sizeof what, "'%s' (%s profile) has no %s", src->name, profile,
                              nprfx_aov_name(aov));
@@ -238,7 +312,7 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
             fin->text = engine_strdup(g->nodes[si].name);
             g->flows_wired = 1;
         }
-        if (!announced[si][aov]++)
+        if (announce(&announced[si][aov], 2))
             notice(g,
                    "warning: plate '%s' (%s profile) has no motion vectors: optical flow on its "
                    "beauty stands in (node '%s', as for footage: slower, and it restarts the "
@@ -265,9 +339,8 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
     int others = 0;
     for (int c = 0; c < n->ninputs; c++)
         others += c != k && n->inputs[c].src >= 0;
-    if (aov >= 0 && others && n->kind == GK_NODE &&
-        (n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL)) {
-        if (!announced[ref->src][aov]++)
+    if (aov >= 0 && others && optional) {
+        if (announce(&announced[ref->src][aov], 4))
             notice(g,
                    "warning: plate '%s' (%s profile) has no %s: the inputs that take it are left "
                    "unconnected",
@@ -280,7 +353,7 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
     return nprfx_error(g->ctx, r, "%s", msg);
 }
 
-nprfx_result internal_graph_prepare(nprfx_graph *g, int frame, int strict)
+nprfx_result internal_graph_prepare(nprfx_graph *g, int frame)
 {
     if (g->plates_settled) return NPRFX_OK;
     plate_names *plates = calloc((size_t)g->count, sizeof *plates);
@@ -307,27 +380,48 @@ nprfx_result internal_graph_prepare(nprfx_graph *g, int frame, int strict)
         memset(&info, 0, sizeof info);
         nprfx_context *quiet = NULL;
         /* a header that cannot be read yet is the frame's read's to report */
-        if (!strict && nprfx_context_create(NULL, &quiet) == NPRFX_OK) {
-            nprfx_result e = g->io.info(quiet, file, &info);
-            nprfx_context_destroy(quiet);
-            if (e) {
-                waiting = 1;
-                continue;
-            }
-        } else if ((r = g->io.info(n->ctx, file, &info))) {
+        if (nprfx_context_create(NULL, &quiet)) {
+            r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
             break;
         }
-        if (!n->prepared && (r = settle_read(g, i, &info))) {
+        nprfx_result e = g->io.info(quiet, file, &info);
+        nprfx_context_destroy(quiet);
+        if (e) {
+            waiting = 1;
+            continue;
+        }
+        /* The channels the read can deliver: without "part", those of every part of the default
+         * view, since the read takes the parts that hold what the graph names. */
+        int extra_room = GRAPH_EXTRA_MAX, nc = 0;
+        int total = info.nchannels;
+        for (int q = 0; q < info.nparts; q++)
+            total += info.parts[q].nchannels;
+        p->names = calloc((size_t)(total + extra_room), sizeof *p->names);
+        if (!p->names) {
+            nprfx_file_info_free(&info);
+            r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+            break;
+        }
+        for (int c = 0; c < info.nchannels; c++)
+            p->names[nc++] = engine_strdup(info.names[c]);
+        const char *view = info.nviews ? info.views[0] : "";
+        for (int q = 0; info.nparts > 1 && !(n->part && n->part[0]) && q < info.nparts; q++) {
+            const nprfx_part_info *part = &info.parts[q];
+            if (part->deep || (part->view[0] && strcmp(part->view, view))) continue;
+            for (int c = 0; c < part->nchannels; c++) {
+                int seen = 0;
+                for (int o = 0; o < nc && !seen; o++)
+                    seen = !strcmp(p->names[o], part->names[c]);
+                if (!seen) p->names[nc++] = engine_strdup(part->names[c]);
+            }
+        }
+        p->n = nc;
+        if (!n->prepared && (r = settle_read(g, i, &info, (const char *const *)p->names, nc))) {
             nprfx_file_info_free(&info);
             break;
         }
-        int extra = internal_graph_extra_count(n);
-        p->names = calloc((size_t)(info.nchannels + extra), sizeof *p->names);
-        for (int c = 0; p->names && c < info.nchannels; c++)
-            p->names[c] = engine_strdup(info.names[c]);
-        for (int c = 0; p->names && c < extra; c++)
-            p->names[info.nchannels + c] = engine_strdup(internal_graph_extra_name(n, c));
-        p->n = p->names ? info.nchannels + extra : 0;
+        for (int c = 0; c < internal_graph_extra_count(n) && c < extra_room; c++)
+            p->names[p->n++] = engine_strdup(internal_graph_extra_name(n, c));
         nprfx_file_info_free(&info);
     }
     /* Every input that reads a plate, once all plates are known. */

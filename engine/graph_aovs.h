@@ -6,11 +6,11 @@
 #include "graph_model.h"
 
 /* Settle every read node's plates from `frame`'s header (profile, motion convention, Cryptomatte
- * ids, 1/z depth), then give each input that reads a plate its channels, or a fallback announced
- * once (rest -> uv -> position, albedo and diffuse_light -> beauty, id -> none for an optional
- * input), or fail naming the AOV, the profile and the channels that would do. Once per graph: a
- * read whose header cannot be read yet is settled at a later frame. strict: a frame whose file
- * cannot be read is an error (the check before a run), else it waits for the frame's own read. */
-nprfx_result internal_graph_prepare(nprfx_graph *g, int frame, int strict);
+ * ids, 1/z depth, a position from depth), then give each input that reads a plate its channels,
+ * or a fallback announced once (rest -> uv -> position, albedo and diffuse_light -> beauty,
+ * motion -> optical flow, an optional input's AOV -> left out), or fail naming the AOV, the
+ * profile and the channels that would do. Once per graph: a read whose header cannot be read
+ * yet (a missing first frame) is settled at a later frame, its read reporting the file. */
+nprfx_result internal_graph_prepare(nprfx_graph *g, int frame);
 
 #endif

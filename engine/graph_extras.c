@@ -12,11 +12,12 @@
 #include "nprfx/channels.h"
 #include "nprfx/cryptomatte.h"
 
-enum { OP_SCALE = 0, OP_CRYPTO = 1, OP_INVERSE = 2 };
+enum { OP_SCALE = 0, OP_CRYPTO = 1, OP_INVERSE = 2, OP_PX = 3, OP_PY = 4, OP_PZ = 5 };
 
 const char *const internal_graph_motion_names[4] = {"motion_prev.X", "motion_prev.Y",
                                                     "motion_next.X", "motion_next.Y"};
 static const char id_name[] = "aov.id", depth_name[] = "aov.depth";
+static const char *const position_names[3] = {"aov.position.X", "aov.position.Y", "aov.position.Z"};
 
 const nprfx_aov_vectors *internal_graph_vectors(const gnode *n)
 {
@@ -38,7 +39,8 @@ static int has_motion(const gnode *n)
 int internal_graph_extra_count(const gnode *n)
 {
     if (n->kind != GK_READ) return 0;
-    return (has_motion(n) ? 4 : 0) + (n->crypto ? 1 : 0) + (n->depth_inverse ? 1 : 0);
+    return (has_motion(n) ? 4 : 0) + (n->crypto ? 1 : 0) + (n->depth_inverse ? 1 : 0) +
+           (n->position_from ? 3 : 0);
 }
 
 const char *internal_graph_extra_name(const gnode *n, int k)
@@ -47,7 +49,8 @@ const char *internal_graph_extra_name(const gnode *n, int k)
     if (k < motion) return internal_graph_motion_names[k];
     k -= motion;
     if (n->crypto && k-- == 0) return id_name;
-    if (n->depth_inverse && k == 0) return depth_name;
+    if (n->depth_inverse && k-- == 0) return depth_name;
+    if (n->position_from && k >= 0 && k < 3) return position_names[k];
     return NULL;
 }
 
@@ -58,6 +61,8 @@ const char *internal_graph_extra_for(const gnode *n, int aov)
     if (aov == NPRFX_AOV_MOTION_NEXT && has_motion(n)) return "motion_next.X,motion_next.Y";
     if (aov == NPRFX_AOV_ID && n->crypto) return id_name;
     if (aov == NPRFX_AOV_DEPTH && n->depth_inverse) return depth_name;
+    if (aov == NPRFX_AOV_POSITION && n->position_from)
+        return "aov.position.X,aov.position.Y,aov.position.Z";
     return NULL;
 }
 
@@ -66,7 +71,8 @@ const char *internal_graph_extra_want(const gnode *n, int k)
     const nprfx_aov_vectors *v = internal_graph_vectors(n);
     if (v && k-- == 0) return v->channels;
     if (n->crypto && k-- == 0) return n->crypto;
-    if (n->depth_inverse && k == 0) return n->depth_inverse;
+    if (n->depth_inverse && k-- == 0) return n->depth_inverse;
+    if (n->position_from && k == 0) return n->position_from;
     return NULL;
 }
 
@@ -130,10 +136,29 @@ nprfx_result internal_graph_extras(nprfx_graph *g, const gnode *n, const char *f
         x->src[x->count][1] = -1;
         x->op[x->count++] = OP_INVERSE;
     }
+    if (n->position_from) {
+        if (nprfx_channels_select(names, nc, n->position_from, idx, 1, bad, sizeof bad, &amb) != 1)
+            return nprfx_error(g->ctx, NPRFX_ERR_MISSING_INPUT,
+                               "node '%s': %s has no depth channel '%s'", n->name, file, bad);
+        for (int c = 0; c < 3; c++) {
+            x->src[x->count][0] = idx[0];
+            x->src[x->count][1] = -1;
+            x->op[x->count++] = OP_PX + c;
+        }
+    }
     return NPRFX_OK;
 }
 
-void internal_graph_extra_apply(const gextra *x, const float *px, float *out)
+void internal_graph_extra_frame(gextra *x, nprfx_rect display)
+{
+    /* Pixel centres at integer coordinates; a pinhole of about 53 degrees across the width (the
+     * focal length is the width): the scale only sizes patterns, which the nodes set anyway. */
+    x->cx = 0.5 * (display.x0 + display.x1 - 1);
+    x->cy = 0.5 * (display.y0 + display.y1 - 1);
+    x->focal = display.x1 > display.x0 ? display.x1 - display.x0 : 1;
+}
+
+void internal_graph_extra_apply(const gextra *x, const float *px, int X, int Y, float *out)
 {
     for (int k = 0; k < x->count; k++) {
         float v = px[x->src[k][0]];
@@ -141,6 +166,17 @@ void internal_graph_extra_apply(const gextra *x, const float *px, float *out)
         case OP_CRYPTO:
             out[k] = nprfx_cryptomatte_object_id(v, px[x->src[k][1]]);
             break;
+        case OP_PX:
+        case OP_PY:
+        case OP_PZ: {
+            /* camera space from depth, y up as a renderer's; the background stays far away */
+            double z = isfinite(v) && v < 1e9f ? v : 1e9;
+            double c = x->op[k] == OP_PX   ? (X - x->cx) / x->focal * z
+                       : x->op[k] == OP_PY ? (x->cy - Y) / x->focal * z
+                                           : -z;
+            out[k] = (float)c;
+            break;
+        }
         case OP_INVERSE:
             /* 1/z with nothing there (0, or anything not a positive depth) is the background */
             out[k] = v > 0 && isfinite(v) ? 1.0f / v : INFINITY;

@@ -82,7 +82,7 @@ nprfx_result nprfx_graph_input_channels(nprfx_graph *g, int node, int k, const c
 
 nprfx_result nprfx_graph_settle(nprfx_graph *g, int frame)
 {
-    return internal_graph_prepare(g, frame, 0);
+    return internal_graph_prepare(g, frame);
 }
 
 const char *nprfx_graph_read_vectors(const nprfx_graph *g, int node)
@@ -97,6 +97,16 @@ int nprfx_graph_read_decodes(const nprfx_graph *g, int node)
     if (!g || node < 0 || node >= g->count) return 0;
     const gnode *n = &g->nodes[node];
     return n->kind == GK_READ ? (n->crypto != NULL) + (n->depth_inverse != NULL) : 0;
+}
+
+int nprfx_graph_read_extras(const nprfx_graph *g, int node, const char **names, int max)
+{
+    if (!g || node < 0 || node >= g->count) return 0;
+    const gnode *n = &g->nodes[node];
+    int count = internal_graph_extra_count(n);
+    for (int k = 0; k < count && k < max; k++)
+        names[k] = internal_graph_extra_name(n, k);
+    return count;
 }
 
 const char *nprfx_graph_motion_name(int k)

@@ -616,6 +616,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->cryptomatte);
         free(n->crypto);
         free(n->depth_inverse);
+        free(n->position_from);
         free(n->compression);
         free(n->scene);
         free(n->display);

@@ -1,6 +1,6 @@
-/* nprfx graph engine — the graph engine's bottom: the parsed graph (nodes, references, the result cache's
- * entries, the memory plan's and the statistics' fields) that every file of the engine shares.
- * Never installed. */
+/* nprfx graph engine — the graph engine's bottom: the parsed graph (nodes, references, the result
+ * cache's entries, the memory plan's and the statistics' fields) that every file of the engine
+ * shares. Never installed. */
 #ifndef NPRFX_CLI_GRAPH_MODEL_H
 #define NPRFX_CLI_GRAPH_MODEL_H
 
@@ -52,6 +52,9 @@ typedef struct gnode {
     const nprfx_aov_vectors *vec;
     int flow; /* read: its fallback flow node, -1 when none */
     char *crypto, *depth_inverse, *cryptomatte;
+    /* read: the depth channel a camera-space position is made of, for a plate with no position
+     * (and no rest or uv to stand in for it); NULL: none */
+    char *position_from;
 } gnode;
 
 /* What a result carries besides pixels: the display window and pixel aspect a write puts back,

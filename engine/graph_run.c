@@ -18,7 +18,7 @@ nprfx_result nprfx_graph_check(nprfx_graph *g, const nprfx_frame_list *frames,
         return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "the graph has no write node, so it would produce nothing");
     if (!frames || frames->count <= 0) return NPRFX_OK;
-    nprfx_result r = internal_graph_prepare(g, frames->frames[0], 0);
+    nprfx_result r = internal_graph_prepare(g, frames->frames[0]);
     return r ? r : nprfx_graph_plan(g, frames->frames[0], plan);
 }
 

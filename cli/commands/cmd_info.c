@@ -13,6 +13,7 @@
 #include "nprfx/io_oiio.h"
 #include "io/io_write.h"
 #include "nprfx/io.h"
+#include "info_aovs.h"
 #include "io_check.h"
 
 /* Exit codes follow idiff: a file that cannot be read is 4. */
@@ -20,13 +21,20 @@ enum { INFO_OK = 0, INFO_USAGE = 2, INFO_FILE_ERROR = 4 };
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: nprfx info FILE...\n\n"
+    fprintf(f, "usage: nprfx info FILE...\n"
+               "       nprfx info --aovs FILE... [--styles DIR]\n\n"
                "Print each image's format, size, data and display windows, subimages,\n"
                "compression and channels grouped by layer with their pixel types, e.g.\n"
                "  ViewLayer.Vector: X Y Z W (half)\n"
                "The first lines describe what a read node takes by default; then the views of a\n"
                "stereo file, tiles, MIP levels, pixel aspect and deep data, and each part of a\n"
                "multi-part file with its windows and channels.\n\n"
+               "With --aovs: the renderer profile the plate is read with, each canonical AOV\n"
+               "(beauty, depth, id, motion_prev, ...) with the channels a read gives it, what\n"
+               "stands in for one it lacks (uv for rest, optical flow for motion, ...) or that\n"
+               "it is missing; then every sample style graph (share/nprfx/graphs, or DIR) with\n"
+               "its plate pointed at the file: runs as is, runs with fallbacks, or does not run\n"
+               "and why. Nothing is rendered.\n\n"
                "Exit status: 0 all files read, 2 usage error, 4 a file could not be read.\n");
 }
 
@@ -295,7 +303,8 @@ int cli_cmd_info(int argc, char **argv)
         fprintf(stderr, "nprfx info: cannot create a context\n");
         return INFO_USAGE;
     }
-    int rc = INFO_OK, nfiles = 0, opts_done = 0;
+    int rc = INFO_OK, nfiles = 0, opts_done = 0, aovs = 0;
+    const char *styles = NULL;
     if (argc >= 2 && !strcmp(argv[1], "--io-test")) {
         rc = io_test(ctx, argc - 1, argv + 1);
         if (rc == INFO_USAGE) fprintf(stderr, "nprfx info: bad --io-test arguments\n");
@@ -313,6 +322,14 @@ int cli_cmd_info(int argc, char **argv)
             opts_done = 1;
             continue;
         }
+        if (!opts_done && !strcmp(a, "--aovs")) {
+            aovs = 1;
+            continue;
+        }
+        if (!opts_done && !strcmp(a, "--styles") && i + 1 < argc) {
+            styles = argv[++i];
+            continue;
+        }
         if (!opts_done && a[0] == '-' && a[1]) {
             fprintf(stderr, "nprfx info: unknown option '%s'\n", a);
             usage(stderr);
@@ -326,9 +343,15 @@ int cli_cmd_info(int argc, char **argv)
             opts_done = 1;
             continue;
         }
+        if (!opts_done && !strcmp(argv[i], "--aovs")) continue;
+        if (!opts_done && !strcmp(argv[i], "--styles")) {
+            i++;
+            continue;
+        }
         nfiles++;
         /* Keep going after a bad file so one run reports on every file given. */
-        if (info_file(ctx, argv[i]) != INFO_OK) rc = INFO_FILE_ERROR;
+        if ((aovs ? cli_info_aovs(ctx, argv[i], styles) : info_file(ctx, argv[i])) != INFO_OK)
+            rc = INFO_FILE_ERROR;
     }
     if (!nfiles) {
         usage(stderr);

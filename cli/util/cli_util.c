@@ -28,7 +28,7 @@ static int cli_threads(int requested)
 /* The data directory (the stipple node's ivs.bin): $NPRFX_DATA_DIR when set (empty: none), else
  * share/nprfx beside the executable (the build tree) or ../share/nprfx (an install), the first
  * holding ivs.bin; NULL when there is none (the data is then generated when needed). */
-static const char *cli_data_dir(char *buf, size_t size)
+const char *cli_data_dir(char *buf, size_t size)
 {
     const char *env = getenv("NPRFX_DATA_DIR");
     if (env) {

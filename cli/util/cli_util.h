@@ -22,6 +22,10 @@ typedef struct cli_env {
     nprfx_pool *pool;
 } cli_env;
 int cli_env_init(cli_env *env, int threads);
+/* The data directory: $NPRFX_DATA_DIR, else share/nprfx beside the executable (the build tree) or
+ * ../share/nprfx (an install), the first holding ivs.bin; NULL when there is none. It holds the
+ * sample style graphs too (graphs/, and pam/ that some of them read). */
+const char *cli_data_dir(char *buf, size_t size);
 /* The memory limit (--mem-limit; UINT64_MAX: none) of the contexts cli_env_init makes from now
  * on, over NPRFX_READ_LIMIT's. */
 void cli_env_mem_limit(uint64_t bytes);

@@ -266,6 +266,9 @@ NPRFX_API const char *nprfx_graph_read_vectors(const nprfx_graph *g, int node);
 /* How many channels read node `node` decodes beyond motion (object ids from Cryptomatte, depth
  * from 1/z): what a translation to another host would have to rebuild. */
 NPRFX_API int nprfx_graph_read_decodes(const nprfx_graph *g, int node);
+/* The names of the channels read node `node` appends to its plates as settled (motion first,
+ * then decoded ids and depth), at most max of them into names; returns how many there are. */
+NPRFX_API int nprfx_graph_read_extras(const nprfx_graph *g, int node, const char **names, int max);
 /* Name k (0..3) of the channels a read node with "vectors" appends to its plates
  * ("motion_prev.X", ...). */
 NPRFX_API const char *nprfx_graph_motion_name(int k);

@@ -111,5 +111,21 @@ for w in "has no id: the inputs that take it are left unconnected" \
 done
 [ $st -eq 0 ] && [ $ok = 1 ] && [ -s bdout/out/toon/toon.0003.exr ] && pass ||
   { fail "beauty and depth only: status $st"; cat bd.log; }
+# nprfx info --aovs: the profile, the channels each AOV comes from (decoded where the read
+# decodes), what stands in for a missing one, and whether each sample style runs on the plate.
+"$NPRFX" info --aovs arl/orbit.0001.exr > info.log 2>&1
+grep -q "arl/orbit.0001.exr: arnold profile" info.log && grep -Eq "^  depth +Z$" info.log &&
+  grep -Eq "^  id +aov.id +\(object ids from Cryptomatte layer crypto_object\)" info.log &&
+  grep -Eq "^  motion_prev +motion_prev.X motion_prev.Y +\(the renderer writes one motion vector" info.log &&
+  grep -Eq "^  diffuse_light +R G B A +\(beauty stands in" info.log &&
+  grep -Eq "^  toon +runs as is$" info.log && grep -Eq "^  stipple_2d +not tried" info.log && pass ||
+  { fail "info --aovs on an Arnold plate"; cat info.log; }
+"$NPRFX" info --aovs bd/orbit.0001.exr --styles "$SRC/samples/graphs" > infobd.log 2>&1
+grep -Eq "^  normal +missing: the profile looks for N$" infobd.log &&
+  grep -Eq "^  motion_prev +optical flow on the beauty" infobd.log &&
+  grep -Eq "^  rest +aov.position.X aov.position.Y aov.position.Z +\(position stands in" infobd.log &&
+  ! grep -q "does not run" infobd.log && [ "$(grep -Ec "^  [a-z_0-9]+ +runs" infobd.log)" = 22 ] &&
+  grep -Eq "^  toon +runs with fallbacks: .*albedo" infobd.log && pass ||
+  { fail "info --aovs on a beauty and depth plate"; cat infobd.log; }
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]
