@@ -149,42 +149,49 @@ nprfx_result internal_graph_extras(nprfx_graph *g, const gnode *n, const char *f
     return NPRFX_OK;
 }
 
-void internal_graph_extra_frame(gextra *x, nprfx_rect display)
+void internal_graph_extra_fill(const gextra *x, const float *src, int nc, float *dst, int nn,
+                               nprfx_rect bounds, nprfx_rect display)
 {
     /* Pixel centres at integer coordinates; a pinhole of about 53 degrees across the width (the
      * focal length is the width): the scale only sizes patterns, which the nodes set anyway. */
-    x->cx = 0.5 * (display.x0 + display.x1 - 1);
-    x->cy = 0.5 * (display.y0 + display.y1 - 1);
-    x->focal = display.x1 > display.x0 ? display.x1 - display.x0 : 1;
-}
-
-void internal_graph_extra_apply(const gextra *x, const float *px, int X, int Y, float *out)
-{
+    const double cx = 0.5 * (display.x0 + display.x1 - 1), cy = 0.5 * (display.y0 + display.y1 - 1);
+    const double focal = display.x1 > display.x0 ? display.x1 - display.x0 : 1;
+    const size_t w = (size_t)nprfx_rect_width(bounds), npix = w * (size_t)nprfx_rect_height(bounds);
     for (int k = 0; k < x->count; k++) {
-        float v = px[x->src[k][0]];
+        const float *s = src + x->src[k][0];
+        const float *s2 = src + (x->src[k][1] >= 0 ? x->src[k][1] : 0);
+        float *d = dst + nc + k;
+        const float scale = (float)x->scale[k];
         switch (x->op[k]) {
         case OP_CRYPTO:
-            out[k] = nprfx_cryptomatte_object_id(v, px[x->src[k][1]]);
+            for (size_t p = 0; p < npix; p++)
+                d[p * nn] = nprfx_cryptomatte_object_id(s[p * nc], s2[p * nc]);
+            break;
+        case OP_INVERSE:
+            /* 1/z with nothing there (0, or anything not a positive depth) is the background */
+            for (size_t p = 0; p < npix; p++) {
+                float v = s[p * nc];
+                d[p * nn] = v > 0 && isfinite(v) ? 1.0f / v : INFINITY;
+            }
             break;
         case OP_PX:
         case OP_PY:
-        case OP_PZ: {
+        case OP_PZ:
             /* camera space from depth, y up as a renderer's; the background stays far away */
-            double z = isfinite(v) && v < 1e9f ? v : 1e9;
-            double c = x->op[k] == OP_PX   ? (X - x->cx) / x->focal * z
-                       : x->op[k] == OP_PY ? (x->cy - Y) / x->focal * z
-                                           : -z;
-            out[k] = (float)c;
+            for (size_t p = 0; p < npix; p++) {
+                float v = s[p * nc];
+                double z = isfinite(v) && v < 1e9f ? v : 1e9;
+                double X = bounds.x0 + (double)(p % w), Y = bounds.y0 + (double)(p / w);
+                d[p * nn] = (float)(x->op[k] == OP_PX   ? (X - cx) / focal * z
+                                    : x->op[k] == OP_PY ? (cy - Y) / focal * z
+                                                        : -z);
+            }
             break;
-        }
-        case OP_INVERSE:
-            /* 1/z with nothing there (0, or anything not a positive depth) is the background */
-            out[k] = v > 0 && isfinite(v) ? 1.0f / v : INFINITY;
-            break;
-        default: {
-            float s = v * (float)x->scale[k];
-            out[k] = isfinite(s) ? s : 0.0f;
-        }
+        default:
+            for (size_t p = 0; p < npix; p++) {
+                float v = s[p * nc] * scale;
+                d[p * nn] = isfinite(v) ? v : 0.0f;
+            }
         }
     }
 }

@@ -13,8 +13,6 @@ typedef struct gextra {
     int src[GRAPH_EXTRA_MAX][2];
     double scale[GRAPH_EXTRA_MAX];
     int op[GRAPH_EXTRA_MAX];
-    /* a position from depth: the pixel grid's centre and the focal length, in pixels */
-    double cx, cy, focal;
 } gextra;
 
 /* The names of the 4 motion channels a read node appends (motion_prev.X, ...). */
@@ -35,11 +33,12 @@ const char *internal_graph_extra_want(const gnode *n, int k);
  * file and the channel that is missing. */
 nprfx_result internal_graph_extras(nprfx_graph *g, const gnode *n, const char *file,
                                    const char *const *names, int nc, gextra *x);
-/* The appended channels of pixel (X, Y) (px: the plate's channels). display is the plate's
- * display window: a position made from depth is centred on it. */
-void internal_graph_extra_apply(const gextra *x, const float *px, int X, int Y, float *out);
-/* Set what a position from depth needs from the plate's display window. */
-void internal_graph_extra_frame(gextra *x, nprfx_rect display);
+/* Fill the appended channels of a plate's pixels: src holds the plate's nc channels per pixel
+ * over bounds, dst nn >= nc + x->count per pixel, its first nc already copied; display is the
+ * plate's display window, on which a position made from depth is centred. One channel at a
+ * time over the whole plate: the loops stay simple enough to vectorise. */
+void internal_graph_extra_fill(const gextra *x, const float *src, int nc, float *dst, int nn,
+                               nprfx_rect bounds, nprfx_rect display);
 
 /* Read node n's motion convention: the plate channels the 4 motion channels are made of, and the
  * factor each is multiplied by. */

@@ -42,14 +42,9 @@ static nprfx_result add_extra_channels(nprfx_graph *g, gnode *n, const char *fil
     plate->names = names;
     for (int k = 0; k < x.count; k++)
         names[nc + k] = engine_strdup(internal_graph_extra_name(n, k));
-    internal_graph_extra_frame(&x, plate->display);
-    const float *s = plate->pixels;
-    float *d = px;
-    for (int y = plate->bounds.y0; y < plate->bounds.y1; y++)
-        for (int X = plate->bounds.x0; X < plate->bounds.x1; X++, s += nc, d += nn) {
-            memcpy(d, s, (size_t)nc * sizeof(float));
-            internal_graph_extra_apply(&x, s, X, y, d + nc);
-        }
+    for (size_t p = 0; p < npix; p++)
+        memcpy(px + p * (size_t)nn, plate->pixels + p * (size_t)nc, (size_t)nc * sizeof(float));
+    internal_graph_extra_fill(&x, plate->pixels, nc, px, nn, plate->bounds, plate->display);
     free(plate->pixels);
     plate->pixels = px;
     plate->nchannels = nn;
