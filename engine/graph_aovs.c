@@ -194,6 +194,18 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
             }
         }
     }
+    /* "colorspace": "auto": integer files (PNG, JPEG, 8- and 16-bit TIFF) hold sRGB-encoded
+     * colour, float and half files (EXR, HDR) scene-linear colour. */
+    n->colour_from = NULL;
+    if (n->colorspace && !strcmp(n->colorspace, "auto")) {
+        int rgb[3], amb;
+        char bad[64];
+        if (nprfx_channels_select((const char *const *)info->names, info->nchannels, "R,G,B", rgb,
+                                  3, bad, sizeof bad, &amb) == 3 &&
+            info->types && info->types[rgb[0]] &&
+            (!strcmp(info->types[rgb[0]], "uint8") || !strcmp(info->types[rgb[0]], "uint16")))
+            n->colour_from = "srgb";
+    }
     /* Depth stored as 1/z. */
     free(n->depth_inverse);
     n->depth_inverse = NULL;

@@ -5,6 +5,7 @@
 #define NPRFX_CLI_GRAPH_MODEL_H
 
 #include <stdint.h>
+#include <string.h>
 
 #include "nprfx/graph.h"
 #include "nprfx/aov.h"
@@ -55,7 +56,17 @@ typedef struct gnode {
     /* read: the depth channel a camera-space position is made of, for a plate with no position
      * (and no rest or uv to stand in for it); NULL: none */
     char *position_from;
+    /* read with "colorspace": "auto": what its plates' R,G,B are, from the first frame's header
+     * ("srgb" for 8- and 16-bit integer files; NULL: scene-linear, left as they are) */
+    const char *colour_from;
 } gnode;
+
+/* The colour space a read converts its R,G,B from (NULL: none). */
+static inline const char *internal_graph_colorspace(const gnode *n)
+{
+    if (!n->colorspace || !n->colorspace[0]) return NULL;
+    return strcmp(n->colorspace, "auto") ? n->colorspace : n->colour_from;
+}
 
 /* What a result carries besides pixels: the display window and pixel aspect a write puts back,
  * and, for a plate as read, each channel's file type (so a copy writes uint ids as uint). */

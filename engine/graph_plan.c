@@ -183,7 +183,7 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
     for (int k = 0; extra && k < xw.count; k++)
         for (int j = 0; j < 2; j++)
             if (xw.src[k][j] >= 0) keep[xw.src[k][j]] = 1;
-    int have_rgb = n->colorspace &&
+    int have_rgb = internal_graph_colorspace(n) &&
                    nprfx_channels_select(all, na, "R,G,B", rgb, 3, bad, sizeof bad, &amb) == 3;
     for (int c = 0; have_rgb && c < 3; c++)
         keep[rgb[c]] = 1;
@@ -207,7 +207,8 @@ int internal_graph_read_pick(nprfx_graph *g, int node, const char *const *names,
             return -1;
     if (extra && (internal_graph_extras(g, n, "", sub, m, &xs) || !same_extras(&xw, &xs, map)))
         return -1;
-    if (n->colorspace && !same_pick("R,G,B", all, na, sub, m + extra, map)) return -1;
+    if (internal_graph_colorspace(n) && !same_pick("R,G,B", all, na, sub, m + extra, map))
+        return -1;
     return m;
 }
 

@@ -109,7 +109,8 @@ static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, npr
     }
     n->noted = 1;
     if ((r = add_extra_channels(g, n, file, plate))) return r;
-    if (n->colorspace) {
+    const char *from = internal_graph_colorspace(n);
+    if (from) {
         int idx[3], amb;
         char bad[64];
         if (nprfx_channels_select((const char *const *)plate->names, plate->nchannels, "R,G,B", idx,
@@ -118,8 +119,7 @@ static nprfx_result finish_plate(nprfx_graph *g, gnode *n, const char *file, npr
             nprfx_image rgb = nprfx_plate_view(plate, idx[0], 3);
             nprfx_context *fctx = NULL; /* the file's name before what OCIO says */
             r = nprfx_context_create_scoped(n->ctx, file, &fctx);
-            if (!r)
-                r = g->io.convert_colorspace(fctx, &rgb, n->colorspace, "scene_linear", g->ocio);
+            if (!r) r = g->io.convert_colorspace(fctx, &rgb, from, "scene_linear", g->ocio);
             nprfx_context_destroy(fctx);
         }
     }

@@ -122,6 +122,27 @@ static int canonical_channels(const gnode *src, int aov, const char *const *name
     return count > nprfx_aov_channels(aov) ? nprfx_aov_channels(aov) : count;
 }
 
+/* Whether a selection's items (sep ',') or a hint's alternatives (sep '|') name a canonical AOV
+ * the read derives (Nuke's depth from its 1/z "depth" layer, ids from Cryptomatte, motion in
+ * nprfx's convention): the derived channels come before a same-named layer holding the raw
+ * numbers. */
+static int names_derived(const gnode *src, const char *list, char sep)
+{
+    for (const char *p = list; p && *p;) {
+        const char *e = strchr(p, sep);
+        size_t len = e ? (size_t)(e - p) : strlen(p);
+        char item[64], comp[8];
+        if (len < sizeof item) {
+            memcpy(item, p, len);
+            item[len] = 0;
+            int aov = internal_graph_canonical_parse(item, comp, sizeof comp);
+            if (aov >= 0 && internal_graph_extra_for(src, aov)) return 1;
+        }
+        p = e ? e + 1 : NULL;
+    }
+    return 0;
+}
+
 /* One item of a selection that names a canonical AOV, with components ("beauty.RGB",
  * "normal.ZX"): the count, or -1. *aovp gets the AOV (-1: the item names none). */
 static int canonical_item(const gnode *src, const char *item, const char *const *names, int nc,
@@ -165,7 +186,9 @@ static int canonical_select(const gnode *src, const char *sel, const char *const
         items++;
         int amb, aov, k;
         char bad[64];
-        k = nprfx_channels_select(names, nc, item, idx + m, max - m, bad, sizeof bad, &amb);
+        k = names_derived(src, item, ',')
+                ? -1
+                : nprfx_channels_select(names, nc, item, idx + m, max - m, bad, sizeof bad, &amb);
         if (k < 0) {
             k = canonical_item(src, item, names, nc, idx + m, max - m, profile, &aov);
             if (aov >= 0) any = 1;
@@ -210,7 +233,9 @@ nprfx_result internal_graph_input_channels_quiet(const nprfx_graph *g, const gno
     int amb = 0;
     const gnode *srcn = &g->nodes[ref->src];
     if (ref->sel) {
-        count = nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
+        count = names_derived(srcn, ref->sel, ',')
+                    ? -1
+                    : nprfx_channels_select(names, nc, ref->sel, idx, 256, bad, sizeof bad, &amb);
         int profile = NPRFX_PROFILE_GENERIC, failed = -1;
         if (count < 0 && !amb) {
             int k2 = canonical_select(srcn, ref->sel, names, nc, idx, 256, &profile, &failed,
@@ -241,7 +266,9 @@ nprfx_result internal_graph_input_channels_quiet(const nprfx_graph *g, const gno
             return NPRFX_ERR_MISSING_INPUT;
         }
     } else if (in && in->aov) {
-        count = nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
+        count = names_derived(srcn, in->aov, '|')
+                    ? -1
+                    : nprfx_channels_from_hint(names, nc, in->aov, idx, NPRFX_MAX_CHANNELS + 1);
         if (count < 0) {
             count = canonical_from_hint(srcn, in->aov, names, nc, idx, NPRFX_MAX_CHANNELS + 1);
             canonical_one = count > 0;
