@@ -127,5 +127,27 @@ grep -Eq "^  normal +missing: the profile looks for N$" infobd.log &&
   ! grep -q "does not run" infobd.log && [ "$(grep -Ec "^  [a-z_0-9]+ +runs" infobd.log)" = 22 ] &&
   grep -Eq "^  toon +runs with fallbacks: .*albedo" infobd.log && pass ||
   { fail "info --aovs on a beauty and depth plate"; cat infobd.log; }
+# "colorspace": "auto": an 8-bit PNG is read as sRGB (as "srgb" reads it), a float EXR as it is.
+cat > cs.json <<'G'
+{"frames": "1", "nodes": {
+ "plate": {"node": "read", "path": "in.####.EXT", "colorspace": "auto"},
+ "t": {"node": "time-offset", "inputs": {"image": "plate:beauty.RGB"}, "params": {"offset": 0}},
+ "w": {"node": "write", "inputs": {"image": "t"}, "path": "out/cs.####.exr"}}}
+G
+oiiotool arl/orbit.0001.exr --ch R,G,B -o in.0001.exr > /dev/null 2>&1 &&
+  oiiotool in.0001.exr -d uint8 -o in.0001.png > /dev/null 2>&1 || fail "oiiotool"
+sed 's/EXT/png/' cs.json > cs_png.json; sed 's/EXT/exr/' cs.json > cs_exr.json
+for x in png exr; do
+  for cs in auto srgb linear; do
+    "$NPRFX" run cs_$x.json --quiet --output-dir cs_${x}_$cs --set plate.colorspace=$cs > cs.log 2>&1 ||
+      { fail "colorspace $cs on $x:"; cat cs.log; }
+  done
+done
+same_cs() { "$NPRFX" diff "$1" "$2" --fail "$3" > d.txt 2>&1; }
+same_cs cs_png_auto/out/cs.0001.exr cs_png_srgb/out/cs.0001.exr 0 &&
+  ! same_cs cs_png_auto/out/cs.0001.exr cs_png_linear/out/cs.0001.exr 0.01 &&
+  same_cs cs_exr_auto/out/cs.0001.exr cs_exr_linear/out/cs.0001.exr 0 &&
+  same_cs in.0001.exr cs_exr_auto/out/cs.0001.exr 0 && pass ||
+  { fail "colorspace auto: PNG as sRGB, EXR as it is:"; cat d.txt; }
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]
