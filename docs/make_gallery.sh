@@ -16,6 +16,31 @@ src=$(cd "$here/.." && pwd)
 hd=$(realpath -m "${2:-$src/build/hd}")
 shift $(( $# < 2 ? $# : 2 ))
 only=" $* "
+# The same look on another renderer's plates, no Blender needed: watercolor on the synthetic
+# orbit scene (nprfx synth) written under Arnold's names and conventions (Cryptomatte object ids,
+# one motion vector to the next frame, no diffuse light pass) and under Blender's, frame 12:
+#   docs/images/styles/watercolor-arnold.jpg   the Arnold layout, 1280x720
+#   docs/images/styles/layouts.jpg             Blender's and Arnold's side by side (640x360 each)
+# usage: docs/make_gallery.sh build/nprfx HD_DIR layouts   (only this picture)
+layouts_picture() {
+  local tmp out="$here/images/styles"
+  tmp=$(mktemp -d)
+  mkdir -p "$out"
+  for layout in blender arnold; do
+    "$NPRFX" synth orbit --layout $layout --size 1280x720 --frames 1-12 \
+      -o "$tmp/$layout/orbit.####.exr" > /dev/null
+    "$NPRFX" run "$src/samples/graphs/watercolor.json" --set "plate.path=$tmp/$layout/orbit.####.exr" \
+      --shot 1-12 --output-dir "$tmp/run_$layout" --quiet
+  done
+  local f=out/watercolor/watercolor.0012.png
+  oiiotool "$tmp/run_arnold/$f" --ch R,G,B --compression jpeg:90 -o "$out/watercolor-arnold.jpg"
+  oiiotool "$tmp/run_blender/$f" --ch R,G,B --resize 640x360 "$tmp/run_arnold/$f" --ch R,G,B \
+    --resize 640x360 --mosaic 2x1 --compression jpeg:90 -o "$out/layouts.jpg"
+  rm -rf "$tmp"
+  echo "make_gallery: layouts"
+}
+if [ "$only" = " layouts " ]; then layouts_picture; exit 0; fi
+
 for shot in crossing dolly; do
   if [ ! -f "$hd/$shot/$shot.0012.exr" ]; then
     command -v blender >/dev/null || { echo "make_gallery: $hd/$shot has no plates and blender is not installed (apt-get install blender)" >&2; exit 1; }
@@ -51,4 +76,5 @@ for g in $(style_graphs "$src"); do
   oiiotool "${args[@]}" --mosaic 3x1 --compression jpeg:90 -o "$out/$name-strip.jpg"
   echo "make_gallery: $name"
 done
+[ "$only" = "  " ] || [[ "$only" == *" layouts "* ]] && layouts_picture
 ls -la "$out"
