@@ -42,9 +42,19 @@ static nprfx_result add_extra_channels(nprfx_graph *g, gnode *n, const char *fil
     plate->names = names;
     for (int k = 0; k < x.count; k++)
         names[nc + k] = engine_strdup(internal_graph_extra_name(n, k));
-    for (size_t p = 0; p < npix; p++)
-        memcpy(px + p * (size_t)nn, plate->pixels + p * (size_t)nc, (size_t)nc * sizeof(float));
-    internal_graph_extra_fill(&x, plate->pixels, nc, px, nn, plate->bounds, plate->display);
+    /* A band of rows at a time, copied then filled while it is still in the cache. */
+    const size_t w = (size_t)nprfx_rect_width(plate->bounds);
+    const int h = nprfx_rect_height(plate->bounds), band_rows = 16;
+    for (int y = 0; y < h; y += band_rows) {
+        const int y1 = y + band_rows < h ? y + band_rows : h;
+        const float *src = plate->pixels + (size_t)y * w * (size_t)nc;
+        float *dst = px + (size_t)y * w * (size_t)nn;
+        for (size_t p = 0; p < (size_t)(y1 - y) * w; p++)
+            memcpy(dst + p * (size_t)nn, src + p * (size_t)nc, (size_t)nc * sizeof(float));
+        nprfx_rect band = {plate->bounds.x0, plate->bounds.y0 + y, plate->bounds.x1,
+                           plate->bounds.y0 + y1};
+        internal_graph_extra_fill(&x, src, nc, dst, nn, band, plate->display);
+    }
     free(plate->pixels);
     plate->pixels = px;
     plate->nchannels = nn;
