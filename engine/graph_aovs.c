@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "aov_map.h"
 #include "engine_util.h"
 #include "graph_aovs.h"
 #include "graph_extras.h"
@@ -127,12 +128,23 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
                                 const char *const *names, int nc)
 {
     gnode *n = &g->nodes[i];
-    n->profile = n->aovs && strcmp(n->aovs, "auto")
+    if (internal_aov_map_named(n->aovs) && !n->aov_map) {
+        char path[4096];
+        if (n->aovs[0] == '/')
+            snprintf(path, sizeof path, "%s", n->aovs);
+        else
+            snprintf(path, sizeof path, "%s/%s", g->base_dir, n->aovs);
+        nprfx_result r = internal_aov_map_load(n->ctx, path, &n->aov_map);
+        if (r) return r;
+    }
+    const internal_aov_map *map = n->aov_map;
+    n->profile = map ? map->base
+                 : n->aovs && strcmp(n->aovs, "auto")
                      ? nprfx_aov_profile_find(n->aovs)
                      : nprfx_aov_detect(names, nc, (const char *const *)info->attr_names,
                                         (const char *const *)info->attr_values, info->nattributes);
     n->profile_known = 1;
-    const char *profile = nprfx_aov_profile_name(n->profile);
+    const char *profile = internal_graph_profile_label(n, n->profile);
     /* Motion: the convention "vectors" names; with "auto" the profile's, else the first whose
      * channels the plate has (as an explicit convention always reads them, whether or not a node
      * uses them: tools such as measure compare against the plate's motion); with none given, the
@@ -144,7 +156,8 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
     else if (n->vectors || plate_needs(g, i, NPRFX_AOV_MOTION_PREV) ||
              plate_needs(g, i, NPRFX_AOV_MOTION_NEXT)) {
         if (!selects(names, nc, "motion_prev.X,motion_prev.Y")) {
-            const nprfx_aov_vectors *v = nprfx_aov_profile_vectors(n->profile);
+            const nprfx_aov_vectors *v =
+                map && map->vectors_given ? map->vec : nprfx_aov_profile_vectors(n->profile);
             if (v && selects(names, nc, v->channels)) n->vec = v;
             for (int k = 0;
                  !n->vec && n->profile == NPRFX_PROFILE_GENERIC && nprfx_aov_vectors_at(k); k++)
@@ -164,7 +177,7 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
     if (want_layer || plate_needs(g, i, NPRFX_AOV_ID)) {
         int chosen = n->aovs && strcmp(n->aovs, "auto");
         int have_index =
-            selects(names, nc, nprfx_aov_candidates(n->profile, NPRFX_AOV_ID)) ||
+            selects(names, nc, internal_aov_map_candidates(map, n->profile, NPRFX_AOV_ID)) ||
             (!chosen &&
              selects(names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, NPRFX_AOV_ID)));
         if (want_layer || !have_index) {
@@ -209,9 +222,10 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
     /* Depth stored as 1/z. */
     free(n->depth_inverse);
     n->depth_inverse = NULL;
-    if (nprfx_aov_profile_depth(n->profile) == NPRFX_DEPTH_INVERSE) {
+    if ((map && map->depth >= 0 ? map->depth : nprfx_aov_profile_depth(n->profile)) ==
+        NPRFX_DEPTH_INVERSE) {
         int idx[2];
-        const char *cand = nprfx_aov_candidates(n->profile, NPRFX_AOV_DEPTH);
+        const char *cand = internal_aov_map_candidates(map, n->profile, NPRFX_AOV_DEPTH);
         if (cand && nprfx_channels_from_hint(names, nc, cand, idx, 2) == 1)
             n->depth_inverse = engine_strdup(names[idx[0]]);
     }
@@ -224,10 +238,10 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
         int chosen = n->aovs && strcmp(n->aovs, "auto"), have = 0, idx[2];
         static const int anchors[] = {NPRFX_AOV_REST, NPRFX_AOV_UV, NPRFX_AOV_POSITION};
         for (int a = 0; a < 3 && !have; a++)
-            have = selects(names, nc, nprfx_aov_candidates(n->profile, anchors[a])) ||
+            have = selects(names, nc, internal_aov_map_candidates(map, n->profile, anchors[a])) ||
                    (!chosen &&
                     selects(names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, anchors[a])));
-        const char *cand = nprfx_aov_candidates(n->profile, NPRFX_AOV_DEPTH);
+        const char *cand = internal_aov_map_candidates(map, n->profile, NPRFX_AOV_DEPTH);
         int d = cand ? nprfx_channels_from_hint(names, nc, cand, idx, 2) : -1;
         if (d != 1 && !chosen)
             d = nprfx_channels_from_hint(
@@ -282,7 +296,8 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
     if (!r) return NPRFX_OK;
     size_t at, len;
     int aov = wanted_aov(n, k, comp, sizeof comp, &at, &len);
-    const char *profile = nprfx_aov_profile_name(internal_graph_plate_profile(src, names, p->n));
+    const char *profile =
+        internal_graph_profile_label(src, internal_graph_plate_profile(src, names, p->n));
     int optional = n->kind == GK_NODE && (n->desc->inputs[k].flags & NPRFX_INPUT_OPTIONAL);
     for (size_t f = 0; aov >= 0 && f < sizeof fallbacks / sizeof fallbacks[0]; f++) {
         if (fallbacks[f].aov != aov || (optional && fallbacks[f].optional_out)) continue;

@@ -28,6 +28,7 @@
 #include "graph_cache.h"
 #include "graph_cycles.h"
 #include "graph_limits.h"
+#include "aov_map.h"
 #include "graph_model.h"
 #include "graph_names.h"
 #include "nprfx/io.h"
@@ -186,18 +187,25 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
             return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': vectors '%s' is not one of: %s",
                                n->name, s, list);
         }
-        if (!strcmp(key, "aovs") && strcmp(s, "auto") && nprfx_aov_profile_find(s) < 0) {
+        if (!strcmp(key, "aovs") && strcmp(s, "auto") && nprfx_aov_profile_find(s) < 0 &&
+            !internal_aov_map_named(s)) {
             char list[256] = "auto";
             for (int p = 0; p < NPRFX_PROFILE_COUNT; p++) {
                 strcat(list, ", ");
                 strcat(list, nprfx_aov_profile_name(p));
             }
-            return nprfx_error(g->ctx, NPRFX_ERR_PARSE, "node '%s': aovs '%s' is not one of: %s",
+            return nprfx_error(g->ctx, NPRFX_ERR_PARSE,
+                               "node '%s': aovs '%s' is not one of: %s, or a mapping file "
+                               "(NAME.json)",
                                n->name, s, list);
         }
         char **dst = (char **)((char *)n + f->offset);
         free(*dst);
         *dst = engine_strdup(s);
+        if (!strcmp(key, "aovs")) { /* a mapping file is read again when the plate settles */
+            internal_aov_map_free(n->aov_map);
+            n->aov_map = NULL;
+        }
         return NPRFX_OK;
     }
     static const char *const kind_names[] = {"node", "read", "synth", "write"};
@@ -613,6 +621,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->colorspace);
         free(n->vectors);
         free(n->aovs);
+        internal_aov_map_free(n->aov_map);
         free(n->cryptomatte);
         free(n->crypto);
         free(n->depth_inverse);

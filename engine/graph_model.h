@@ -59,7 +59,12 @@ typedef struct gnode {
     /* read with "colorspace": "auto": what its plates' R,G,B are, from the first frame's header
      * ("srgb" for 8- and 16-bit integer files; NULL: scene-linear, left as they are) */
     const char *colour_from;
+    /* read: the studio's mapping file its "aovs" names (aov_map.h), loaded when it settles */
+    struct internal_aov_map *aov_map;
 } gnode;
+
+/* A read's profile as messages name it: the renderer's, or the mapping file's name. */
+const char *internal_graph_profile_label(const gnode *n, int profile);
 
 /* The colour space a read converts its R,G,B from (NULL: none). */
 static inline const char *internal_graph_colorspace(const gnode *n)

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "nprfx/graph.h"
+#include "aov_map.h"
 #include "graph_model.h"
 #include "graph_extras.h"
 #include "graph_resolve.h"
@@ -85,9 +86,16 @@ int internal_graph_canonical_parse(const char *item, char *components, size_t n)
     return aov;
 }
 
+const char *internal_graph_profile_label(const gnode *n, int profile)
+{
+    return n->aov_map ? n->aov_map->label : nprfx_aov_profile_name(profile);
+}
+
 int internal_graph_plate_profile(const gnode *src, const char *const *names, int nc)
 {
     if (src->profile_known) return src->profile;
+    if (src->aov_map) return src->aov_map->base;
+    if (internal_aov_map_named(src->aovs)) return NPRFX_PROFILE_GENERIC;
     if (src->aovs && strcmp(src->aovs, "auto")) return nprfx_aov_profile_find(src->aovs);
     return nprfx_aov_detect(names, nc, NULL, NULL, 0);
 }
@@ -111,7 +119,7 @@ static int canonical_channels(const gnode *src, int aov, const char *const *name
         return src->kind == GK_SYNTH
                    ? nprfx_channels_from_hint(names, nc, nprfx_aov_name(aov), idx, max)
                    : -1;
-    const char *cand = nprfx_aov_candidates(*profile, aov);
+    const char *cand = internal_aov_map_candidates(src->aov_map, *profile, aov);
     int count = cand ? nprfx_channels_from_hint(names, nc, cand, idx, max) : -1;
     /* a profile the graph names is its word; a detected one may miss a custom pass's name */
     int chosen = src->kind == GK_READ && src->aovs && strcmp(src->aovs, "auto");
@@ -243,13 +251,14 @@ nprfx_result internal_graph_input_channels_quiet(const nprfx_graph *g, const gno
             if (k2 > 0) count = k2;
         }
         if (count < 0 && failed >= 0) {
-            const char *cand = nprfx_aov_candidates(profile, failed);
+            const char *cand = internal_aov_map_candidates(srcn->aov_map, profile, failed);
             int motion = failed == NPRFX_AOV_MOTION_PREV || failed == NPRFX_AOV_MOTION_NEXT;
             snprintf(msg, msgn,
                      "node '%s': input '%s': plate '%s' has no %s: its %s profile looks for %s; "
                      "name the channels (\"%s:CHANNELS\"), or the profile (\"aovs\" on the read "
                      "node)",
-                     n->name, iname, src, nprfx_aov_name(failed), nprfx_aov_profile_name(profile),
+                     n->name, iname, src, nprfx_aov_name(failed),
+                     internal_graph_profile_label(srcn, profile),
                      motion ? "the vectors of its \"vectors\" convention"
                             : (cand ? cand : "no fixed channel name"),
                      src);

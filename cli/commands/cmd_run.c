@@ -39,8 +39,9 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "blend.opacity=0.5\n"
         "  --aovs PROFILE      the renderer every read node's plates come from, for the\n"
         "                      canonical AOVs graphs name (plate:depth): auto (detected from\n"
-        "                      the channel names), generic, blender, arnold, renderman, karma,\n"
-        "                      vray, redshift, nuke; as --set READ.aovs=PROFILE on each\n"
+        "                      the header and channel names), generic, blender, arnold,\n"
+        "                      renderman, karma, vray, redshift, nuke, or a studio's mapping\n"
+        "                      file NAME.json (README); as --set READ.aovs=... on each read\n"
         "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
         "  --output-dir DIR    put relative write paths under DIR\n"
         "  --cache-mb N        memory for cached node results and idle frame buffers\n"
@@ -296,6 +297,7 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
     int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0;
     const char *mem_limit = NULL, *aovs = NULL;
+    char aovs_path[8192];
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -307,9 +309,21 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
             frames = argv[++i];
         else if (!strcmp(a, "--shot") && has)
             shot = argv[++i];
-        else if (!strcmp(a, "--aovs") && has)
+        else if (!strcmp(a, "--aovs") && has) {
             aovs = argv[++i];
-        else if (!strcmp(a, "--set") && has && nsets < 256)
+            /* a mapping file named here is relative to where the command runs, not to the
+             * graph file as a read's own "aovs" is */
+            size_t n = strlen(aovs);
+            if (n > 5 && !strcmp(aovs + n - 5, ".json") && aovs[0] != '/') {
+                char cwd[4096];
+                if (!getcwd(cwd, sizeof cwd) || snprintf(aovs_path, sizeof aovs_path, "%s/%s", cwd,
+                                                         aovs) >= (int)sizeof aovs_path) {
+                    fprintf(stderr, "%s run: --aovs: the path '%s' is too long\n", prog, aovs);
+                    return 2;
+                }
+                aovs = aovs_path;
+            }
+        } else if (!strcmp(a, "--set") && has && nsets < 256)
             sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--threads") && has)
             threads = atoi(argv[++i]);
@@ -362,8 +376,8 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     opt.no_pool = no_pool;
     opt.strip_rows = strip_rows;
     int status = 0;
-    run_opts ro = {prog,  frames,      shot, sets,  nsets,       keep_going,
-                   quiet, ngraphs > 1, wait, stats, check, shared_lock, aovs};
+    run_opts ro = {prog,        frames, shot,  sets,  nsets,       keep_going, quiet,
+                   ngraphs > 1, wait,   stats, check, shared_lock, aovs};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

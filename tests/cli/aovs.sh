@@ -127,6 +127,55 @@ grep -Eq "^  normal +missing: the profile looks for N$" infobd.log &&
   ! grep -q "does not run" infobd.log && [ "$(grep -Ec "^  [a-z_0-9]+ +runs" infobd.log)" = 22 ] &&
   grep -Eq "^  toon +runs with fallbacks: .*albedo" infobd.log && pass ||
   { fail "info --aovs on a beauty and depth plate"; cat infobd.log; }
+# A studio's own names through a mapping file: the Arnold plate with its normal, id and depth
+# renamed reads, with "aovs" naming the file (relative to the graph) or --aovs (relative to here),
+# to the Blender plate's pixels; the AOVs it does not map keep Arnold's names.
+mkdir -p studio
+for f in 0001 0002; do
+  oiiotool ar/orbit.$f.exr --ch "R,G,B,A,Zdepth=Z,nrm.R=N.R,nrm.G=N.G,nrm.B=N.B,P.R,P.G,P.B,objectId=ID" \
+    -o studio/orbit.$f.exr > /dev/null 2>&1 || fail "oiiotool studio"
+done
+cat > studio.json <<'M'
+{"profile": "arnold", "aovs": {"normal": "nrm", "id": "objectId|oid", "depth": "Zdepth", "albedo": null},
+ "depth": "z"}
+M
+mkdir -p maps && cp studio.json maps/studio.json
+sed 's|"path": "bl/orbit.####.exr"|"path": "studio/orbit.####.exr", "aovs": "studio.json"|' canon.json > canon_studio.json
+run studio_file canon_studio.json
+run studio_cli canon.json --set plate.path=studio/orbit.####.exr --aovs maps/studio.json
+same blender/out studio_file/out "a mapping file named by the read"
+same blender/out studio_cli/out "a mapping file named by --aovs"
+"$NPRFX" run canon.json --quiet --output-dir studio_none --set plate.path=studio/orbit.####.exr \
+  --aovs arnold > studio_none.log 2>&1
+grep -qF "warning: plate 'plate' (arnold profile) has no normal" studio_none.log && pass ||
+  { fail "the renamed plate without its mapping:"; cat studio_none.log; }
+# What the mapping says is not written is missing, in its terms; a bad mapping names file and key.
+cat > needs_map.json <<'G'
+{"frames": "1", "nodes": {
+ "plate": {"node": "read", "path": "studio/orbit.####.exr", "aovs": "nonormal.json"},
+ "t": {"node": "time-offset", "inputs": {"image": "plate:normal"}},
+ "w": {"node": "write", "inputs": {"image": "t"}, "path": "out/a.####.exr"}}}
+G
+echo '{"profile": "arnold", "aovs": {"normal": null}}' > nonormal.json
+"$NPRFX" run needs_map.json --quiet --output-dir nm > nm.log 2>&1
+grep -qF "plate 'plate' has no normal: its nonormal.json profile looks for no fixed channel name" nm.log &&
+  [ ! -e nm/out/a.0001.exr ] && pass || { fail "an AOV the mapping leaves out:"; cat nm.log; }
+for bad in '{"aov": {}}#aov: is not one of profile, aovs, vectors, depth' \
+  '{"aovs": {"zdepth": "Z"}}#zdepth: is not a canonical AOV (beauty, albedo' \
+  '{"profile": "maya"}#profile: must be one of generic, blender' \
+  '{"aovs": {"depth": 1}}#depth: must be channel names' \
+  '{"vectors": "maya"}#vectors: must be one of none, blender' '[1]#must be a JSON object' \
+  '{"aovs": }#malformed JSON near line 1'; do
+  echo "${bad%%#*}" > badmap.json
+  "$NPRFX" run canon.json --quiet --output-dir badmap --aovs badmap.json > badmap.log 2>&1
+  st=$?
+  [ $st -ne 0 ] && grep -qF "badmap.json" badmap.log && grep -qF "${bad#*#}" badmap.log &&
+    [ ! -e badmap/out/ink.0001.exr ] && pass || { fail "mapping ${bad%%#*}: status $st"; cat badmap.log; }
+done
+"$NPRFX" run canon.json --quiet --output-dir nomap --aovs nowhere.json > nomap.log 2>&1
+grep -qF "cannot open AOV mapping" nomap.log && grep -qF "nowhere.json" nomap.log && pass ||
+  { fail "a missing mapping file:"; cat nomap.log; }
+
 # "colorspace": "auto": an 8-bit PNG is read as sRGB (as "srgb" reads it), a float EXR as it is.
 cat > cs.json <<'G'
 {"frames": "1", "nodes": {
