@@ -96,6 +96,17 @@ static inline void ofx_names_extra_param(const nprfx_node_desc *d, const char *w
     if (len < 0 || (size_t)len >= n) buf[n - 1] = 0; /* names this long do not occur */
 }
 
+/* Whether the node has params in pixels (PIXELS or AREA) or is otherwise scaled with the image
+ * (NPRFX_NODE_PIXEL_SCALED): the adapter adds a "designWidth" param to it (the plate width those
+ * params were set for, as a graph's "design_width"). */
+static inline int ofx_names_has_pixel_params(const nprfx_node_desc *d)
+{
+    if (d->flags & NPRFX_NODE_PIXEL_SCALED) return 1;
+    for (int i = 0; i < d->num_params; i++)
+        if (d->params[i].flags & (NPRFX_PARAM_PIXELS | NPRFX_PARAM_AREA)) return 1;
+    return 0;
+}
+
 /* The channel selector of input k: the input's own name in lowerCamel case, then "Channels"
  * ("depth" -> "depthChannels", "motion_prev" -> "motionPrevChannels", "uv" -> "uvChannels",
  * "object_id" -> "objectIdChannels"). The input's name, not its clip's: the main clip is

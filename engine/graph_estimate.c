@@ -9,6 +9,7 @@
 #include "graph_frames.h"
 #include "graph_extras.h"
 #include "graph_model.h"
+#include "graph_scale.h"
 #include "graph_plan.h"
 #include "graph_resolve.h"
 #include "graph_strips.h"
@@ -248,7 +249,12 @@ static uint64_t state_bytes(nprfx_graph *g, const gnode *n, const shape *shapes,
                                           shapes[src].channels, idx, &in_ch[k]))
             return 0;
     }
-    return internal_graph_query_state(g, n, n->params, sh->w, sh->h, in_ch);
+    nprfx_value scaled[64];
+    const nprfx_value *params = n->params;
+    if (n->desc->num_params <= 64) /* the plate's width stands for its display window's */
+        params = internal_graph_scale_params(
+            n, params, internal_graph_param_scale(g, nprfx_rect_make(0, 0, sh->w, sh->h)), scaled);
+    return internal_graph_query_state(g, n, params, sh->w, sh->h, in_ch);
 }
 
 /* Evaluate node root (and what it needs) on shapes: non-zero when a shape cannot be told. */

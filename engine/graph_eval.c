@@ -1,5 +1,5 @@
-/* nprfx graph engine — graph evaluation: a node's result at a frame, from the cache or rendered, its
- * inputs evaluated first on an explicit work stack; processing nodes run through
+/* nprfx graph engine — graph evaluation: a node's result at a frame, from the cache or rendered,
+ * its inputs evaluated first on an explicit work stack; processing nodes run through
  * nprfx_node_render (or the render hook), temporal inputs fetched through the cache and pinned
  * while a render call uses them. */
 #define _DEFAULT_SOURCE
@@ -11,6 +11,7 @@
 #include "nprfx/graph.h"
 #include "graph_cache.h"
 #include "graph_eval.h"
+#include "graph_scale.h"
 #include "graph_frames.h"
 #include "graph_memory.h"
 #include "graph_model.h"
@@ -254,7 +255,7 @@ static nprfx_result export_node(nprfx_graph *g, const gnode *n, nprfx_render_arg
 }
 
 void internal_graph_render_args(nprfx_graph *g, gnode *n, int frame, nprfx_rect frame_rect,
-                                nprfx_value *varied, nprfx_render_args *a)
+                                nprfx_rect display, nprfx_value *varied, nprfx_render_args *a)
 {
     const nprfx_node_desc *d = n->desc;
     memset(a, 0, sizeof *a);
@@ -262,12 +263,16 @@ void internal_graph_render_args(nprfx_graph *g, gnode *n, int frame, nprfx_rect 
     a->ctx = n->ctx;
     a->node = d;
     a->time = frame;
-    a->render_scale = 1.0;
+    a->render_scale = internal_graph_param_scale(g, display);
+    a->vector_scale = 1.0; /* a plate's vectors are in its own pixels */
     a->frame = frame_rect;
     a->first_frame = g->first_frame;
     a->last_frame = g->last_frame;
-    a->params =
-        d->num_params <= 64 ? internal_graph_variant_params(g, n, frame, varied) : n->params;
+    a->params = n->params;
+    if (d->num_params <= 64) {
+        a->params = internal_graph_variant_params(g, n, frame, varied);
+        a->params = internal_graph_scale_params(n, a->params, a->render_scale, varied);
+    }
     a->state = &n->state;
     a->items = &g->render_items;
 }
@@ -361,7 +366,7 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
     if (r) goto done;
     nprfx_render_args a;
     nprfx_value varied[64];
-    internal_graph_render_args(g, n, frame, frame_rect, varied, &a);
+    internal_graph_render_args(g, n, frame, frame_rect, meta->display, varied, &a);
     a.inputs = inputs;
     a.output = im;
     a.fetch = fetch_cb;

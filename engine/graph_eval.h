@@ -16,6 +16,7 @@ nprfx_result internal_graph_select_input(nprfx_graph *g, const gnode *n, int k, 
  * for 64, used when the params vary), state and item counter; the caller sets inputs, output,
  * window and fetch. */
 void internal_graph_render_args(nprfx_graph *g, gnode *n, int frame, nprfx_rect frame_rect,
+                                nprfx_rect display,
                                 nprfx_value *varied, nprfx_render_args *a);
 
 /* The cache entry of node at frame, evaluated (and its inputs) when not cached. */

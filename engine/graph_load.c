@@ -469,7 +469,8 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         /* A key given twice is ambiguous (JSON leaves it to the reader): refuse it rather than
          * take one silently. */
         if ((!strcmp(e->key, "frames") && g->frames_text) || (!strcmp(e->key, "ocio") && g->ocio) ||
-            (!strcmp(e->key, "format") && g->fmt_text)) {
+            (!strcmp(e->key, "format") && g->fmt_text) ||
+            (!strcmp(e->key, "design_width") && g->design_width > 0)) {
             r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry '%s' is given twice", e->key);
             goto done;
         }
@@ -483,9 +484,18 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
             g->ocio = engine_strdup(e->string);
         else if (!strcmp(e->key, "format") && json_is(e, INTERNAL_JSON_STRING))
             g->fmt_text = engine_strdup(e->string);
-        else {
+        else if (!strcmp(e->key, "design_width")) {
+            if (!json_is(e, INTERNAL_JSON_NUMBER) || !(e->number >= 1) || e->number > 1e6) {
+                r = nprfx_error(ctx, NPRFX_ERR_PARSE,
+                                "top-level entry 'design_width' must be the plate width in "
+                                "pixels the params were set for (a number, 1 to 1000000)");
+                goto done;
+            }
+            g->design_width = e->number;
+        } else {
             r = nprfx_error(ctx, NPRFX_ERR_PARSE,
-                            "unexpected top-level entry '%s' (expected frames, nodes, ocio)",
+                            "unexpected top-level entry '%s' (expected frames, nodes, ocio, "
+                            "format, design_width)",
                             e->key);
             goto done;
         }

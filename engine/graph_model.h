@@ -117,6 +117,7 @@ struct nprfx_graph {
     int first_frame, last_frame;
     char *base_dir, *out_dir, *ocio;
     char *fmt_text;  /* "format": "WxH" for graphs without inputs */
+    double design_width; /* "design_width": the plate width its pixel params are for; 0: none */
     int *name_slots; /* hash index of node names (graph_names.c) */
     size_t name_nslots;
     centry *head, *tail;

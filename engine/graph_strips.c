@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "graph_scale.h"
 
 #include "nprfx/graph.h"
 #include "graph_eval.h"
@@ -263,12 +264,19 @@ static nprfx_result strips_prepare(nprfx_graph *g, const int *writes, int nw, in
         if (r) break;
         nprfx_output_info oi;
         if ((r = nprfx_node_output_info(nd->ctx, d, nd->params, in_ch, &oi))) break;
-        if ((r = nprfx_node_footprint(nd->ctx, d, nd->params, &s->footprint))) break;
+        s->display = st->s[first].display;
+        s->pixel_aspect = st->s[first].pixel_aspect;
+        /* the footprint of the params it renders with, at the plate's scale */
+        nprfx_value scaled[64];
+        const nprfx_value *params =
+            d->num_params <= 64
+                ? internal_graph_scale_params(nd, nd->params,
+                                              internal_graph_param_scale(g, s->display), scaled)
+                : nd->params;
+        if ((r = nprfx_node_footprint(nd->ctx, d, params, &s->footprint))) break;
         s->channels = oi.channels;
         s->names = internal_graph_names_dup(oi.names, oi.channels);
         if (!s->names) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-        s->display = st->s[first].display;
-        s->pixel_aspect = st->s[first].pixel_aspect;
     }
     /* Margins, from the writes back: a node's rows are its readers' rows grown by their
      * footprints. Uses: the readers of each result within the chains, the writes included. */
@@ -389,7 +397,7 @@ static nprfx_result render_rows(strips *st, snode *s, int frame, int y0, int y1)
             /* the same arguments as a whole frame's, its params varied at this frame */
             nprfx_render_args a;
             nprfx_value varied[64];
-            internal_graph_render_args(g, nd, frame, st->frame, varied, &a);
+            internal_graph_render_args(g, nd, frame, st->frame, s->display, varied, &a);
             a.window = rows;
             a.inputs = inputs;
             a.output = &s->buf;

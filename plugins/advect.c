@@ -1,7 +1,7 @@
 /* The advect node: texture coordinates carried along the motion vectors, two staggered layers
  * and their blend weight, as surface-like anchors for footage without UV (Neyret 2003; Bousseau
- * et al. 2007). The recursion, its schedule and its cache live in core/motion/advect.c; this file is the
- * descriptor and the call into it. */
+ * et al. 2007). The recursion, its schedule and its cache live in core/motion/advect.c; this file
+ * is the descriptor and the call into it. */
 #include <stddef.h>
 
 #include "nprfx/advect.h"
@@ -175,7 +175,8 @@ const nprfx_node_desc nprfx_node_advect = {
     .num_params = P_COUNT,
     .output_channels = NPRFX_ADVECT_CHANNELS,
     .output = advect_output,
-    .flags = NPRFX_NODE_TEMPORAL | NPRFX_NODE_STATEFUL | NPRFX_NODE_NEEDS_OTHER_FRAMES,
+    .flags = NPRFX_NODE_TEMPORAL | NPRFX_NODE_STATEFUL | NPRFX_NODE_NEEDS_OTHER_FRAMES |
+             NPRFX_NODE_PIXEL_SCALED,
     .render = advect_render,
     .state_free = nprfx_advect_state_free,
     .state_bytes = advect_state_bytes,

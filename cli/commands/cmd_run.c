@@ -42,6 +42,11 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "                      the header and channel names), generic, blender, arnold,\n"
         "                      renderman, karma, vray, redshift, nuke, or a studio's mapping\n"
         "                      file NAME.json (README); as --set READ.aovs=... on each read\n"
+        "  --design-width W    the plate width in pixels the graph's params were set for\n"
+        "                      (replaces its \"design_width\"): on a plate of another width,\n"
+        "                      every length in pixels (stroke widths, dot areas, radii) is\n"
+        "                      scaled by plate width / W, so a proxy draws the same look\n"
+        "                      smaller; off: params in each plate's own pixels\n"
         "  --threads N         worker threads (default $NPRFX_THREADS, else all cores)\n"
         "  --output-dir DIR    put relative write paths under DIR\n"
         "  --cache-mb N        memory for cached node results and idle frame buffers\n"
@@ -77,7 +82,8 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "                      frames, sizes, the memory plan against --mem-limit) and list\n"
         "                      what they would write; render nothing\n\n"
         "Graph files: {\"frames\": \"1-24\", \"nodes\": {NAME: {\"node\": TYPE, \"inputs\": "
-        "{INPUT: REF}, \"params\": {PARAM: VALUE}}}}\n"
+        "{INPUT: REF}, \"params\": {PARAM: VALUE}}},\n"
+        "         \"design_width\": 1280}  (optional: the plate width its pixel params are for)\n"
         "  read:  {\"node\": \"read\", \"path\": \"plates/shot.####.exr\", \"colorspace\": "
         "\"linear\", \"vectors\": \"blender\",\n"
         "         \"part\": \"rgba\", \"view\": \"left\"}  (part, view: of multi-part and stereo "
@@ -102,7 +108,8 @@ typedef struct run_opts {
     const char *prog, *frames, *shot;
     const char *const *sets;
     int nsets, keep_going, quiet, several, wait, stats, check, shared_lock;
-    const char *aovs; /* --aovs: every read node's profile */
+    const char *aovs;         /* --aovs: every read node's profile */
+    const char *design_width; /* --design-width */
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -209,6 +216,18 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         status = 2;
         goto done;
     }
+    if (ro->design_width) {
+        char *end = NULL;
+        double w = !strcmp(ro->design_width, "off") ? 0 : strtod(ro->design_width, &end);
+        if ((end && (end == ro->design_width || *end)) || nprfx_graph_set_design_width(g, w)) {
+            fprintf(stderr,
+                    "%s run: --design-width '%s': give the plate width the params were set for "
+                    "(e.g. 1920), or off for the plate's own pixels\n",
+                    prog, ro->design_width);
+            status = 2;
+            goto done;
+        }
+    }
     for (int i = 0; ro->aovs && i < nprfx_graph_node_count(g); i++) {
         nprfx_graph_node_info info = {sizeof info};
         char set[512];
@@ -296,7 +315,7 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
     int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0;
-    const char *mem_limit = NULL, *aovs = NULL;
+    const char *mem_limit = NULL, *aovs = NULL, *design_width = NULL;
     char aovs_path[8192];
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
@@ -323,7 +342,9 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
                 }
                 aovs = aovs_path;
             }
-        } else if (!strcmp(a, "--set") && has && nsets < 256)
+        } else if (!strcmp(a, "--design-width") && has)
+            design_width = argv[++i];
+        else if (!strcmp(a, "--set") && has && nsets < 256)
             sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--threads") && has)
             threads = atoi(argv[++i]);
@@ -377,7 +398,7 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     opt.strip_rows = strip_rows;
     int status = 0;
     run_opts ro = {prog,        frames, shot,  sets,  nsets,       keep_going, quiet,
-                   ngraphs > 1, wait,   stats, check, shared_lock, aovs};
+                   ngraphs > 1, wait,   stats, check, shared_lock, aovs,       design_width};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

@@ -473,13 +473,23 @@ static void usage_layouts(FILE *f)
     }
 }
 
+/* Every channel of the scene's frame under the light. */
+static nprfx_result synth_render(nprfx_context *ctx, const char *scene, const char *light,
+                                 int frame, nprfx_image *im)
+{
+    int all[64], n = nprfx_synth_channel_count();
+    for (int c = 0; c < n && c < 64; c++)
+        all[c] = c;
+    return nprfx_synth_render_lit(ctx, scene, light, frame, all, n, im);
+}
+
 static void usage(FILE *f)
 {
     char layouts[256];
     layout_names(layouts, sizeof layouts, "|", 0);
     fprintf(f,
             "usage: nprfx synth SCENE -o PATH [--frames LIST] [--size WxH] [--half]\n"
-            "                   [--layout L] [--compression C] [--threads N]\n"
+            "                   [--layout L] [--light L] [--compression C] [--threads N]\n"
             "       nprfx synth --list\n\n"
             "Ray-casts an analytic scene and writes one multi-channel EXR per frame with exact\n"
             "AOVs: ground truth for the coherence metrics and plates for trying the nodes.\n\n"
@@ -498,12 +508,18 @@ static void usage(FILE *f)
             "                   changed; the read node needs \"vectors\": \"blender\"); or a\n"
             "                   renderer's, as its profile (\"aovs\") looks for them:\n"
             "                   %s (renderer layouts, below)\n"
+            "  --light L        the scene's light (below): sun (default), point, lowkey\n"
             "  --compression C  EXR compression: zip (default), piz, none, dwaa, ...\n"
             "  --threads N      worker threads (default $NPRFX_THREADS, else all cores)\n"
             "  --list           list the scenes\n\n"
             "scenes (motion figures for 256 pixels wide):\n",
             layouts);
     list_scenes(f);
+    fprintf(f, "\nlights (beauty and diffuse change; no shadows):\n");
+    for (int i = 0; i < nprfx_synth_light_count(); i++) {
+        const char *help = NULL, *name = nprfx_synth_light_name(i, &help);
+        fprintf(f, "  %-10s %s\n", name, help);
+    }
     fprintf(f, "\nchannels:");
     const char *const *names = nprfx_synth_channel_names();
     for (int i = 0; i < nprfx_synth_channel_count(); i++)
@@ -531,7 +547,7 @@ static void usage(FILE *f)
 int cli_cmd_synth(int argc, char **argv)
 {
     const char *scene = NULL, *out = NULL, *frames_spec = "1", *size = "256x256";
-    const char *compression = NULL;
+    const char *compression = NULL, *light = NULL;
     int half = 0, threads = 0, profile = -1; /* -1: synth's own names */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -562,6 +578,16 @@ int cli_cmd_synth(int argc, char **argv)
                 return SYNTH_USAGE;
             }
             profile = strcmp(l, "synth") ? p : -1;
+        } else if (!strcmp(a, "--light") && has) {
+            light = argv[++i];
+            int found = 0;
+            for (int k = 0; k < nprfx_synth_light_count(); k++)
+                found |= !strcmp(nprfx_synth_light_name(k, NULL), light);
+            if (!found) {
+                fprintf(stderr, "nprfx synth: --light must be sun, point or lowkey, not '%s'\n",
+                        light);
+                return SYNTH_USAGE;
+            }
         } else if (!strcmp(a, "--half")) {
             half = 1;
         } else if (a[0] != '-' && !scene) {
@@ -659,7 +685,7 @@ int cli_cmd_synth(int argc, char **argv)
         int frame = frames.frames[i];
         char path[4096];
         if (nprfx_seq_expand(env.ctx, out, frame, path, sizeof path) != NPRFX_OK ||
-            nprfx_synth_render(env.ctx, scene, frame, &im) != NPRFX_OK) {
+            synth_render(env.ctx, scene, light, frame, &im) != NPRFX_OK) {
             fprintf(stderr, "nprfx synth: frame %d: %s\n", frame, cli_message(env.ctx));
             status = SYNTH_FAILED;
             goto done;

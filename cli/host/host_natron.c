@@ -320,11 +320,12 @@ static void param_knob(ntp *w, const nprfx_graph_node_info *n, int i)
     knob(w, "\t\t\t", p->name, type, 0, dims, vals, defs, label);
 }
 
-static void ofx_node(ntp *w, const host_node *hn)
+static void ofx_node(ntp *w, const host_project *hp, const host_node *hn)
 {
     const nprfx_graph_node_info *n = hn->n;
     const nprfx_node_desc *d = n->desc;
-    int knobs = 0;
+    int design = host_design_width(hp, d);
+    int knobs = design > 0;
     for (int i = 0; i < d->num_params; i++)
         knobs += host_param_changed(n, i);
     for (int k = 0; k < d->num_inputs; k++)
@@ -332,6 +333,11 @@ static void ofx_node(ntp *w, const host_node *hn)
     node_begin(w, hn->name, hn->plugin_id, d->version_major, d->version_minor, knobs);
     for (int i = 0; i < d->num_params; i++)
         if (host_param_changed(n, i)) param_knob(w, n, i);
+    if (design > 0) {
+        char name[NPRFX_OFX_NAME_MAX];
+        ofx_names_extra_param(d, "designWidth", name, sizeof name);
+        knob_int(w, name, "Int", 0, design, 0, NULL);
+    }
     const char *labels[32], *srcs[32];
     char clip[32][NPRFX_OFX_NAME_MAX];
     int nin = 0;
@@ -428,7 +434,7 @@ nprfx_result host_write_natron(const host_project *hp, FILE *f)
         gui[ng++] = (gui_node){cs->multiply, 140.0 * i - 200, 240, rgb_math, 0, 0};
     }
     for (int i = 0; i < hp->nnodes; i++) {
-        ofx_node(&w, &hp->nodes[i]);
+        ofx_node(&w, hp, &hp->nodes[i]);
         gui[ng++] =
             (gui_node){hp->nodes[i].name, 160.0 * (i % 4) - 150, 340 + 100.0 * i, rgb_plain, 0, 0};
     }

@@ -188,6 +188,12 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
         }
         for (int p = 0; p < d->num_params; p++)
             if (host_param_changed(n, p)) param_line(f, n, hn->name, p);
+        if (host_design_width(hp, d) > 0) {
+            char name[NPRFX_OFX_NAME_MAX];
+            ofx_names_extra_param(d, "designWidth", name, sizeof name);
+            fprintf(f, "    %s.getParam(\"%s\").setValue(%d)\n", hn->name, name,
+                    host_design_width(hp, d));
+        }
     }
     for (int i = 0; i < hp->nwrites; i++) {
         const host_write *w = &hp->writes[i];

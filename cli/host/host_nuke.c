@@ -148,6 +148,11 @@ nprfx_result host_write_nuke(const host_project *hp, FILE *f)
                 nk_value(f, &d->params[p], &n->params[p]);
                 fputc('\n', f);
             }
+        if (host_design_width(hp, d) > 0) {
+            char name[NPRFX_OFX_NAME_MAX];
+            ofx_names_extra_param(d, "designWidth", name, sizeof name);
+            fprintf(f, " %s %d\n", name, host_design_width(hp, d));
+        }
         for (int c = 0; c <= last; c++) {
             int k = hn->clips[c];
             if (!hn->links[k].src) continue;

@@ -32,6 +32,11 @@ char *host_double(double v, char *buf, size_t n)
     return buf;
 }
 
+int host_design_width(const host_project *hp, const nprfx_node_desc *d)
+{
+    return ofx_names_has_pixel_params(d) ? hp->design_width : 0;
+}
+
 int host_param_changed(const nprfx_graph_node_info *n, int i)
 {
     const nprfx_param_desc *p = &n->desc->params[i];
@@ -393,6 +398,7 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
     nprfx_result r = nprfx_graph_frames(g, NULL, &fl);
     if (r) return r;
     hp->first_frame = hp->last_frame = 1;
+    hp->design_width = (int)(nprfx_graph_design_width(g) + 0.5);
     if (!nprfx_graph_shot(g, &hp->first_frame, &hp->last_frame) && fl.count)
         hp->first_frame = hp->last_frame = fl.frames[0];
     nprfx_seq_frames_free(&fl);

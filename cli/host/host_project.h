@@ -64,6 +64,7 @@ typedef struct host_project {
     const char *graph_path;
     int first_frame, last_frame;
     int width, height;    /* the first read node's data window */
+    int design_width;     /* the graph's "design_width" (0: none), each node's designWidth */
     char format_name[64]; /* the project format's name, from the output file's name */
     host_read *reads;     /* in graph order */
     int nreads;
@@ -81,6 +82,9 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
                                 const char *out_file, host_project *hp);
 void host_project_free(host_project *hp);
 
+/* The designWidth knob node d gets: the graph's design width where d has params in pixels, else 0
+ * (no knob). */
+int host_design_width(const host_project *hp, const nprfx_node_desc *d);
 /* Whether param i of node n differs from the descriptor's default. */
 int host_param_changed(const nprfx_graph_node_info *n, int i);
 /* A double in the fewest digits that read back as the same value (0.05, not 0.0500...03). */

@@ -284,6 +284,8 @@ static nprfx_result check_args(const nprfx_render_args *args, nprfx_render_args 
                            args->size);
     memset(a, 0, sizeof *a);
     memcpy(a, args, args->size < sizeof *a ? args->size : sizeof *a);
+    if (args->size < NPRFX_RENDER_ARGS_SIZE_V2 + sizeof a->vector_scale || !(a->vector_scale > 0))
+        a->vector_scale = a->render_scale;
     a->size = sizeof *a;
     const nprfx_node_desc *d = a->node;
     if (!d || !d->render)

@@ -13,8 +13,12 @@
  * frame gets the offscreen motion k_offscreen, which every reader treats as "left the frame".
  *
  * Beauty: a soft checker from UV (continuous, so it is not a 1-spp aliasing mess) times a colour
- * per object, lit by 0.15 ambient + 0.85 diffuse from the fixed light light_dir() (from the upper
- * left, in front); RGB is scene-linear and premultiplied by coverage (background RGBA = 0). */
+ * per object, lit by one of the lights (nprfx_synth_light): RGB = albedo * (ambient + diffuse),
+ * the `diffuse` channel holding the light's term. The sun (default) is 0.15 ambient + 0.85 N.L
+ * from light_dir() (upper left, in front), so RGB stays in [0, 1]; the point light and the low
+ * key fall off with the square of the distance, the first up to ~40 on the faces nearest it (HDR
+ * highlights), the second leaving most of the frame below 0.1. RGB is scene-linear and
+ * premultiplied by coverage (background RGBA = 0). There are no shadows. */
 #include <math.h>
 #include <string.h>
 
@@ -24,7 +28,7 @@
 static const double k_pi = 3.14159265358979323846;
 static const double k_background_z = 1e10;
 static const double k_offscreen = 1e6; /* motion for a point behind the camera at frame i+-1 */
-static const double k_ambient = 0.15;
+#define k_ambient_sun 0.15
 
 static double deg(double d)
 {
@@ -40,6 +44,53 @@ static double focal_per_width(void)
 static sg_vec3 light_dir(void)
 {
     return sg_normalize(sg_v(-0.45, 0.7, 0.55));
+}
+
+/* A light: RGB = albedo * (ambient + gain * diffuse), the diffuse channel being max(0, N.L)
+ * for the sun and I cos / d^2 for a point light at (x, y, z) of intensity I. */
+typedef struct point_light {
+    const char *name, *help;
+    double x, y, z, intensity, ambient, gain;
+} point_light;
+
+/* Index 0 is the sun (light_dir(), no position); the others are point lights. */
+static const point_light k_lights[] = {
+    {"sun", "0.15 ambient + 0.85 diffuse from the upper left (RGB within [0, 1])", 0, 0, 0, 1,
+     k_ambient_sun, 1 - k_ambient_sun},
+    {"point",
+     "a strong point light in front, upper left, close to the objects: HDR highlights "
+     "(beauty up to ~40), little ambient",
+     -1.0, 1.4, 2.0, 40.0, 0.04, 1},
+    {"lowkey",
+     "a dim point light low on the right, falling off across the frame: most of it "
+     "below 0.1, deep shadows",
+     2.6, -0.4, 1.2, 1.5, 0.005, 1},
+};
+#define NLIGHTS ((int)(sizeof k_lights / sizeof k_lights[0]))
+
+int nprfx_synth_light_count(void)
+{
+    return NLIGHTS;
+}
+
+const char *nprfx_synth_light_name(int i, const char **help)
+{
+    if (i < 0 || i >= NLIGHTS) return NULL;
+    if (help) *help = k_lights[i].help;
+    return k_lights[i].name;
+}
+
+/* The light's term at world point P with normal N (without the ambient). */
+static double light_term(const point_light *l, sg_vec3 P, sg_vec3 N)
+{
+    if (l == &k_lights[0]) {
+        double d = sg_dot(N, light_dir());
+        return d > 0 ? d : 0.0;
+    }
+    sg_vec3 L = sg_sub(sg_v(l->x, l->y, l->z), P);
+    double d2 = sg_dot(L, L);
+    double c = sg_dot(N, L) / sqrt(d2);
+    return c > 0 ? l->intensity * c / d2 : 0.0;
 }
 
 /* ---- channels ------------------------------------------------------------------------------ */
@@ -332,6 +383,7 @@ typedef struct render_job {
     nprfx_image *out;
     const int *pick;              /* out's channel c is synth channel pick[c] */
     int motion_prev, motion_next; /* whether they are picked: each costs two projections */
+    const point_light *light;
 } render_job;
 
 static int intersect(const object_desc *o, const pose *p, sg_vec3 eye, sg_vec3 dir, double tmax,
@@ -401,10 +453,9 @@ static void shade_pixel(const render_job *job, int x, int y, float *px)
     const pose *p = &job->poses[1][best_obj];
     sg_vec3 P = to_world(p, best.p);
     sg_vec3 N = sg_normalize(sg_apply(p->rot, best.n));
-    double diffuse = sg_dot(N, light_dir());
-    if (diffuse < 0) diffuse = 0;
+    double diffuse = light_term(job->light, P, N);
     double albedo = texture(o, best.u, best.v);
-    double shade = albedo * (k_ambient + (1 - k_ambient) * diffuse);
+    double shade = albedo * (job->light->ambient + job->light->gain * diffuse);
 
     px[CH_R] = (float)(o->colour[0] * shade);
     px[CH_G] = (float)(o->colour[1] * shade);
@@ -429,7 +480,7 @@ static void shade_pixel(const render_job *job, int x, int y, float *px)
     px[CH_ID] = (float)(best_obj + 1);
     px[CH_DIFFUSE] = (float)diffuse;
     px[CH_COVERAGE] = 1.0f;
-    /* the surface colour, so that RGB = albedo * (ambient + (1 - ambient) diffuse) */
+    /* the surface colour, so that RGB = albedo * (ambient + gain diffuse) */
     px[CH_ALBEDO_R] = (float)(o->colour[0] * albedo);
     px[CH_ALBEDO_G] = (float)(o->colour[1] * albedo);
     px[CH_ALBEDO_B] = (float)(o->colour[2] * albedo);
@@ -471,6 +522,21 @@ nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, int frame,
 nprfx_result nprfx_synth_render_channels(nprfx_context *ctx, const char *name, int frame,
                                          const int *channels, int count, nprfx_image *out)
 {
+    return nprfx_synth_render_lit(ctx, name, NULL, frame, channels, count, out);
+}
+
+nprfx_result nprfx_synth_render_lit(nprfx_context *ctx, const char *name, const char *light,
+                                    int frame, const int *channels, int count, nprfx_image *out)
+{
+    const point_light *lt = &k_lights[0];
+    if (light && light[0]) {
+        lt = NULL;
+        for (int i = 0; i < NLIGHTS && !lt; i++)
+            if (!strcmp(k_lights[i].name, light)) lt = &k_lights[i];
+        if (!lt)
+            return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                               "synth: unknown light '%s' (known: sun, point, lowkey)", light);
+    }
     if (!name || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT,
                            "synth: scene name and output image are required");
@@ -503,6 +569,7 @@ nprfx_result nprfx_synth_render_channels(nprfx_context *ctx, const char *name, i
     job.width = out->bounds.x1;
     job.out = out;
     job.pick = channels;
+    job.light = lt;
     for (int c = 0; c < count; c++) {
         job.motion_prev |= channels[c] == CH_MPX || channels[c] == CH_MPY;
         job.motion_next |= channels[c] == CH_MNX || channels[c] == CH_MNY;

@@ -109,8 +109,8 @@ static nprfx_result cn_pass_configure(const cn_run *run, cn_pass *ps, int dir, i
     internal_cn_pass_free(ps);
     ps->dir = dir;
     ps->origin = origin;
-    internal_cn_pass_shape(nprfx_cn_state_bytes(run->args->frame, run->p.channels), run->budget, n, &ps->K,
-                  &ps->nring, &ps->ncap);
+    internal_cn_pass_shape(nprfx_cn_state_bytes(run->args->frame, run->p.channels), run->budget, n,
+                           &ps->K, &ps->nring, &ps->ncap);
     ps->ckpt = ps->ncap ? calloc((size_t)ps->ncap, sizeof(cn_slot)) : NULL;
     ps->ring = calloc((size_t)ps->nring, sizeof(cn_slot));
     if ((ps->ncap && !ps->ckpt) || !ps->ring) {
@@ -240,7 +240,8 @@ static nprfx_result cn_pass_get(const cn_run *run, cn_pass *ps, int64_t f, const
         if (run->have_zvel && (r = cn_fetch(run, IN_ZVEL, h, &zvel))) return r;
         if (run->p.noise == NPRFX_CN_NOISE_INPUT && (r = cn_fetch(run, IN_SOURCE, h, &src)))
             return r;
-        uint64_t fp = internal_cn_fingerprint(internal_cn_fingerprint(CN_HASH_INIT, &depth), &motion);
+        uint64_t fp =
+            internal_cn_fingerprint(internal_cn_fingerprint(CN_HASH_INIT, &depth), &motion);
         if (run->p.noise == NPRFX_CN_NOISE_INPUT) fp = internal_cn_fingerprint(fp, &src);
         nprfx_image gated = depth;
         if (run->have_conf) {
@@ -444,7 +445,7 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
     run.p.sigma_lo = np->sigma_lo;
     run.p.sigma_hi = np->sigma_hi;
     run.p.seed = (uint64_t)np->seed;
-    run.p.motion_scale = args->render_scale > 0.0 ? args->render_scale : 1.0;
+    run.p.motion_scale = args->vector_scale > 0.0 ? args->vector_scale : 1.0;
     int mode = np->mode, outmap = np->output;
     double smooth = np->smooth, contrast = np->contrast;
     run.symmetric = mode == NPRFX_CN_MODE_SYMMETRIC;

@@ -126,6 +126,11 @@ NPRFX_API nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment);
 /* Replace the graph's "frames" (the shot temporal nodes see, and the frames rendered by
  * default), e.g. for a shot longer or shorter than the graph was written for (--shot). */
 NPRFX_API nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames);
+/* The plate width in pixels the graph's pixel params were set for ("design_width"): on a plate
+ * W pixels wide every PIXELS param is multiplied by W / width and every AREA param by its square
+ * (0: none, the params are in each plate's own pixels). Refused outside 0 .. 1000000. */
+NPRFX_API nprfx_result nprfx_graph_set_design_width(nprfx_graph *g, double width);
+NPRFX_API double nprfx_graph_design_width(const nprfx_graph *g);
 /* The shot's frames from the graph's "frames" entry (or `override`, e.g. from --frames, which
  * must lie inside the shot when the graph declares one). Free with nprfx_seq_frames_free. */
 NPRFX_API nprfx_result nprfx_graph_frames(nprfx_graph *g, const char *override,

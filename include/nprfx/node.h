@@ -136,7 +136,8 @@ typedef struct nprfx_render_args {
     nprfx_context *ctx;
     const nprfx_node_desc *node;
     double time;                 /* the frame being rendered */
-    double render_scale;         /* 1 at full resolution; a host proxy gives e.g. 0.5 */
+    double render_scale;         /* this frame's pixels per pixel the params were set in: a host
+                                    proxy gives e.g. 0.5, a graph run at twice its design width 2 */
     nprfx_rect frame;            /* the whole image domain at this scale */
     nprfx_rect window;           /* the pixels to write now; inside output->bounds and frame */
     int first_frame, last_frame; /* the shot's frame range, for temporal nodes */
@@ -151,11 +152,18 @@ typedef struct nprfx_render_args {
      * the first release: nprfx_node_render gives nodes NULL here when the caller's struct is
      * the shorter NPRFX_RENDER_ARGS_SIZE_V1 one. */
     long long *items;
+    /* What pixel-valued inputs (motion vectors) are multiplied by to be in this frame's pixels:
+     * a host's proxy render gives vectors in full-resolution pixels (render_scale), a graph run
+     * at another size than its design width gives them in the plate's own pixels (1). 0, or a
+     * caller's struct too short to hold it (it came after `items`): render_scale. */
+    double vector_scale;
 } nprfx_render_args;
 
 /* Render args as the first release defined them, without `items`: callers built against that
  * header pass this size, and nprfx_node_render still accepts it. */
 #define NPRFX_RENDER_ARGS_SIZE_V1 offsetof(nprfx_render_args, items)
+/* Render args with `items` but without `vector_scale`. */
+#define NPRFX_RENDER_ARGS_SIZE_V2 offsetof(nprfx_render_args, vector_scale)
 
 /* A node's render function. nprfx_node_render calls it after the shared checks (see there), with
  * a full-size copy of the caller's args and `params`, the node's typed params struct filled from
@@ -184,6 +192,10 @@ typedef nprfx_result (*nprfx_render_fn)(const nprfx_render_args *args, const voi
  * it has not cleared (a reused buffer still holding an earlier frame's pixels), saving a pass over
  * the frame. Without it, the output arrives zeroed, as nprfx_image_alloc gives it. */
 #define NPRFX_NODE_WRITES_WINDOW 0x10u
+/* Its output depends on the render scale beyond its PIXELS and AREA params (e.g. texture
+ * coordinates made from pixel positions): a host that scales params by a graph's design width
+ * must give it the same scale (nprfx_render_args.render_scale). */
+#define NPRFX_NODE_PIXEL_SCALED 0x20u
 
 struct nprfx_node_desc {
     size_t size;       /* sizeof(nprfx_node_desc) */

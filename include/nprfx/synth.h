@@ -21,7 +21,8 @@ extern "C" {
  *   P.X/Y/Z             world position        Pref.X/Y/Z  object-space (rest) position
  *   N.X/Y/Z             world normal          UV.U/V      surface parameterisation
  *   id                  object index (0 = background, 1.. objects)
- *   diffuse             diffuse intensity max(0, N.L) in [0,1]
+ *   diffuse             the light's diffuse term: max(0, N.L) in [0,1] under the sun, I cos / d^2
+ *                       under a point light (nprfx_synth_render_lit)
  *   coverage            1 where an object covers the pixel centre, 0 on background */
 NPRFX_API int nprfx_synth_channel_count(void);
 NPRFX_API const char *const *nprfx_synth_channel_names(void);
@@ -45,6 +46,16 @@ NPRFX_API nprfx_result nprfx_synth_render(nprfx_context *ctx, const char *name, 
 NPRFX_API nprfx_result nprfx_synth_render_channels(nprfx_context *ctx, const char *name, int frame,
                                                    const int *channels, int count,
                                                    nprfx_image *out);
+
+/* As nprfx_synth_render_channels, under a named light: "sun" (NULL or "" too: the default),
+ * "point" (HDR highlights) or "lowkey" (see nprfx_synth_light_name). Only beauty and the diffuse
+ * channel change with the light. */
+NPRFX_API nprfx_result nprfx_synth_render_lit(nprfx_context *ctx, const char *name,
+                                              const char *light, int frame, const int *channels,
+                                              int count, nprfx_image *out);
+/* The lights, 0 .. count-1: name, and in *help (may be NULL) one line on it; NULL outside. */
+NPRFX_API int nprfx_synth_light_count(void);
+NPRFX_API const char *nprfx_synth_light_name(int i, const char **help);
 
 #ifdef __cplusplus
 }

@@ -116,7 +116,8 @@ static OfxStatus main_entry(int index, const char *action, const void *handle,
     if (!d || !action) return kOfxStatErrUnknown;
     if (!strcmp(action, kOfxActionLoad)) return ofx_suites_load();
     if (!strcmp(action, kOfxActionUnload)) {
-        internal_stipple_shipped_release(); /* the process-wide dot sequence; instances keep theirs */
+        internal_stipple_shipped_release(); /* the process-wide dot sequence; instances keep theirs
+                                             */
         return kOfxStatOK;
     }
     if (!ofx_g.prop || !ofx_g.fx || !ofx_g.param) return kOfxStatErrFatal;

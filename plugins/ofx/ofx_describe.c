@@ -359,6 +359,25 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         add_page_child(page, &nchildren, d->params[i].name);
     }
     char name[NPRFX_OFX_NAME_MAX + 16];
+    if (ofx_names_has_pixel_params(d)) {
+        OfxPropertySetHandle pp;
+        ofx_names_extra_param(d, "designWidth", name, sizeof name);
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeInteger, name, &pp)) != kOfxStatOK)
+            return st;
+        ofx_set_str(pp, kOfxPropLabel, 0, "Design Width");
+        ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
+        ofx_set_int(pp, kOfxParamPropMin, 0, 0);
+        ofx_set_int(pp, kOfxParamPropMax, 0, 1000000);
+        ofx_set_int(pp, kOfxParamPropDisplayMin, 0, 0);
+        ofx_set_int(pp, kOfxParamPropDisplayMax, 0, 4096);
+        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
+        ofx_set_str(pp, kOfxParamPropHint, 0,
+                    "The image width in pixels the params in pixels were set for, as a graph's "
+                    "design_width: on a wider or narrower input every length in pixels (and "
+                    "area in pixels^2) follows the width, so the look keeps its proportions on "
+                    "a 4K plate or a phone clip. 0: the params are in the input's own pixels.");
+        add_page_child(page, &nchildren, name);
+    }
     for (int k = 0; k < d->num_inputs; k++) {
         if (!general && k != main) continue;
         /* Source read whole by the flow: a main input that is derived has no channels to pick */

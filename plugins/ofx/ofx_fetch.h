@@ -48,7 +48,8 @@ typedef struct ofx_render_call {
     nprfx_image src;
     float *src_scratch;
     nprfx_value fvalues[NPRFX_OFX_DERIVE_MAX_PARAMS];
-    double scale;
+    double scale;        /* params in pixels: the render scale times the design scale */
+    double vector_scale; /* motion vectors: the render scale */
     nprfx_rect frame;
     int first_frame, last_frame;
     pthread_mutex_t dlock;

@@ -86,6 +86,7 @@ static nprfx_result flow_at(ofx_render_call *rc, int t, const nprfx_image **out)
     a.node = inst->plan.flow;
     a.time = t;
     a.render_scale = rc->scale;
+    a.vector_scale = rc->vector_scale;
     a.frame = rc->frame;
     a.window = rc->frame;
     a.first_frame = rc->first_frame;

@@ -84,6 +84,10 @@ OfxStatus ofx_instance_create(const nprfx_node_desc *d, OfxImageEffectHandle fx)
             pm->paramGetHandle(ps, name, &inst->selectors[k], NULL) != kOfxStatOK)
             inst->selectors[k] = NULL;
     }
+    ofx_names_extra_param(d, "designWidth", name, sizeof name);
+    if (!ofx_names_has_pixel_params(d) ||
+        pm->paramGetHandle(ps, name, &inst->design_width, NULL) != kOfxStatOK)
+        inst->design_width = NULL;
     if (inst->mask) {
         ofx_names_extra_param(d, "mix", name, sizeof name);
         if (pm->paramGetHandle(ps, name, &inst->mix, NULL) != kOfxStatOK) inst->mix = NULL;

@@ -19,6 +19,7 @@ typedef struct ofx_instance {
     OfxParamHandle *params;          /* per descriptor param */
     OfxParamHandle *selectors;       /* per input; NULL without a channel selector */
     OfxParamHandle mix, mask_invert; /* NULL unless the node is maskable */
+    OfxParamHandle design_width;     /* NULL unless the node has params in pixels */
     pthread_mutex_t lock; /* held around renders of stateful nodes and around freeing state */
     void *state;          /* the node's per-instance slot (nprfx_render_args.state) */
     int persistent;       /* a persistent error message is shown on the effect */

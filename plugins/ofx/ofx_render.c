@@ -101,7 +101,16 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_rect host_window = ofx_flip_rect(wr, rc.f);
 
     if ((r = ofx_eval_params(inst, rc.ctx, time, 0, values, strings))) goto done;
-    nprfx_node_apply_render_scale(d, values, scale[0]);
+    /* Params in pixels follow the render scale (a proxy) and, with a design width, the input's
+     * full-resolution width; motion vectors come in full-resolution pixels: the render scale
+     * alone. */
+    double param_scale = scale[0];
+    int design = 0;
+    if (inst->design_width &&
+        ofx_g.param->paramGetValue(inst->design_width, &design) == kOfxStatOK && design > 0 &&
+        rod.x2 > rod.x1)
+        param_scale *= (rod.x2 - rod.x1) / par / design;
+    nprfx_node_apply_render_scale(d, values, param_scale);
 
     for (int k = 0; k < d->num_inputs; k++) {
         if (!ofx_clip_connected(inst->clips[k])) continue;
@@ -161,8 +170,9 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
             goto done;
         }
         memcpy(rc.fvalues, inst->plan.values, sizeof rc.fvalues);
-        nprfx_node_apply_render_scale(inst->plan.flow, rc.fvalues, scale[0]);
-        rc.scale = scale[0];
+        nprfx_node_apply_render_scale(inst->plan.flow, rc.fvalues, param_scale);
+        rc.scale = param_scale;
+        rc.vector_scale = scale[0];
         rc.frame = frame;
         if (!ofx_g.temporal) ofx_footage_continue(&rc, ofx_round_frame(time));
         if ((r = ofx_footage_inputs(&rc, ofx_round_frame(time), in_ch))) goto done;
@@ -223,7 +233,8 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         a.ctx = rc.ctx;
         a.node = d;
         a.time = time;
-        a.render_scale = scale[0];
+        a.render_scale = param_scale;
+        a.vector_scale = scale[0];
         a.frame = frame;
         a.window = window;
         a.first_frame = rc.first_frame;

@@ -201,7 +201,7 @@ static void image_props(himage *im, const node_inst *ni, const char *comps, void
                         int row_bytes, const char *id)
 {
     OfxPropertySetHandle p = (OfxPropertySetHandle)&im->props;
-    double s = ni->args->render_scale;
+    double s = internal_host_scale(ni->args);
     int bv[4] = {b.x1, b.y1, b.x2, b.y2};
     internal_set_string(p, kOfxPropType, 0, kOfxTypeImage);
     internal_set_string(p, kOfxImageEffectPropPixelDepth, 0,
@@ -343,7 +343,7 @@ static OfxStatus fx_clip_get_rod(OfxImageClipHandle clip, OfxTime time, OfxRectD
                               input_flip(ni, c->input, &a->inputs[c->input]));
     else
         return kOfxStatFailed;
-    double s = a->render_scale;
+    double s = internal_host_scale(a);
     bounds->x1 = r.x1 / s;
     bounds->y1 = r.y1 / s;
     bounds->x2 = r.x2 / s;

@@ -96,7 +96,7 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, i
     OfxStatus st = internal_props_copy(&e->props, &src->props);
     OfxPropertySetHandle ep = (OfxPropertySetHandle)&e->props;
     int w = nprfx_rect_width(a->frame), hgt = nprfx_rect_height(a->frame);
-    double s = a->render_scale;
+    double s = internal_host_scale(a);
     internal_set_string(ep, kOfxPropType, 0, kOfxTypeImageEffectInstance);
     internal_set_string(ep, kOfxImageEffectPropContext, 0,
                         filter ? kOfxImageEffectContextFilter : kOfxImageEffectContextGeneral);
@@ -239,8 +239,8 @@ static void set_change_args(hprops *in, const nprfx_render_args *a, const char *
     internal_set_string(p, kOfxPropType, 0, type);
     internal_set_string(p, kOfxPropName, 0, name);
     internal_set_double(p, kOfxPropTime, 0, a->time);
-    internal_set_double(p, kOfxImageEffectPropRenderScale, 0, a->render_scale);
-    internal_set_double(p, kOfxImageEffectPropRenderScale, 1, a->render_scale);
+    internal_set_double(p, kOfxImageEffectPropRenderScale, 0, internal_host_scale(a));
+    internal_set_double(p, kOfxImageEffectPropRenderScale, 1, internal_host_scale(a));
 }
 
 /* Params and channel selectors from the graph, with the instance-changed actions a host sends
@@ -270,6 +270,18 @@ static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int f
         if (param_assign(p, pd, &v)) changed[nchanged++] = p->name;
     }
     char name[NPRFX_OFX_NAME_MAX];
+    /* A graph's design width: the runner's param scale beyond the host's render scale is the
+     * full-resolution width over the design width. */
+    ofx_names_extra_param(d, "designWidth", name, sizeof name);
+    hparam *dw = ofx_names_has_pixel_params(d) ? internal_effect_param(e, name) : NULL;
+    if (dw) {
+        double hs = internal_host_scale(a), extra = a->render_scale / hs;
+        int design = extra != 1.0 ? (int)lround(nprfx_rect_width(a->frame) / hs / extra) : 0;
+        if (dw->i != design) {
+            dw->i = design;
+            changed[nchanged++] = dw->name;
+        }
+    }
     for (int k = 0; k < d->num_inputs; k++) {
         if (!a->inputs[k].data) continue;
         /* on footage a derived main input is Source read whole: no selector */
@@ -356,7 +368,7 @@ static nprfx_result query_regions(node_inst *ni, const nprfx_render_args *a)
     const nprfx_node_desc *d = ni->desc;
     const char *id = ni->pl->p->pluginIdentifier;
     heffect *e = ni->fx;
-    double s = a->render_scale;
+    double s = internal_host_scale(a);
     hprops in, out;
     internal_props_init(&in, K_PLAIN);
     internal_props_init(&out, K_PLAIN);
@@ -611,7 +623,7 @@ static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, v
     for (int k = 0; k < ni->desc->num_inputs; k++)
         ni->frames[k].nfetched = 0;
     if ((r = sync_params(ni, a, first)) || (r = query_regions(ni, a))) goto done;
-    double s = a->render_scale;
+    double s = internal_host_scale(a);
     if (s != 1.0 && !h->profile->multires) {
         r = nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED, "%s: this host (%s) renders at scale 1 only",
                         id, h->profile->like);
