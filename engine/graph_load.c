@@ -485,10 +485,12 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
         else if (!strcmp(e->key, "format") && json_is(e, INTERNAL_JSON_STRING))
             g->fmt_text = engine_strdup(e->string);
         else if (!strcmp(e->key, "design_width")) {
-            if (!json_is(e, INTERNAL_JSON_NUMBER) || !(e->number >= 1) || e->number > 1e6) {
+            if (!json_is(e, INTERNAL_JSON_NUMBER) || !(e->number >= 1) ||
+                e->number > NPRFX_DESIGN_WIDTH_MAX) {
                 r = nprfx_error(ctx, NPRFX_ERR_PARSE,
                                 "top-level entry 'design_width' must be the plate width in "
-                                "pixels the params were set for (a number, 1 to 1000000)");
+                                "pixels the params were set for (a number, 1 to %d)",
+                                NPRFX_DESIGN_WIDTH_MAX);
                 goto done;
             }
             g->design_width = e->number;

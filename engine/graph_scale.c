@@ -1,7 +1,8 @@
-/* A graph's design width (docs/design.md §3.6): its pixel params were set for plates that many
- * pixels wide. On a plate W wide the runner multiplies every length in pixels by W / design and
- * every area by its square, so a quarter-size proxy draws what the full-size render draws, a
- * quarter the size. Motion vectors are left alone: a plate's vectors are in its own pixels. */
+/* A graph's design width (docs/design.md §3.6, "Design width"): its pixel params were set for
+ * plates that many pixels wide. On a plate W wide the runner multiplies every length in pixels by W
+ * / design and every area by its square, so a quarter-size proxy draws what the full-size render
+ * draws, a quarter the size. Motion vectors are left alone: a plate's vectors are in its own
+ * pixels. */
 #include "graph_scale.h"
 
 #include <string.h>
@@ -24,11 +25,11 @@ const nprfx_value *internal_graph_scale_params(const gnode *n, const nprfx_value
 
 nprfx_result nprfx_graph_set_design_width(nprfx_graph *g, double width)
 {
-    if (!(width >= 0) || width > 1e6)
+    if (!(width >= 0) || width > NPRFX_DESIGN_WIDTH_MAX)
         return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
                            "design width %g: give the plate width in pixels the graph's params "
-                           "were set for (1 to 1000000), or 0 for the plate's own pixels",
-                           width);
+                           "were set for (1 to %d), or 0 for the plate's own pixels",
+                           width, NPRFX_DESIGN_WIDTH_MAX);
     g->design_width = width;
     g->plan_ready = 0;
     return NPRFX_OK;

@@ -27,7 +27,10 @@ typedef enum nprfx_param_type {
 /* Param flags. */
 #define NPRFX_PARAM_PIXELS 0x1u /* a length in pixels: multiplied by the host's render scale */
 #define NPRFX_PARAM_AREA 0x2u   /* an area in pixels^2: multiplied by render scale squared */
-#define NPRFX_PARAM_PATH 0x4u   /* a STRING that names a file (sequence) path */
+/* The widest design width (the image width PIXELS/AREA params were set for) a graph or a host
+ * node may state. */
+#define NPRFX_DESIGN_WIDTH_MAX 1000000
+#define NPRFX_PARAM_PATH 0x4u /* a STRING that names a file (sequence) path */
 #define NPRFX_PARAM_EXPORT                                                                         \
     0x8u /* a PATH the caller writes desc->export_text's text to, per frame;                       \
             empty: no export */

@@ -160,6 +160,21 @@ static void add_page_child(OfxPropertySetHandle page, int *nchildren, const char
     if (page) ofx_set_str(page, kOfxParamPropPageChild, (*nchildren)++, name);
 }
 
+/* A param the adapter adds beside the descriptor's (its name from ofx_names_extra_param, into
+ * name): defined, labelled, explained, not animated; the caller sets its values. */
+static OfxStatus define_extra(OfxParamSetHandle ps, const nprfx_node_desc *d, const char *type,
+                              const char *want, const char *label, const char *hint, char *name,
+                              size_t n, OfxPropertySetHandle *pp)
+{
+    ofx_names_extra_param(d, want, name, n);
+    OfxStatus st = ofx_g.param->paramDefine(ps, type, name, pp);
+    if (st != kOfxStatOK) return st;
+    ofx_set_str(*pp, kOfxPropLabel, 0, label);
+    ofx_set_int(*pp, kOfxParamPropAnimates, 0, 0);
+    ofx_set_str(*pp, kOfxParamPropHint, 0, hint);
+    return kOfxStatOK;
+}
+
 static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
                               const nprfx_param_desc *p)
 {
@@ -359,23 +374,21 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         add_page_child(page, &nchildren, d->params[i].name);
     }
     char name[NPRFX_OFX_NAME_MAX + 16];
+    OfxPropertySetHandle pp;
     if (ofx_names_has_pixel_params(d)) {
-        OfxPropertySetHandle pp;
-        ofx_names_extra_param(d, "designWidth", name, sizeof name);
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeInteger, name, &pp)) != kOfxStatOK)
+        if ((st = define_extra(ps, d, kOfxParamTypeInteger, "designWidth", "Design Width",
+                               "The image width in pixels the params in pixels were set for, as "
+                               "a graph's design_width: on a wider or narrower input every length "
+                               "in pixels (and area in pixels^2) follows the width, so the look "
+                               "keeps its proportions on a 4K plate or a phone clip. 0: the "
+                               "params are in the input's own pixels.",
+                               name, sizeof name, &pp)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Design Width");
         ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
         ofx_set_int(pp, kOfxParamPropMin, 0, 0);
-        ofx_set_int(pp, kOfxParamPropMax, 0, 1000000);
+        ofx_set_int(pp, kOfxParamPropMax, 0, NPRFX_DESIGN_WIDTH_MAX);
         ofx_set_int(pp, kOfxParamPropDisplayMin, 0, 0);
         ofx_set_int(pp, kOfxParamPropDisplayMax, 0, 4096);
-        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "The image width in pixels the params in pixels were set for, as a graph's "
-                    "design_width: on a wider or narrower input every length in pixels (and "
-                    "area in pixels^2) follows the width, so the look keeps its proportions on "
-                    "a 4K plate or a phone clip. 0: the params are in the input's own pixels.");
         add_page_child(page, &nchildren, name);
     }
     for (int k = 0; k < d->num_inputs; k++) {
@@ -387,28 +400,23 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         if (name[0]) add_page_child(page, &nchildren, name);
     }
     if (maskable) {
-        OfxPropertySetHandle pp;
-        ofx_names_extra_param(d, "maskInvert", name, sizeof name);
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeBoolean, name, &pp)) != kOfxStatOK)
+        if ((st = define_extra(ps, d, kOfxParamTypeBoolean, "maskInvert", "Invert Mask",
+                               "Use 1 - Mask instead of the Mask.", name, sizeof name, &pp)) !=
+            kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Invert Mask");
         ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
-        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
-        ofx_set_str(pp, kOfxParamPropHint, 0, "Use 1 - Mask instead of the Mask.");
         add_page_child(page, &nchildren, name);
-        ofx_names_extra_param(d, "mix", name, sizeof name);
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeDouble, name, &pp)) != kOfxStatOK)
+        if ((st = define_extra(ps, d, kOfxParamTypeDouble, "mix", "Mix",
+                               "out = Source + (result - Source) * mix * Mask, per channel the "
+                               "Source has (Mask: 1 where no Mask clip is connected). 1 with no "
+                               "Mask leaves the result untouched.",
+                               name, sizeof name, &pp)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Mix");
         ofx_set_dbl(pp, kOfxParamPropDefault, 0, 1.0);
         ofx_set_dbl(pp, kOfxParamPropMin, 0, 0.0);
         ofx_set_dbl(pp, kOfxParamPropMax, 0, 1.0);
         ofx_set_dbl(pp, kOfxParamPropDisplayMin, 0, 0.0);
         ofx_set_dbl(pp, kOfxParamPropDisplayMax, 0, 1.0);
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "out = Source + (result - Source) * mix * Mask, per channel the Source has "
-                    "(Mask: 1 where no Mask clip is connected). 1 with no Mask leaves the result "
-                    "untouched.");
         add_page_child(page, &nchildren, name);
     }
     return kOfxStatOK;
