@@ -225,8 +225,17 @@ void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *val
                                    double render_scale)
 {
     for (int i = 0; i < node->num_params; i++) {
-        if (node->params[i].flags & NPRFX_PARAM_PIXELS) values[i].v[0] *= render_scale;
-        if (node->params[i].flags & NPRFX_PARAM_AREA) values[i].v[0] *= render_scale * render_scale;
+        const nprfx_param_desc *p = &node->params[i];
+        if (!(p->flags & (NPRFX_PARAM_PIXELS | NPRFX_PARAM_AREA))) continue;
+        double v = values[i].v[0];
+        int was_in_range = v >= p->hard_min && v <= p->hard_max;
+        v *= (p->flags & NPRFX_PARAM_AREA) ? render_scale * render_scale : render_scale;
+        /* A valid size stays valid at any scale: a proxy draws a fine paper thread at its
+         * smallest size rather than refusing the frame (a value already out of range is left
+         * for the check to name). */
+        if (p->type == NPRFX_PARAM_INT) v = floor(v + 0.5);
+        if (was_in_range) v = v < p->hard_min ? p->hard_min : v > p->hard_max ? p->hard_max : v;
+        values[i].v[0] = v;
     }
 }
 

@@ -342,7 +342,8 @@ NPRFX_API nprfx_result nprfx_node_output_info(nprfx_context *ctx, const nprfx_no
                                               const nprfx_value *params, const int *input_channels,
                                               nprfx_output_info *out);
 
-/* Scale pixel/area params by the render scale (OFX proxies). In-place on values. */
+/* Scale pixel/area params by the render scale (OFX proxies, a graph's design width), in place
+ * on values; a value inside its hard range stays inside it (clamped to its ends). */
 NPRFX_API void nprfx_node_apply_render_scale(const nprfx_node_desc *node, nprfx_value *values,
                                              double render_scale);
 

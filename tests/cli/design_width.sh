@@ -4,7 +4,8 @@
 # (gabor-splat's frequency) follows: the render is bit-identical to the same graph without a
 # design width and its params doubled by hand. By strips of rows too (the filters' margins
 # follow the scaled params). Bad widths are refused with a message naming them. The synth
-# lights: point has HDR highlights, lowkey is dark, sun is the default's beauty.
+# lights: point has HDR highlights, lowkey is dark, sun is the default's beauty. A size scaled
+# below its param's range takes the range's end.
 set -u
 NPRFX=$1; SRC=$2; W=$3
 rm -rf "$W"; mkdir -p "$W"; cd "$W" || exit 1
@@ -65,6 +66,19 @@ done
 
 same strips/strip/grow.0001.exr whole/strip/grow.0001.exr && pass ||
   { fail "morphology by strips of 8 rows differs from the whole frame"; cat d.txt; }
+
+# a size at its range's end stays valid on a proxy: paper's thread 2 and 1 (minimum 1) designed for
+# 1024 both render on the 256-wide plate as thread 1, the minimum (they were refused as 0.5, 0.25)
+paper() { # NAME DESIGN THREAD
+  local design=""
+  [ "$2" != none ] && design="\"design_width\": $2,"
+  printf '{"frames": "1", %s "nodes": {"plate": {"node": "synth", "scene": "orbit", "size": "256x192"}, "p": {"node": "paper", "inputs": {"image": "plate:beauty"}, "params": {"thread": %s}}, "w": {"node": "write", "inputs": {"image": "p"}, "path": "%s/p.####.exr"}}}\n' "$design" "$3" "$1" > "$1.json"
+  "$NPRFX" run "$1.json" -q > "$1.log" 2>&1 || fail "$1: $(cat "$1.log")"
+}
+paper paper_proxy 1024 2
+paper paper_min 1024 1
+same paper_proxy/p.0001.exr paper_min/p.0001.exr && pass ||
+  { fail "paper threads 2 and 1 designed at 1024 on a 256 plate differ (both are its minimum)"; cat d.txt; }
 
 # refusals
 expect_error() { # NAME PATTERN -- command

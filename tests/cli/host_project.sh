@@ -62,8 +62,11 @@ input strokes Tone light
 param light out_high 0.6
 param light out_low 0.05
 param look gain_layer 0.85
+param matte designWidth 1280
 param noise contrast 0.2
+param noise designWidth 1280
 param noise sigma_hi 2.5
+param paper designWidth 1280
 param strokes invert 1
 param strokes sigma 10
 WANT
@@ -76,8 +79,8 @@ for p in "noise sigma_lo" "noise alpha"; do
 done
 
 # (3) the script: the same params by script name, and no __file__ outside the try
-grep -o '^    [a-z_]*\.getParam("[a-z_]*")\.setValue([^)]*)' "$PY" |
-    sed 's/^ *\([a-z_]*\)\.getParam("\([a-z_]*\)")\.setValue(\(.*\))/param \1 \2 \3/; s/True$/1/' |
+grep -o '^    [a-z_]*\.getParam("[a-zA-Z_]*")\.setValue([^)]*)' "$PY" |
+    sed 's/^ *\([a-z_]*\)\.getParam("\([a-zA-Z_]*\)")\.setValue(\(.*\))/param \1 \2 \3/; s/True$/1/' |
     awk '{ print $1, $2, $3, $4 + 0 }' | sort > py.txt
 grep '^param' want.txt > want_py.txt
 diff want_py.txt py.txt > py.diff || { fail "$PY: params differ from the graph's:"; cat py.diff; }

@@ -57,9 +57,11 @@ for g in "$SRC"/samples/graphs/*.json; do
 done
 [ "$(echo $STYLES | wc -w)" -ge 20 ] && pass || fail "only these style graphs: $STYLES"
 
-# Every style on each plate: one run per plate (out/PLATE/), two at a time.
+# Every style on each plate: one run per plate (out/PLATE/), two at a time. Sizes in the plate's
+# pixels (--design-width off): at the graphs' 1280 the small plates would draw marks too fine for
+# a layout's conversions to show.
 for P in $LAYOUTS $(for L in $LAYOUTS; do echo as_$L; done) blender; do echo $P; done |
-  xargs -P 2 -I{} sh -c '"$0" run $1 --set plate.path="$PWD/$2/orbit.####.exr" --shot 1-2 \
+  xargs -P 2 -I{} sh -c '"$0" run $1 --set plate.path="$PWD/$2/orbit.####.exr" --shot 1-2 --design-width off \
     --output-dir "out/$2" > "$2.log" 2>&1 || echo "$2" >> failed.txt' "$NPRFX" "$GRAPHS" {}
 [ ! -s failed.txt ] && pass || while read -r P; do fail "the styles on the $P plate:"; cat $P.log; done < failed.txt
 FILES=$(cd out/blender && find . -name '*.exr' | sed 's,^\./,,' | sort)
@@ -68,7 +70,7 @@ for P in $LAYOUTS; do
   [ "$(cd out/$P && find . -name '*.exr' | sed 's,^\./,,' | sort)" = "$FILES" ] && pass ||
     fail "the styles on the $P plate wrote other files than on the Blender plate"
 done
-pick() { printf '%s\n' $FILES | grep "$1"; } # the outputs of some styles
+pick() { printf '%s\n' $FILES | grep "$@"; } # the outputs of some styles
 
 for L in $LAYOUTS; do
   plates same out/$L out/as_$L $FILES > d.txt 2>&1 && pass || { fail "$L layout:"; cat d.txt; }
