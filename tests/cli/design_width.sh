@@ -70,9 +70,7 @@ same strips/strip/grow.0001.exr whole/strip/grow.0001.exr && pass ||
 # a size at its range's end stays valid on a proxy: paper's thread 2 and 1 (minimum 1) designed for
 # 1024 both render on the 256-wide plate as thread 1, the minimum (they were refused as 0.5, 0.25)
 paper() { # NAME DESIGN THREAD
-  local design=""
-  [ "$2" != none ] && design="\"design_width\": $2,"
-  printf '{"frames": "1", %s "nodes": {"plate": {"node": "synth", "scene": "orbit", "size": "256x192"}, "p": {"node": "paper", "inputs": {"image": "plate:beauty"}, "params": {"thread": %s}}, "w": {"node": "write", "inputs": {"image": "p"}, "path": "%s/p.####.exr"}}}\n' "$design" "$3" "$1" > "$1.json"
+  printf '{"frames": "1", "design_width": %s, "nodes": {"plate": {"node": "synth", "scene": "orbit", "size": "256x192"}, "p": {"node": "paper", "inputs": {"image": "plate:beauty"}, "params": {"thread": %s}}, "w": {"node": "write", "inputs": {"image": "p"}, "path": "%s/p.####.exr"}}}\n' "$2" "$3" "$1" > "$1.json"
   "$NPRFX" run "$1.json" -q > "$1.log" 2>&1 || fail "$1: $(cat "$1.log")"
 }
 paper paper_proxy 1024 2

@@ -59,7 +59,7 @@ render() {
   mv "$f" "$out.exr"; rm -rf "$W/run_$out"
 }
 
-# compare NAME SIZE [expect]: metric of NAME_SIZE against NAME_full; prints mad and ink ratio
+# compare NAME SIZE: the metric of NAME_SIZE against NAME_full; prints mad and ink ratio
 compare() {
   local n=$1 s=$2
   lum "${n}_full.exr" "${n}_fullb.exr" $grid
