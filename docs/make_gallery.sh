@@ -4,6 +4,7 @@
 #   docs/images/styles/NAME.jpg        crossing, frame 12, 1280x720
 #   docs/images/styles/NAME-strip.jpg  crossing, frames 4, 8 and 12 side by side (640x360 each)
 #   docs/images/styles/NAME-dolly.jpg  dolly, frame 12, 1280x720 (a second shot, with sky)
+#   docs/images/styles/NAME-lights.jpg three lights at two sizes (below)
 # usage: docs/make_gallery.sh build/nprfx [HD_DIR [STYLE ...]]   (STYLE: only these graphs)
 # HD_DIR (default build/hd) holds the 1280x720 plates; when they are missing they are rendered
 # first with Blender (samples/blender/make_plates.py --res 1280x720, frames 1-12 of crossing and
@@ -41,6 +42,47 @@ layouts_picture() {
 }
 if [ "$only" = " layouts " ]; then layouts_picture; exit 0; fi
 
+# Every style in three lights at two sizes, no Blender needed: the synthetic orbit scene (nprfx
+# synth, Blender's layout) lit by the sun, by a strong point light (HDR highlights up to ~40) and
+# low key (most of it below 0.1), frame 2, at 1280x720 (top row, shown at 640x360) and as a
+# 320x180 proxy (bottom row, enlarged to 640x360), left to right sun, point, low key:
+#   docs/images/styles/NAME-lights.jpg
+# usage: docs/make_gallery.sh build/nprfx HD_DIR lights [STYLE ...]   (only these pictures)
+lights_pictures() {
+  local tmp out="$here/images/styles" g name preview l s args # $1: " NAME ... " or "" (all)
+  tmp=$(mktemp -d)
+  mkdir -p "$out"
+  for l in sun point lowkey; do
+    for s in 1280x720 320x180; do
+      "$NPRFX" synth orbit --layout blender --light $l --size $s --frames 1-2 \
+        -o "$tmp/plates/$l-$s/orbit.####.exr" > /dev/null
+    done
+  done
+  for g in $(style_graphs "$src"); do
+    name=$(basename "$g" .json)
+    [ -z "$1" ] || [[ "$1" == *" $name "* ]] || continue
+    preview=$(grep '"image": *"look"' "$g" | grep -o '"preview": *"[^"]*"' | sed 's/.*"\([^"]*\)"$/\1/')
+    args=()
+    for s in 1280x720 320x180; do
+      for l in sun point lowkey; do
+        "$NPRFX" run "$g" --set "plate.path=$tmp/plates/$l-$s/orbit.####.exr" --shot 1-2 --frames 2 \
+          --output-dir "$tmp/$name-$l-$s" --quiet
+        args+=("$tmp/$name-$l-$s/${preview//####/0002}" --ch R,G,B --resize 640x360)
+      done
+    done
+    oiiotool "${args[@]}" --mosaic 3x2 --compression jpeg:85 -o "$out/$name-lights.jpg"
+    echo "make_gallery: $name in three lights"
+  done
+  rm -rf "$tmp"
+}
+. "$src/tests/lib/styles.sh" # style_graphs: what counts as a style graph, in one place
+if [[ "$only" == " lights "* ]]; then
+  sel=${only#" lights"}
+  [ "$sel" = " " ] && sel=""
+  lights_pictures "$sel"
+  exit 0
+fi
+
 for shot in crossing dolly; do
   if [ ! -f "$hd/$shot/$shot.0012.exr" ]; then
     command -v blender >/dev/null || { echo "make_gallery: $hd/$shot has no plates and blender is not installed (apt-get install blender)" >&2; exit 1; }
@@ -53,7 +95,6 @@ out="$here/images/styles"
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-. "$src/tests/lib/styles.sh" # style_graphs: what counts as a style graph, in one place
 for g in $(style_graphs "$src"); do
   name=$(basename "$g" .json)
   [ "$only" = "  " ] || [[ "$only" == *" $name "* ]] || continue
@@ -77,4 +118,5 @@ for g in $(style_graphs "$src"); do
   echo "make_gallery: $name"
 done
 [ "$only" = "  " ] || [[ "$only" == *" layouts "* ]] && layouts_picture
+if [ "$only" = "  " ]; then lights_pictures ""; else lights_pictures "$only"; fi
 ls -la "$out"

@@ -1,7 +1,7 @@
 /* The blend node: the cookbook's compositing functions (alphaBlend, overlay, overlayAlpha),
  * multiply, screen, Bousseau et al.'s pigment density, and the background colour where the
- * coverage AOV is 0. The formulas and the per-pixel loop live in core/looks/blend.c; this file is the
- * descriptor and the call into it. */
+ * coverage AOV is 0. The formulas and the per-pixel loop live in core/looks/blend.c; this file is
+ * the descriptor and the call into it. */
 #include <stddef.h>
 
 #include "nprfx/blend.h"
@@ -174,7 +174,16 @@ const nprfx_node_desc nprfx_node_blend = {
         "pigment: d is Bousseau et al.'s pigment density, computed from the layer as in their"
         " paper (d = 1 + beta (T - 0.5), beta = factor, T = c1): a layer value of 0.5 leaves "
         "the colour alone, brighter layer values mean denser pigment (darker, for factor > "
-        "0), darker values thinner pigment. Colour values 0 and 1 are fixed points.\n"
+        "0), darker values thinner pigment. Colour values 0 and 1 are fixed points; d is "
+        "clamped to [0, 2], where the formula keeps colours within [0, 1].\n"
+        "\n"
+        "Colour above 1 (scene-linear highlights): the formulas are exact as written for "
+        "values in [0, 1] and extended so that a highlight of 100 stays finite and in its "
+        "place: screen is max(c0, c1) where either value is above 1 (screen only lightens); "
+        "in overlay and overlayalpha, c0 inside the screen term is at most 1 (a highlight is "
+        "scaled by f as white is); pigment acts on the part of C within [0, 1] and the rest "
+        "passes unchanged (light beyond the paper's white takes no pigment). Every join is "
+        "continuous.\n"
         "\n"
         "Channels: the output has base's channels. A 4-channel base is RGBA: its alpha passes"
         " through unblended. A 1-channel layer (a noise pattern) is used for every colour "

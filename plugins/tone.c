@@ -1,6 +1,6 @@
 /* The tone node: a shading AOV mapped into the [0, 1] tone that threshold-map and the styles
- * expect, with one range for the whole shot. The measuring and the mapping live in core/looks/tone.c;
- * this file is the descriptor and the call into it. */
+ * expect, with one range for the whole shot. The measuring and the mapping live in
+ * core/looks/tone.c; this file is the descriptor and the call into it. */
 #include <stddef.h>
 
 #include "nprfx/node.h"
@@ -25,6 +25,7 @@ enum {
     P_BAND_SOFTNESS,
     P_OUT_LOW,
     P_OUT_HIGH,
+    P_SOLID_BLACKS,
     P_BACKGROUND,
     P_COUNT
 };
@@ -193,6 +194,19 @@ static const nprfx_param_desc params[P_COUNT] = {
      .soft_max = 1,
      .hard_min = -10,
      .hard_max = 10},
+    {.name = "solid_blacks",
+     NPRFX_FIELD(tp, solid_blacks),
+     .label = "Solid Blacks",
+     .help = "The darkest tones filled with solid ink, as an ink artist spots blacks: below this"
+             " tone t the output fades linearly to 0 at t = 0 (out * t / solid_blacks), which a "
+             "threshold-map turns into solid ink. 0 (the default): the darkest tone is out_low, "
+             "so with out_low above 0 the deepest shadow keeps its texture.",
+     .type = NPRFX_PARAM_DOUBLE,
+     .def = {0},
+     .soft_min = 0,
+     .soft_max = 0.5,
+     .hard_min = 0,
+     .hard_max = 1},
     {.name = "background",
      NPRFX_FIELD(tp, background),
      .label = "Background",
@@ -229,7 +243,8 @@ const nprfx_node_desc nprfx_node_tone = {
             "covered pixels over the whole shot (or one reference frame, or given), measured "
             "once and never per frame, so the tone cannot flicker:\n\n"
             "t = clamp((v - lo) / (hi - lo) * 2^exposure, 0, 1)^(1/gamma), out = out_low + "
-            "(out_high - out_low) t, and out = background where coverage is 0.\n\n"
+            "(out_high - out_low) t (times t / solid_blacks below solid_blacks), and out = "
+            "background where coverage is 0.\n\n"
             "Feed it the beauty or a light pass that includes the ambient light, not the direct "
             "light alone (0 in every shadow), and a matte as coverage so the sky is not "
             "measured and stays paper."

@@ -18,21 +18,34 @@ static inline double alpha_blend(double c0, double c1, double a)
 {
     return (1.0 - a) * c0 + a * c1;
 }
-static inline double overlay(double c0, double c1, double f)
-{
-    return c0 * f * (1.0 - (1.0 - c0) * (1.0 - c1));
-}
-static inline double overlay_alpha(double back, double c0, double c1, double f, double a)
-{
-    return back * (1.0 - a) + a * c0 * f * (1.0 - (1.0 - c0 * a) * (1.0 - c1));
-}
+
 static inline double multiply(double c0, double c1)
 {
     return c0 * c1;
 }
+/* Screen only lightens: where either value is above 1 (scene-linear light beyond white) the
+ * formula would darken it, or go negative when both are, so there it is the larger value (a
+ * continuous join: at 1 both give 1). */
 static inline double screen(double c0, double c1)
 {
+    if (c0 > 1.0 || c1 > 1.0) return c0 > c1 ? c0 : c1;
     return 1.0 - (1.0 - c0) * (1.0 - c1);
+}
+/* The overlays scale c0 by a modulation, f times the screen of c0 and the layer. A base above 1
+ * modulates as white does (the formula's c0 inside the screen would square a highlight of 40
+ * into 1600, and overlays stacked in a look compound that): c0 enters the screen at most 1, so a
+ * highlight is scaled by f like white is; below 1 the formulas are the cookbook's. */
+static inline double white_at_most(double c)
+{
+    return c > 1.0 ? 1.0 : c;
+}
+static inline double overlay(double c0, double c1, double f)
+{
+    return c0 * f * screen(white_at_most(c0), c1);
+}
+static inline double overlay_alpha(double back, double c0, double c1, double f, double a)
+{
+    return back * (1.0 - a) + a * c0 * f * screen(white_at_most(c0) * a, c1);
 }
 static inline double difference(double c0, double c1, double f)
 {

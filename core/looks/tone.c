@@ -50,6 +50,9 @@ double nprfx_tone_map(const nprfx_tone_params *p, double lo, double hi, double v
     if (p->gamma != 1.0 && t > 0.0 && t < 1.0) t = pow(t, 1.0 / p->gamma);
     if (p->bands >= 2) t = nprfx_tone_band(t, p->bands, p->band_softness);
     double out = p->out_low + (p->out_high - p->out_low) * t;
+    /* spotted blacks: the deepest tones fade to 0 (the threshold's solid ink) continuously, so a
+     * shadow's solid core grows and shrinks smoothly with the light instead of popping */
+    if (p->solid_blacks > 0.0 && t < p->solid_blacks) out *= t / p->solid_blacks;
     if (coverage != coverage || coverage < 0.0) coverage = 0.0;
     if (coverage < 1.0) out = coverage * out + (1.0 - coverage) * p->background;
     return out;

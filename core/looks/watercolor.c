@@ -19,10 +19,6 @@
 /* A paper slope below this (height per pixel) counts as flat, so that rounding noise on a
  * constant paper is never normalised up to a full wobble. */
 #define FLAT_SLOPE 1e-5
-/* Densities are clamped to [0, 2], where pigment() maps [0, 1] onto itself: 2 gives C^2 (the
- * darkest), 0 gives 2C - C^2 (the lightest). Beyond, dark colours would go negative, and the
- * tails of the noise textures would punch black holes into the wash. */
-#define DENSITY_MAX 2.0
 /* The edge blur's kernel is cut at this many sigmas. */
 #define EDGE_SIGMAS 3.0
 #define MAX_LENGTH 256.0 /* px: the largest edge_width, wobble and wobble_scale accepted */
@@ -190,7 +186,8 @@ static void vblur_rows(void *user, int begin, int end, int worker)
         }
 }
 
-/* Step 2's density: d = min(1 + edge_darkening * g, 2), g the normalised colour gradient. */
+/* Step 2's density: d = 1 + edge_darkening * g, g the normalised colour gradient (pigment()
+ * clamps densities to [0, 2]). */
 static double edge_density(const wc_job *j, int x, int y)
 {
     const nprfx_rect f = j->frame;
@@ -206,14 +203,7 @@ static double edge_density(const wc_job *j, int x, int y)
         s += gx * gx + gy * gy;
     }
     double g = sqrt(s / j->ncol) * j->edge_norm;
-    return fmin(1.0 + j->edge_darkening * g, DENSITY_MAX);
-}
-
-/* A texture's density, clamped to [0, 2] (a NaN texture gives NaN, which pigment() spreads). */
-static inline double texture_density(double t, double beta)
-{
-    double d = internal_pigment_density(t, beta);
-    return d < 0.0 ? 0.0 : (d > DENSITY_MAX ? DENSITY_MAX : d);
+    return 1.0 + j->edge_darkening * g;
 }
 
 /* Steps 2 and 3 at the window's pixels: the densities in sequence through pigment(). */
@@ -227,11 +217,14 @@ static void paint_rows(void *user, int begin, int end, int worker)
             int nd = 0;
             if (j->edges) d[nd++] = edge_density(j, x, y);
             if (j->turb)
-                d[nd++] = texture_density(at_clamped(j->turb, j->ct, x, y)[0], j->turbulence);
+                d[nd++] =
+                    internal_pigment_density(at_clamped(j->turb, j->ct, x, y)[0], j->turbulence);
             if (j->disp)
-                d[nd++] = texture_density(at_clamped(j->disp, j->cd, x, y)[0], j->dispersion);
+                d[nd++] =
+                    internal_pigment_density(at_clamped(j->disp, j->cd, x, y)[0], j->dispersion);
             if (j->paper && j->granulation != 0.0)
-                d[nd++] = texture_density(at_clamped(j->paper, j->cp, x, y)[0], j->granulation);
+                d[nd++] =
+                    internal_pigment_density(at_clamped(j->paper, j->cp, x, y)[0], j->granulation);
             const float *q = nprfx_image_at(&j->q, x, y);
             float *o = nprfx_image_at(j->out, x, y);
             for (int ch = 0; ch < j->ncol; ch++) {

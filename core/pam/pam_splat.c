@@ -1,10 +1,10 @@
 /* pam-splat: a painterly art map splatted on the surfaces (Yan et al. 2008 §5, docs/design.md
  * §3.7). See nprfx/pam_splat.h for the interface.
  *
- * The splats are the points of gabor-splat's anchored-point scatter (core/gabor/anchored_scatter.c):
- * a constant number per screen area, anchored in Pref or UV, with continuous level-of-detail
- * weights w, each emitted once by its owner pixel with the depth and id of its surface. They
- * are rendered in the three passes of §5.1:
+ * The splats are the points of gabor-splat's anchored-point scatter
+ * (core/gabor/anchored_scatter.c): a constant number per screen area, anchored in Pref or UV, with
+ * continuous level-of-detail weights w, each emitted once by its owner pixel with the depth and id
+ * of its surface. They are rendered in the three passes of §5.1:
  *  1. visibility: the depth and id AOVs are the depth buffer (a renderer has already resolved
  *     what is visible); a splat reaches a pixel of its own object id whose depth is within the
  *     tolerance of the depth expected on the splat's plane (gabor-splat's hard test);
@@ -402,9 +402,15 @@ static void render_tile(pam_job *P, int t, tile_buf *B)
                     yuv[c] = a[4 + c] / a[3]; /* each dab painted in its splat's colour */
             else
                 nprfx_rgb_to_yuv(rgb, yuv);
-            yuv[0] += P->p->beta * d[0];
-            yuv[1] += P->p->gamma * d[1];
-            yuv[2] += P->p->gamma * d[2];
+            /* Eq. 10 paints on a canvas whose white is luminance 1: a brighter (HDR) colour is
+             * painted at luminance 1 and scaled back, so its strokes keep the contrast they
+             * have at white instead of vanishing into it */
+            double hdr = yuv[0] > 1.0 ? yuv[0] : 1.0;
+            yuv[0] = yuv[0] / hdr + P->p->beta * d[0];
+            yuv[1] = yuv[1] / hdr + P->p->gamma * d[1];
+            yuv[2] = yuv[2] / hdr + P->p->gamma * d[2];
+            for (int c = 0; c < 3; c++)
+                yuv[c] *= hdr;
             nprfx_yuv_to_rgb(yuv, rgb);
             for (int c = 0; c < 3; c++)
                 dst[c] = (float)rgb[c];
@@ -434,8 +440,8 @@ static void render_tiles(void *user, int begin, int end, int worker)
 
 /* ---- the render ----------------------------------------------------------------------------- */
 
-static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p,
-                          const pam_inputs *in, const nprfx_image *out)
+static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p, const pam_inputs *in,
+                          const nprfx_image *out)
 {
     if (!p || !out || !out->data)
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "pam-splat: incomplete arguments");
@@ -498,8 +504,7 @@ static nprfx_result check(nprfx_context *ctx, const nprfx_pam_splat_params *p,
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_pam_splat_render(const nprfx_render_args *args,
-                                    const nprfx_pam_splat_params *p)
+nprfx_result nprfx_pam_splat_render(const nprfx_render_args *args, const nprfx_pam_splat_params *p)
 {
     if (!args) return NPRFX_ERR_INVALID_ARGUMENT;
     nprfx_context *ctx = args->ctx;

@@ -17,7 +17,13 @@
  * watercolor rendering with temporal coherence and abstraction" (NPAR 2006): d is a pigment
  * density, d = 1 leaves C unchanged, d > 1 darkens and d < 1 lightens (for C in [0,1]; C = 0 and
  * C = 1 are fixed points). The paper derives d from a grey texture T as d = 1 + beta (T - 0.5);
- * nprfx_blend_pigment_density computes exactly that. */
+ * nprfx_blend_pigment_density computes exactly that.
+ *
+ * Scene-linear colour above 1 (HDR highlights): screen, the overlays and pigment are display
+ * formulas, exact as written for values in [0, 1]. Beyond, screen is max(c0, c1) where either
+ * value is above 1 (it only lightens); the overlays' c0 inside the screen is at most 1 (a
+ * highlight is modulated as white is, scaled by f); pigment clamps d to [0, 2] and acts on the
+ * part of C within [0, 1], the rest passing unchanged. Each join is continuous. */
 #ifndef NPRFX_BLEND_H
 #define NPRFX_BLEND_H
 

@@ -34,6 +34,7 @@ typedef struct nprfx_tone_params {
     double band_softness;     /* width of the ramp between levels, in levels (0: a hard step) */
     double out_low, out_high; /* the output spans [out_low, out_high] */
     double background;        /* output where coverage is 0 */
+    double solid_blacks;      /* tones t below it fade to 0 (solid ink); 0: off */
 } nprfx_tone_params;
 
 /* The scalar the node maps: one channel as it is, RGB(A) as Rec. 709 luminance
@@ -52,6 +53,7 @@ NPRFX_API double nprfx_tone_light(double tone, double albedo);
  *   with bands n >= 2: x = t n, k = floor(x), f = x - k, s = band_softness,
  *     t = min(k + clamp((f - 1 + s) / s, 0, 1), n - 1) / (n - 1)   (s = 0: the step f >= 1)
  *   out = out_low + (out_high - out_low) t,
+ *   with solid_blacks b > 0 and t < b: out = out * t / b (0, solid ink, at t = 0),
  * and where coverage c < 1, out = c out + (1 - c) background. NaN v maps as lo. */
 NPRFX_API double nprfx_tone_map(const nprfx_tone_params *p, double lo, double hi, double v,
                                 double coverage);

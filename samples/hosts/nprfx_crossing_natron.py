@@ -100,7 +100,7 @@ def build(app):
     choose(light.getParam("albedoChannels"), "RGB")
     connect(light, "Coverage", matte)
     choose(light.getParam("coverageChannels"), "R")
-    light.getParam("out_low").setValue(0.05)
+    light.getParam("out_low").setValue(0.2)
     light.getParam("out_high").setValue(0.6)
     noise = create(app, "org.nprfx.CoherentNoise", "noise")
     connect(noise, "Depth", plate_Depth_Z)

@@ -60,7 +60,7 @@ input paper Image plate_Combined_RGB
 input strokes Pattern noise
 input strokes Tone light
 param light out_high 0.6
-param light out_low 0.05
+param light out_low 0.2
 param look gain_layer 0.85
 param matte designWidth 1280
 param noise contrast 0.2

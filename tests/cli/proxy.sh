@@ -38,25 +38,11 @@ lum() {
 # avg IMG: the mean of its one channel
 avg() { oiiotool "$1" --printstats 2>/dev/null | awk '/Stats Avg/ { print $3; exit }'; }
 
-# look_path GRAPH: the path of the write node that writes "look", frame 2
-look_path() {
-  python3 -c 'import json, sys
-for n in json.load(open(sys.argv[1]))["nodes"].values():
-    if n.get("node") == "write" and n.get("inputs", {}).get("image") == "look":
-        print(n["path"].replace("####", "0002")); break' "$1"
-}
-
 # render GRAPH SIZE OUT [run options]: frame 2 of the look as OUT.exr
 render() {
-  local g=$1 s=$2 out=$3; shift 3
-  rm -rf "$W/run_$out"
-  "$NPRFX" run "$g" --set "plate.path=$W/plate_$s/orbit.####.exr" --shot 1-2 --frames 2 \
-    --design-width $design --output-dir "$W/run_$out" --quiet "$@" > "$out.log" 2>&1 ||
-    { fail "$(basename "$g") at $s: $(tail -3 "$out.log")"; return 1; }
-  local f
-  f="$W/run_$out/$(look_path "$g")"
-  [ -f "$f" ] || { fail "$(basename "$g") at $s wrote no $f"; return 1; }
-  mv "$f" "$out.exr"; rm -rf "$W/run_$out"
+  local g=$1 s=$2 out=$3 msg; shift 3
+  msg=$(style_look "$NPRFX" "$g" "$W/plate_$s/orbit.####.exr" "$out" --design-width $design "$@") ||
+    { fail "$(basename "$g") at $s: $msg"; return 1; }
 }
 
 # compare NAME SIZE: the metric of NAME_SIZE against NAME_full; prints mad and ink ratio

@@ -37,3 +37,21 @@ style_render() {
   "$1" run "$2" --set "plate.path=$3/dolly.####.exr" --shot "$STYLE_PLATE_FRAMES" \
     --frames "$STYLE_GOLDEN_FRAMES" --output-dir "$4" --quiet
 }
+
+# style_look NPRFX GRAPH PLATE OUT [run options]: frame 2 of GRAPH's look (the image its write
+# node of "look" writes) on the plates PLATE (a path with ####, frames 1-2 as the shot), moved
+# to OUT.exr; the run's messages in OUT.log. On failure it prints why and returns 1.
+style_look() {
+  local nprfx=$1 g=$2 plate=$3 out=$4 f
+  shift 4
+  rm -rf "run_$out"
+  "$nprfx" run "$g" --set "plate.path=$plate" --shot 1-2 --frames 2 --output-dir "run_$out" \
+    --quiet "$@" > "$out.log" 2>&1 || { tail -3 "$out.log"; return 1; }
+  f=run_$out/$(python3 -c 'import json, sys
+for n in json.load(open(sys.argv[1]))["nodes"].values():
+    if n.get("node") == "write" and n.get("inputs", {}).get("image") == "look":
+        print(n["path"].replace("####", "0002")); break' "$g")
+  [ -f "$f" ] || { echo "wrote no $f"; return 1; }
+  mv "$f" "$out.exr"
+  rm -rf "run_$out"
+}

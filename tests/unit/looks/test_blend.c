@@ -1,6 +1,7 @@
 /* Unit tests for core/looks/blend.c (each formula against hand-computed numbers) and the blend node
  * (broadcast, alpha vs opacity, coverage/background, back, window, errors, determinism across
  * thread counts and tile splits). */
+#include <math.h>
 #include <string.h>
 
 #include "check.h"
@@ -79,6 +80,32 @@ static void test_formulas(void)
     CHECK_NEAR(nprfx_blend_pigment(0.0, 3.0), 0.0, 1e-12);
     CHECK_NEAR(nprfx_blend_pigment(1.0, 3.0), 1.0, 1e-12);
     CHECK_NEAR(nprfx_blend_pigment(0.37, 1.0), 0.37, 1e-12);
+    /* densities clamp to [0, 2] (beyond, mid colours leave [0, 1]): d 5 acts as 2, C^2 = 0.25
+     * (the bare formula gives -0.5); d -3 acts as 0, 2C - C^2 = 0.75 (the bare formula 1.5) */
+    CHECK_NEAR(nprfx_blend_pigment(0.5, 5.0), 0.25, 1e-12);
+    CHECK_NEAR(nprfx_blend_pigment(0.5, -3.0), 0.75, 1e-12);
+    /* colour beyond [0, 1]: the part within takes the pigment, the rest passes (the bare formula
+     * gives 100 - (100 - 1e4) = 10000 at d 2 and -9800 at d 0) */
+    CHECK_NEAR(nprfx_blend_pigment(100.0, 2.0), 100.0, 1e-12);
+    CHECK_NEAR(nprfx_blend_pigment(100.0, 0.0), 100.0, 1e-12);
+    CHECK_NEAR(nprfx_blend_pigment(2.5, 1.7), 2.5, 1e-12);
+    CHECK_NEAR(nprfx_blend_pigment(-0.25, 2.0), -0.25, 1e-12);
+    /* continuous at 1: just below, the pigment's pull is (C - C^2)(d - 1) ~ 1e-6 */
+    CHECK_NEAR(nprfx_blend_pigment(1.0 - 1e-6, 2.0), 1.0, 3e-6);
+    CHECK(isnan(nprfx_blend_pigment(NAN, 1.5)) && isnan(nprfx_blend_pigment(0.5, NAN)));
+    /* screen only lightens: above 1 it is the larger value (the formula gives 5 + 5 - 25 = -15
+     * and 2 + 0.5 - 1 = 1.5); continuous at 1 */
+    CHECK_NEAR(nprfx_blend_screen(5.0, 5.0), 5.0, 1e-12);
+    CHECK_NEAR(nprfx_blend_screen(2.0, 0.5), 2.0, 1e-12);
+    CHECK_NEAR(nprfx_blend_screen(0.25, 40.0), 40.0, 1e-12);
+    CHECK_NEAR(nprfx_blend_screen(1.0, 0.3), 1.0, 1e-12);
+    CHECK(isnan(nprfx_blend_screen(NAN, 0.5)));
+    /* the overlays modulate a base above 1 as white: overlay(40, 0.3, 1.2) = 40 * 1.2 * 1 = 48
+     * (the formula as written: 40 * 1.2 * (1 + 39 * 0.7) = 1358.4); overlayalpha, back 0.1, a
+     * 0.5: 0.05 + 0.5 * 40 * 1.2 * (1 - 0.5 * 0.7) = 15.65 (as written: 343.25); continuous at 1 */
+    CHECK_NEAR(nprfx_blend_overlay(40.0, 0.3, 1.2), 48.0, 1e-12);
+    CHECK_NEAR(nprfx_blend_overlay_alpha(0.1, 40.0, 0.3, 1.2, 0.5), 15.65, 1e-12);
+    CHECK_NEAR(nprfx_blend_overlay(1.0, 0.3, 1.2), 1.2, 1e-12);
     /* density d = 1 + beta (T - 0.5): T 0.75, beta 2 => 1.5; T 0.5 => 1 */
     CHECK_NEAR(nprfx_blend_pigment_density(0.75, 2.0), 1.5, 1e-12);
     CHECK_NEAR(nprfx_blend_pigment_density(0.5, 7.0), 1.0, 1e-12);
@@ -156,13 +183,13 @@ static void test_broadcast(nprfx_context *ctx)
     out = run(ctx, 2, 1, &r);
     CHECK_OK(r);
     /* pixel 0: c0 = (1, 0.4, 1.6), c1 = (0.1, 0.2, 0.3):
-     * 1 - 0 * 0.9 = 1; 1 - 0.6 * 0.8 = 0.52; 1 - (-0.6)(0.7) = 1.42; alpha 0.7 unchanged */
+     * 1 - 0 * 0.9 = 1; 1 - 0.6 * 0.8 = 0.52; 1.6 above 1: max 1.6; alpha 0.7 unchanged */
     CHECK_NEAR(out.data[0], 1.0, TOL);
     CHECK_NEAR(out.data[1], 0.52, TOL);
-    CHECK_NEAR(out.data[2], 1.42, TOL);
+    CHECK_NEAR(out.data[2], 1.6, TOL);
     CHECK_NEAR(out.data[3], 0.7, TOL);
-    /* pixel 1: c0 = (2, 0, 0.5), c1 = (0.5, 0, 0.25): 1 - (-1)(0.5) = 1.5; 0; 1 - 0.5*0.75 */
-    CHECK_NEAR(out.data[4], 1.5, TOL);
+    /* pixel 1: c0 = (2, 0, 0.5), c1 = (0.5, 0, 0.25): max 2; 0; 1 - 0.5*0.75 */
+    CHECK_NEAR(out.data[4], 2.0, TOL);
     CHECK_NEAR(out.data[5], 0.0, TOL);
     CHECK_NEAR(out.data[6], 0.625, TOL);
     CHECK_NEAR(out.data[7], 0.3, TOL);

@@ -50,6 +50,17 @@ static void test_map(void)
     p.out_low = 0.2;
     p.out_high = 0.8;
     CHECK_NEAR(nprfx_tone_map(&p, 2, 4, 2.5, 1), 0.35, 1e-15);
+    /* solid blacks 0.2 over out 0.4 + 0.5 t: t 0 -> 0 (solid ink, not 0.4); t 0.1 -> 0.45 * 0.5
+     * = 0.225; from t 0.2 on as without (0.5 at 0.2, 0.65 at 0.5) */
+    p.out_low = 0.4;
+    p.out_high = 0.9;
+    p.solid_blacks = 0.2;
+    CHECK(nprfx_tone_map(&p, 0, 1, 0.0, 1) == 0.0);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.1, 1), 0.225, 1e-15);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.2, 1), 0.5, 1e-15);
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.5, 1), 0.65, 1e-15);
+    p.solid_blacks = 0;
+    CHECK_NEAR(nprfx_tone_map(&p, 0, 1, 0.0, 1), 0.4, 1e-15);
     /* an empty range is a step at lo */
     p = plain();
     CHECK(nprfx_tone_map(&p, 2, 2, 2, 1) == 0.0 && nprfx_tone_map(&p, 2, 2, 2.001, 1) == 1.0);

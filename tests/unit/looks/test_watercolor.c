@@ -154,7 +154,8 @@ static void test_textures(nprfx_context *ctx)
     CHECK_NEAR(out.data[0], 0.3875, TOL);
     CHECK_NEAR(out.data[1], 0.128, TOL);
     CHECK_NEAR(out.data[2], 0.8595, TOL);
-    /* the same numbers as the blend node's public formula (one formula, core/looks/internal_blend.h) */
+    /* the same numbers as the blend node's public formula (one formula,
+     * core/looks/internal_blend.h) */
     double d = nprfx_blend_pigment_density((double)0.8f, 1.5);
     for (int c = 0; c < 3; c++)
         CHECK(out.data[c] == (float)nprfx_blend_pigment(c3[c], d));
@@ -201,6 +202,55 @@ static void test_textures(nprfx_context *ctx)
     CHECK_OK(r);
     CHECK(out.data[0] == 1.0f);
     nprfx_image_free(&out);
+}
+
+/* Scene-linear colour of any range (an HDR highlight up to 100): a lit yellow in four patches of
+ * brightness 1, 5, 20 and 100 under random textures. Without wobble the pigment acts on each
+ * channel's part within [0, 1] and the rest passes, so a channel at or above 1 comes out as it
+ * went in and one below stays in [0, 1]; with every effect on (the edges of the HDR patches
+ * darken hardest) the output stays finite and within [0, 100], no channel pushed negative. */
+static void test_hdr(nprfx_context *ctx)
+{
+    const int w = 64, h = 16;
+    const float gain[4] = {1.0f, 5.0f, 20.0f, 100.0f};
+    nprfx_result r;
+    for (int wob = 0; wob < 2; wob++) {
+        reset();
+        in[II("image")] = th_image(w, h, 3, NULL);
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++) {
+                float *c = nprfx_image_at(&in[II("image")], x, y), k = gain[x / 16];
+                c[0] = 0.9f * k;
+                c[1] = 0.8f * k;
+                c[2] = 0.02f * k;
+            }
+        in[II("turbulence")] = random_image(w, h, 1, 11);
+        in[II("dispersion")] = random_image(w, h, 1, 12);
+        in[II("paper")] = random_image(w, h, 1, 13);
+        set("turbulence", 2);
+        set("dispersion", 2);
+        set("granulation", 2);
+        if (!wob) effects_off();
+        nprfx_image out = run(ctx, w, h, &r);
+        CHECK_OK(r);
+        int bad = 0;
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++)
+                for (int c = 0; c < 3; c++) {
+                    float v = px(&out, x, y, c), c0 = px(&in[II("image")], x, y, c);
+                    if (!isfinite(v) || v < 0.0f || v > 100.0f)
+                        bad++;
+                    else if (!wob && c0 >= 1.0f && v != c0)
+                        bad++;
+                    else if (!wob && c0 < 1.0f && v > 1.0f)
+                        bad++;
+                }
+        CHECK(bad == 0);
+        if (bad)
+            fprintf(stderr, "  hdr (wobble and edges %s): %d channel values out\n",
+                    wob ? "on" : "off", bad);
+        nprfx_image_free(&out);
+    }
 }
 
 /* A vertical step from a to b between x = 19 and x = 20 of a 40 x 9 RGB image. */
@@ -486,6 +536,7 @@ int main(void)
     test_descriptor(ctx);
     test_identity(ctx);
     test_textures(ctx);
+    test_hdr(ctx);
     test_edges(ctx);
     test_wobble_ramp(ctx);
     test_wobble_bound(ctx);

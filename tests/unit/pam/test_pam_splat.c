@@ -249,6 +249,61 @@ static void test_eq10(void)
     nprfx_image_free(&pam);
 }
 
+/* ---- colour above 1 ---- */
+
+/* An HDR model colour (a highlight up to 100) is painted at luminance 1 and scaled back: the
+ * strokes on k times a colour of luminance just above 1 are k times the strokes on that colour,
+ * finite, with the contrast they have at white (added at full brightness, Eq. 10's deviation
+ * would vanish into a highlight: out / k = colour + D / k). */
+static void test_hdr(void)
+{
+    int w = 96, h = 64;
+    nprfx_image pam = test_pam(3, 16, 0);
+    const float base[3] = {1.1f, 1.0f, 0.9f}, gains[3] = {5.0f, 20.0f, 100.0f};
+    nprfx_image ref = th_image(w, h, 3, NULL);
+    double worst = 0.0, sum = 0.0, sum2 = 0.0;
+    int nonfinite = 0;
+    for (int g = -1; g < 3; g++) {
+        float k = g < 0 ? 1.0f : gains[g];
+        plane P = make_plane(w, h, 0.6, 1.0, 0.0);
+        for (int i = 0; i < w * h; i++)
+            for (int c = 0; c < 3; c++)
+                P.color.data[3 * i + c] = base[c] * k;
+        nprfx_image in[IN_N], out = th_image(w, h, 3, NULL);
+        plane_inputs(&P, &pam, in);
+        pparams p = defaults();
+        set(&p, "anchor_space", 1);
+        set(&p, "size", 12);
+        CHECK_OK(render_at(in, &p, g < 0 ? &ref : &out, 1, NULL));
+        for (int i = 0; i < 3 * w * h; i++) {
+            if (g < 0) {
+                nonfinite += !isfinite(ref.data[i]);
+                continue;
+            }
+            nonfinite += !isfinite(out.data[i]);
+            double e = fabs(out.data[i] / k - ref.data[i]);
+            if (e > worst) worst = e;
+        }
+        if (g < 0)
+            for (int i = 0; i < w * h; i++) {
+                double y = luma(ref.data + 3 * i);
+                sum += y;
+                sum2 += y * y;
+            }
+        nprfx_image_free(&out);
+        free_plane(&P);
+    }
+    double n = (double)w * h, sd = sqrt(fmax(sum2 / n - (sum / n) * (sum / n), 0.0));
+    printf("HDR colour: strokes at luminance ~1 have sd %.3f; x5, x20, x100 differ from them (x "
+           "the gain) by at most %.2g; %d values not finite\n",
+           sd, worst, nonfinite);
+    CHECK(sd > 0.02);
+    CHECK(worst < 1e-4);
+    CHECK(nonfinite == 0);
+    nprfx_image_free(&ref);
+    nprfx_image_free(&pam);
+}
+
 /* ---- tone ---- */
 
 static double mean_surface_luma(const nprfx_image *out, const nprfx_image *depth)
@@ -614,6 +669,7 @@ int main(void)
     if (!node) return check_finish();
     test_formulas();
     test_eq10();
+    test_hdr();
     test_tone();
     test_coherence();
     test_flow();
