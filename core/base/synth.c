@@ -277,6 +277,17 @@ static pose zoom_pose(int object, double t)
     return make_pose(sg_identity(), pow(zoom_per_frame, t), sg_v(0, 0, 0));
 }
 
+/* ground: the textured plane seen at a grazing angle, its normal 80 degrees from the view axis
+ * (the foreshortening 1 / cos 80 = 5.8 at the image centre, more towards the horizon 2 degrees
+ * above the centre line), drifting sideways 0.2 plane units per frame so that its texture moves.
+ * It fills the frame below the horizon; above is background. */
+static const double ground_tilt_deg = 80.0;
+static pose ground_pose(int object, double t)
+{
+    (void)object;
+    return make_pose(sg_rot_x(deg(-ground_tilt_deg)), 1, sg_v(0.02 * t, 0, -1.0));
+}
+
 /* clang-format off */
 #define PLANE_OBJECT {SHAPE_PLANE, 0, 0, 2, 2, {0.85, 0.62, 0.30}}
 /* clang-format on */
@@ -312,6 +323,12 @@ static const scene_def scenes[] = {
      {PLANE_OBJECT},
      plane_camera,
      zoom_pose},
+    {{"ground", "plane at a grazing angle (its normal 80 degrees from the view axis), drifting "
+                "sideways: foreshortening ~6x at the centre, more towards the horizon"},
+     1,
+     {PLANE_OBJECT},
+     plane_camera,
+     ground_pose},
 };
 
 #define NSCENES ((int)(sizeof scenes / sizeof scenes[0]))

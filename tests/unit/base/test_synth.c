@@ -70,13 +70,13 @@ static void test_channels_and_scenes(void)
         CHECK(n[i] && !strcmp(n[i], want[i]));
     CHECK(n[26] == NULL);
 
-    const char *scenes[] = {"orbit", "dolly", "translate", "rotate", "zoom"};
-    CHECK(nprfx_synth_scene_count() == 5);
-    for (int i = 0; i < 5; i++) {
+    const char *scenes[] = {"orbit", "dolly", "translate", "rotate", "zoom", "ground"};
+    CHECK(nprfx_synth_scene_count() == 6);
+    for (int i = 0; i < 6; i++) {
         const nprfx_synth_scene_info *info = nprfx_synth_scene_at(i);
         CHECK(info && !strcmp(info->name, scenes[i]) && info->help && info->help[0]);
     }
-    CHECK(nprfx_synth_scene_at(5) == NULL);
+    CHECK(nprfx_synth_scene_at(6) == NULL);
 
     nprfx_image im;
     CHECK_OK(nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, 8, 8), 26, &im));
@@ -419,6 +419,7 @@ int main(void)
     test_consistency("rotate", -200, 64, 64, 0);
     test_consistency("zoom", 5, 96, 64, 0);
     test_consistency("zoom", -100, 64, 64, 0);
+    test_consistency("ground", 5, 96, 64, 0.002);
     const int orbit_frames[] = {1, 24, 60, 96, 130};
     for (int i = 0; i < 5; i++)
         test_consistency("orbit", orbit_frames[i], 128, 96, 0.002);
