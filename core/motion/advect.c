@@ -115,7 +115,7 @@ typedef struct step_job {
     const nprfx_image *prev, *motion, *conf;
     nprfx_image *next;
     nprfx_rect frame;
-    double plane, min_conf;
+    double plane, min_conf, motion_scale;
 } step_job;
 
 static void step_rows(void *user, int begin, int end, int worker)
@@ -129,8 +129,8 @@ static void step_rows(void *user, int begin, int end, int worker)
             double mx = 0.0, my = 0.0;
             if (nprfx_rect_contains(j->motion->bounds, x, y)) {
                 const float *m = nprfx_image_at(j->motion, x, y);
-                mx = m[0];
-                my = m[1];
+                mx = m[0] * j->motion_scale;
+                my = m[1] * j->motion_scale;
             }
             int fresh = !isfinite(mx) || !isfinite(my);
             if (j->conf) {
@@ -177,9 +177,14 @@ nprfx_result nprfx_advect_step(nprfx_context *ctx, const nprfx_advect_params *p,
                            "advect: the coordinates must cover the frame with 2 channels");
     if (!(plane > 0))
         return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "advect: plane %g", plane);
-    step_job j = {
-        prev,  motion,           confidence && confidence->data ? confidence : NULL, next, frame,
-        plane, p->min_confidence};
+    step_job j = {prev,
+                  motion,
+                  confidence && confidence->data ? confidence : NULL,
+                  next,
+                  frame,
+                  plane,
+                  p->min_confidence,
+                  p->motion_scale > 0.0 ? p->motion_scale : 1.0};
     nprfx_parallel_for(nprfx_context_executor(ctx), nprfx_rect_height(frame), 16, step_rows, &j);
     return NPRFX_OK;
 }
@@ -502,8 +507,11 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
     if (nprfx_rect_empty(frame) || nprfx_rect_empty(window)) return NPRFX_OK;
     double scale = args->render_scale > 0 ? args->render_scale : 1.0;
     int t = (int)floor(args->time + 0.5);
+    /* the motion input in this frame's pixels (a host's proxy gives full-resolution vectors) */
+    nprfx_advect_params pm = *p;
+    pm.motion_scale = args->vector_scale > 0.0 ? args->vector_scale : 1.0;
     adv_run run = {
-        args, ctx, p, args->inputs[IN_CONF].data != NULL, NPRFX_ADVECT_PLANE_PIXELS * scale, t};
+        args, ctx, &pm, args->inputs[IN_CONF].data != NULL, NPRFX_ADVECT_PLANE_PIXELS * scale, t};
 
     adv_cache local, *c = &local;
     memset(&local, 0, sizeof local);
@@ -519,6 +527,7 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
     key = hash_bytes(key, &p->min_confidence, sizeof p->min_confidence);
     key = hash_bytes(key, &frame, sizeof frame);
     key = hash_bytes(key, &scale, sizeof scale);
+    key = hash_bytes(key, &pm.motion_scale, sizeof pm.motion_scale);
     key = hash_bytes(key, &args->first_frame, sizeof args->first_frame);
     key = hash_bytes(key, &args->last_frame, sizeof args->last_frame);
     key = hash_bytes(key, &run.have_conf, sizeof run.have_conf);

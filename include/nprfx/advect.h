@@ -48,6 +48,9 @@ typedef struct nprfx_advect_params {
     double max_distortion; /* stretch ratio s1/s2 of dX/dx where a layer's weight starts to fall */
     double min_confidence; /* below it (or NaN) a pixel is re-seeded */
     int output;            /* nprfx_advect_output */
+    /* Not a param: what the motion input is multiplied by to be in the frame's pixels (the render
+     * args' vector_scale: a host's proxy render gives vectors in full-resolution pixels); 0: 1. */
+    double motion_scale;
 } nprfx_advect_params;
 
 /* The output's channel count and names for an nprfx_advect_output (0 and NULL when there is no
@@ -79,7 +82,8 @@ NPRFX_API void nprfx_advect_schedule(const nprfx_advect_params *p, int layer, in
 NPRFX_API void nprfx_advect_seed(nprfx_rect frame, double plane, nprfx_rect window,
                                  nprfx_image *coords);
 
-/* One step of the recursion over the whole frame: next(x) = prev(x + motion(x)), bilinear, where
+/* One step of the recursion over the whole frame: next(x) = prev(x + s motion(x)), bilinear (s =
+ * p->motion_scale, 1 when 0), where
  * prev and next are 2-channel images over `frame`. A pixel is re-seeded (the identity) where its
  * motion is not finite, its confidence (NULL: not connected) is below min_confidence or not
  * finite, or x + motion(x) lies outside [x0, x1 - 1] x [y0, y1 - 1]. Inputs read 0 outside their

@@ -59,6 +59,9 @@ static void defaults(nprfx_value *v, int layers, int period)
     v[P_PERIOD].v[0] = period;
 }
 
+/* The render scale render() gives (a host's proxy: below 1). */
+static double g_render_scale = 1;
+
 /* Render `window` of out (5 channels over the frame) at frame t through the descriptor. */
 static nprfx_result render(nprfx_context *ctx, seq *s, const nprfx_value *v, int t, void **state,
                            nprfx_rect window, nprfx_image *out, int with_fetch)
@@ -73,7 +76,7 @@ static nprfx_result render(nprfx_context *ctx, seq *s, const nprfx_value *v, int
     a.ctx = ctx;
     a.node = node;
     a.time = t;
-    a.render_scale = 1;
+    a.render_scale = g_render_scale;
     a.frame = out->bounds;
     a.window = window;
     a.first_frame = s->first;
@@ -269,6 +272,39 @@ static void test_translation(nprfx_context *ctx)
     int n = 0;
     CHECK_OK(nprfx_node_frames_needed(ctx, node, v, &q, I_MOTION, rg, &n));
     CHECK(n == 1 && rg[0].first == 2 && rg[0].last == T);
+    free_state(&state);
+    nprfx_image_free(&out);
+    seq_free(&s);
+}
+
+/* A host's half-size proxy: the identity is pixel / (1024 * 0.5), and the motion vectors come
+ * in full-resolution pixels (-1, -0.5 a frame: -0.5, -0.25 of the proxy's pixels), which the
+ * node multiplies by the render scale (the args' vector_scale, which defaults to it): the same
+ * coordinates as test_translation's, on the proxy's plane. Taken raw, the vectors would move
+ * the texture twice as fast as the picture. */
+static void test_proxy(nprfx_context *ctx)
+{
+    enum { w = 24, h = 20, T = 7 };
+    seq s;
+    memset(&s, 0, sizeof s);
+    s.first = 1;
+    s.last = 30;
+    fill_uniform(&s, w, h, 1, T, -1.0f, -0.5f);
+    nprfx_value v[8];
+    defaults(v, 2, 24);
+    nprfx_image out = th_image(w, h, 5, NULL);
+    void *state = NULL;
+    g_render_scale = 0.5;
+    CHECK_OK(render(ctx, &s, v, T, &state, out.bounds, &out, 1));
+    g_render_scale = 1;
+    int k = T - 1, exact = 1;
+    for (int y = k + 1; y < h; y++)
+        for (int x = k + 1; x < w; x++) {
+            const float *o = nprfx_image_at(&out, x, y);
+            exact &=
+                o[0] == (float)((x - 0.5 * k) / 512.0) && o[1] == (float)((y - 0.25 * k) / 512.0);
+        }
+    CHECK(exact);
     free_state(&state);
     nprfx_image_free(&out);
     seq_free(&s);
@@ -690,6 +726,7 @@ int main(void)
     test_schedule();
     test_distortion_and_mix(ctx);
     test_translation(ctx);
+    test_proxy(ctx);
     test_reseed(ctx);
     test_order_tiles(ctx, par);
     test_outputs(ctx);
