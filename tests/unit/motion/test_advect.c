@@ -230,19 +230,32 @@ static void fill_uniform(seq *s, int w, int h, int f0, int f1, float mx, float m
  * up a frame before): after k steps every pixel whose k-step history stays clear of the
  * re-seeded edge holds the identity moved by exactly k (0.5, 0.25) px; the pixels whose previous
  * position is outside the frame (column 0, row 0) hold the identity. */
+/* Frame T of a uniform translation by (mx, my) a frame over frames 1..T of a shot 1-30 (two
+ * layers, period 24) at the given render scale: the sequence in *s, the result in *out. */
+enum { TW = 24, TH = 20, TT = 7 };
+static void translated(nprfx_context *ctx, float mx, float my, double scale, seq *s, nprfx_value *v,
+                       nprfx_image *out, void **state)
+{
+    memset(s, 0, sizeof *s);
+    s->first = 1;
+    s->last = 30;
+    fill_uniform(s, TW, TH, 1, TT, mx, my);
+    defaults(v, 2, 24);
+    *out = th_image(TW, TH, 5, NULL);
+    *state = NULL;
+    g_render_scale = scale;
+    CHECK_OK(render(ctx, s, v, TT, state, out->bounds, out, 1));
+    g_render_scale = 1;
+}
+
 static void test_translation(nprfx_context *ctx)
 {
-    enum { w = 24, h = 20, T = 7 };
+    enum { w = TW, h = TH, T = TT };
     seq s;
-    memset(&s, 0, sizeof s);
-    s.first = 1;
-    s.last = 30;
-    fill_uniform(&s, w, h, 1, T, -0.5f, -0.25f);
     nprfx_value v[8];
-    defaults(v, 2, 24);
-    nprfx_image out = th_image(w, h, 5, NULL);
-    void *state = NULL;
-    CHECK_OK(render(ctx, &s, v, T, &state, out.bounds, &out, 1));
+    nprfx_image out;
+    void *state;
+    translated(ctx, -0.5f, -0.25f, 1, &s, v, &out, &state);
     int k = T - 1, exact = 1, seeded = 1, same_b = 1, mix = 1;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
@@ -284,19 +297,12 @@ static void test_translation(nprfx_context *ctx)
  * the texture twice as fast as the picture. */
 static void test_proxy(nprfx_context *ctx)
 {
-    enum { w = 24, h = 20, T = 7 };
+    enum { w = TW, h = TH, T = TT };
     seq s;
-    memset(&s, 0, sizeof s);
-    s.first = 1;
-    s.last = 30;
-    fill_uniform(&s, w, h, 1, T, -1.0f, -0.5f);
     nprfx_value v[8];
-    defaults(v, 2, 24);
-    nprfx_image out = th_image(w, h, 5, NULL);
-    void *state = NULL;
-    g_render_scale = 0.5;
-    CHECK_OK(render(ctx, &s, v, T, &state, out.bounds, &out, 1));
-    g_render_scale = 1;
+    nprfx_image out;
+    void *state;
+    translated(ctx, -1.0f, -0.5f, 0.5, &s, v, &out, &state);
     int k = T - 1, exact = 1;
     for (int y = k + 1; y < h; y++)
         for (int x = k + 1; x < w; x++) {
