@@ -24,6 +24,7 @@ enum {
     P_TONES,
     P_TILE,
     P_ASPECT,
+    P_ANISOTROPY,
     P_INK,
     P_PAPER,
     P_SEED,
@@ -155,6 +156,22 @@ static const nprfx_param_desc params[P_COUNT] = {
      .soft_max = 4,
      .hard_min = 1e-3,
      .hard_max = 1e3},
+    {.name = "anisotropy",
+     NPRFX_FIELD(sp, stipple.anisotropy),
+     .label = "Follow Foreshortening",
+     .help = "Keep the dots blue noise where a surface is seen at a grazing angle. The sequence "
+             "lies on the UVs, so where the view squeezes a surface in one direction its dots "
+             "are squeezed too and line up in rows (a ground plane, the oblique faces of a "
+             "box). On, the sequence is read through the inverse of that squeeze (one of 13 "
+             "fixed stretches, 2x to 8x in four directions, blended across each pixel's "
+             "neighbours), so its dots are evenly spread on screen while they stay on the "
+             "surface; off, as Ma et al. do, the sequence follows the UVs alone.",
+     .type = NPRFX_PARAM_BOOL,
+     .def = {1},
+     .soft_min = 0,
+     .soft_max = 1,
+     .hard_min = 0,
+     .hard_max = 1},
     {.name = "ink",
      NPRFX_FIELD(sp, ink),
      .label = "Ink",

@@ -78,6 +78,7 @@ typedef struct cgrid {
 /* A stipple with the key that orders it: its owner pixel, then its sample. */
 typedef struct keyed {
     int oy, ox;
+    int level; /* the anisotropy level whose reading of the sequence found it (0: the UVs') */
     double u, v;
     nprfx_stipple s;
 } keyed;
@@ -86,6 +87,14 @@ typedef struct klist {
     keyed *k;
     size_t n, cap;
     int failed;
+    int level; /* given to what emit() adds */
+    /* anisotropy passes: each owner's share of the level over E (ew wide), NULL otherwise. An
+     * owner with a share below 1 has i_max = share * (its full i_max) + 1, so that the samples
+     * up to the next one are looked at, and emit() keeps sample i where i + h < i_max - 1, h a
+     * hash of (i, level) in [0, 1): the count the share asks for, in expectation, where a
+     * whole prefix would round it down (a far object keeps few samples a pixel). */
+    const float *share;
+    nprfx_rect share_e;
 } klist;
 
 typedef struct stlist {

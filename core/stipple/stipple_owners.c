@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "internal_ivs.h"
+#include "nprfx/rng.h"
 #include "internal_stipple.h"
 #include "stipple_footprint.h"
 #include "stipple_strip.h"
@@ -88,7 +89,16 @@ static int inverse_bilinear(const owner *o, double u, double v, double *a, doubl
 static void emit(const owner *o, int index, double u, double v, klist *out)
 {
     const nprfx_stipple_params *p = o->p;
-    double area, tone = 1.0;
+    double area, tone = 1.0, i_max = o->i_max;
+    if (out->share) {
+        const nprfx_rect e = out->share_e;
+        const float share =
+            out->share[(size_t)(o->y - e.y0) * (size_t)nprfx_rect_width(e) + (size_t)(o->x - e.x0)];
+        if (share < 1.0f) {
+            i_max -= 1.0;
+            if (index + nprfx_rand_u01(p->seed, out->level, index, 0, 0, 0) >= i_max) return;
+        }
+    }
     switch (p->mode) {
     case NPRFX_STIPPLE_RADIUS:
         area = o->g * p->a0;
@@ -107,7 +117,7 @@ static void emit(const owner *o, int index, double u, double v, klist *out)
             double frac = (tau - lo) / (hi - lo);
             /* low indices take the darker pen: a prefix of the sequence, so both pens stay
              * evenly spread, and the split moves smoothly as the tone changes */
-            tone = (index + 1.0) / o->i_max <= frac ? hi : lo;
+            tone = (index + 1.0) / i_max <= frac ? hi : lo;
         }
         if (tone <= 0) return;
         break;
@@ -145,6 +155,7 @@ static void emit(const owner *o, int index, double u, double v, klist *out)
     keyed *k = &out->k[out->n++];
     k->oy = o->y;
     k->ox = o->x;
+    k->level = out->level;
     k->u = u;
     k->v = v;
     k->s.x = x;
@@ -160,6 +171,7 @@ static int keyed_cmp(const void *pa, const void *pb)
     const keyed *a = pa, *b = pb;
     if (a->oy != b->oy) return a->oy < b->oy ? -1 : 1;
     if (a->ox != b->ox) return a->ox < b->ox ? -1 : 1;
+    if (a->level != b->level) return a->level < b->level ? -1 : 1;
     if (a->s.sample != b->s.sample) return a->s.sample < b->s.sample ? -1 : 1;
     /* the same sample twice in one footprint: only when the footprint spans tiles */
     if (a->u != b->u) return a->u < b->u ? -1 : 1;
@@ -174,7 +186,6 @@ _Static_assert(BLOCK == 4, "a block row is four lanes");
 #define BLOCK_PX (BLOCK * BLOCK)
 /* owned samples waiting for emit() */
 #define PENDING 64
-
 
 typedef struct block_ctx {
     const sjob *j;
@@ -509,6 +520,223 @@ static void sort_keyed(keyed *k, size_t n)
         }
 }
 
+/* The block loop over the owners of E: a row of blocks at a time, CHUNK columns at a time,
+ * each block's stipples sorted by owner, appended to b->out; where each row of blocks starts
+ * in it in brow. */
+static void owner_blocks(block_ctx *b, scratch *s, nprfx_rect E, strip *st, size_t *brow, int nbr)
+{
+    klist *kl = b->out;
+    for (int br = 0; br < nbr && b->r == NPRFX_OK; br++) {
+        const int by = E.y0 + br * BLOCK, by1 = by + BLOCK < E.y1 ? by + BLOCK : E.y1;
+        brow[br] = kl->n;
+        b->y0 = by;
+        b->rows = by1 - by;
+        for (int cx = E.x0; cx < E.x1 && b->r == NPRFX_OK; cx += CHUNK) {
+            const int cx1 = cx + CHUNK < E.x1 ? cx + CHUNK : E.x1;
+            internal_stipple_strip_fill(b->j, s, E, by, by1, cx, cx1, st);
+            for (int bx = cx; bx < cx1 && b->r == NPRFX_OK; bx += BLOCK) {
+                b->x0 = bx;
+                b->at = (size_t)(bx - cx);
+                const unsigned kept = block_owners(b, bx + BLOCK <= cx1 ? BLOCK : cx1 - bx);
+                if (!kept) continue;
+                size_t first = kl->n;
+                b->built = 0;
+                block_queries(b, kept);
+                block_emit(b);
+                sort_keyed(kl->k + first, kl->n - first);
+            }
+        }
+    }
+    brow[nbr] = kl->n;
+}
+
+/* ---- anisotropy: the sequence read through the foreshortening ---- */
+
+/* Levels: 0 the UVs as they are; 1 + 4 (l - 1) + k a stretch r = 2^l (l = 1, 2, 3) along the
+ * UV direction k * 45 degrees. */
+#define ANISO_LEVELS 13
+#define ANISO_MAX_L 3
+#define ANISO_DEAD 0.25
+
+/* The shares of the levels at one owner from its Jacobian jc (du/dx, du/dy, dv/dx, dv/dy):
+ * M = jc maps screen to UV, so the UV direction the screen stretches most is the eigenvector of
+ * M M^T of the smaller eigenvalue, and r = sqrt(ratio of the eigenvalues) = s1 / s2. l =
+ * log2 r, blended linearly between its levels, and the direction between its two nearest of
+ * the four. Not usable (no derivatives): all on level 0. */
+static void aniso_weights(const float *jc, int usable, float *w)
+{
+    for (int i = 0; i < ANISO_LEVELS; i++)
+        w[i] = 0.0f;
+    w[0] = 1.0f;
+    if (!usable) return;
+    const double a = jc[0], b = jc[1], c = jc[2], d = jc[3];
+    const double p = a * a + b * b, q = a * c + b * d, t = c * c + d * d;
+    const double h = 0.5 * (p - t), e = sqrt(h * h + q * q), m = 0.5 * (p + t);
+    const double big = m + e, small = m - e;
+    if (!(small > 0.0) || !isfinite(big)) return;
+    /* below a stretch of 2^ANISO_DEAD the UVs as they are (rounding in the derivatives of a
+     * square map must not move an owner off level 0), reaching level 1 at a stretch of 2 */
+    double l = 0.5 * log2(big / small);
+    if (l < 1.0) l = (l - ANISO_DEAD) / (1.0 - ANISO_DEAD);
+    if (!(l > 0.0)) return;
+    if (l > ANISO_MAX_L) l = ANISO_MAX_L;
+    /* the eigenvector of the larger eigenvalue is at 0.5 atan2(2q, p - t): the direction the
+     * screen squeezes; the one it stretches is a right angle from it */
+    double th = 0.5 * atan2(2.0 * q, p - t) * (180.0 / PI_D) + 90.0;
+    th = fmod(th, 180.0);
+    if (th < 0) th += 180.0;
+    const double tk = th / 45.0;
+    int k0 = (int)floor(tk);
+    const double fk = tk - k0;
+    k0 &= 3;
+    const int k1 = (k0 + 1) & 3;
+    const int l0 = (int)floor(l);
+    const double fl = l - l0;
+    w[0] = 0.0f;
+    /* level l0 (0: the UVs) with 1 - fl, level l0 + 1 with fl */
+    for (int side = 0; side < 2; side++) {
+        const int ll = l0 + side;
+        const double share = side ? fl : 1.0 - fl;
+        if (share <= 0.0 || ll > ANISO_MAX_L) continue;
+        if (ll == 0) {
+            w[0] += (float)share;
+            continue;
+        }
+        w[1 + 4 * (ll - 1) + k0] += (float)(share * (1.0 - fk));
+        w[1 + 4 * (ll - 1) + k1] += (float)(share * fk);
+    }
+}
+
+/* The level's map A = R diag(sqrt r, 1 / sqrt r) R^T (R: the turn by k * 45 degrees). */
+static void aniso_matrix(int level, double A[4])
+{
+    const int ll = 1 + (level - 1) / 4, k = (level - 1) % 4;
+    const double sr = sqrt((double)(1 << ll)), th = k * 45.0 * PI_D / 180.0;
+    const double c = cos(th), sn = sin(th);
+    A[0] = c * c * sr + sn * sn / sr;
+    A[1] = c * sn * (sr - 1.0 / sr);
+    A[2] = A[1];
+    A[3] = sn * sn * sr + c * c / sr;
+}
+
+/* The owners' stipples when some owner of E sees its surface foreshortened: one pass of the
+ * block loop per level with a share there, the UVs (su, sv, the Jacobian and the corner grid)
+ * read through the level's map and each owner's i_max times its share (its smoothed |det J|
+ * over the share), then all sorted by owner, level and sample, so the order does not depend
+ * on how owners fall into units. Returns 0 where every owner is on level 0 (the caller's
+ * single pass is the same), -1 when out of memory, else the number of passes. */
+static int aniso_passes(scratch *s, nprfx_rect E, block_ctx *b, strip *st, size_t *brow, int nbr)
+{
+    pixdata *d = &s->d;
+    cgrid *g = &s->g;
+    const int ew = nprfx_rect_width(E), eh = nprfx_rect_height(E);
+    const size_t ne = (size_t)ew * (size_t)eh;
+    float *w = malloc(sizeof(float) * ANISO_LEVELS * ne);
+    if (!w) return -1;
+    int active[ANISO_LEVELS] = {0};
+    for (int y = E.y0; y < E.y1; y++)
+        for (int x = E.x0; x < E.x1; x++) {
+            const size_t k = pd_at(d, x, y), e = (size_t)(y - E.y0) * ew + (size_t)(x - E.x0);
+            float wk[ANISO_LEVELS];
+            aniso_weights(d->jac + 4 * k, (d->ok[k] & OK_BOTH) == OK_BOTH, wk);
+            for (int l = 0; l < ANISO_LEVELS; l++) {
+                w[l * ne + e] = wk[l];
+                active[l] |= wk[l] > 0.0f;
+            }
+        }
+    int any = 0;
+    for (int l = 1; l < ANISO_LEVELS; l++)
+        any |= active[l];
+    if (!any) {
+        free(w);
+        return 0;
+    }
+    const size_t nd = (size_t)d->w * (size_t)nprfx_rect_height(d->r);
+    const size_t ng = (size_t)g->gw * (size_t)g->gh;
+    double *su0 = malloc(sizeof(double) * (2 * nd + 2 * ng));
+    float *jac0 = malloc(sizeof(float) * (4 * nd + ne));
+    if (!su0 || !jac0) {
+        free(w);
+        free(su0);
+        free(jac0);
+        return -1;
+    }
+    double *sv0 = su0 + nd, *gu0 = sv0 + nd, *gv0 = gu0 + ng;
+    float *sdet0 = jac0 + 4 * nd;
+    memcpy(su0, d->su, sizeof(double) * nd);
+    memcpy(sv0, d->sv, sizeof(double) * nd);
+    memcpy(gu0, g->gu, sizeof(double) * ng);
+    memcpy(gv0, g->gv, sizeof(double) * ng);
+    memcpy(jac0, d->jac, sizeof(float) * 4 * nd);
+    memcpy(sdet0, s->sdet, sizeof(float) * ne);
+    int passes = 0;
+    for (int l = 0; l < ANISO_LEVELS && b->r == NPRFX_OK && !b->out->failed; l++) {
+        if (!active[l]) continue;
+        double A[4] = {1, 0, 0, 1};
+        if (l) aniso_matrix(l, A);
+        for (size_t k = 0; k < nd; k++) {
+            d->su[k] = l ? A[0] * su0[k] + A[1] * sv0[k] : su0[k];
+            d->sv[k] = l ? A[2] * su0[k] + A[3] * sv0[k] : sv0[k];
+            const float *j0 = jac0 + 4 * k;
+            float *j1 = d->jac + 4 * k;
+            /* d(A s)/dx = A ds/dx */
+            j1[0] = l ? (float)(A[0] * j0[0] + A[1] * j0[2]) : j0[0];
+            j1[1] = l ? (float)(A[0] * j0[1] + A[1] * j0[3]) : j0[1];
+            j1[2] = l ? (float)(A[2] * j0[0] + A[3] * j0[2]) : j0[2];
+            j1[3] = l ? (float)(A[2] * j0[1] + A[3] * j0[3]) : j0[3];
+        }
+        for (size_t k = 0; k < ng; k++) {
+            g->gu[k] = l ? A[0] * gu0[k] + A[1] * gv0[k] : gu0[k];
+            g->gv[k] = l ? A[2] * gu0[k] + A[3] * gv0[k] : gv0[k];
+        }
+        /* i_max = K / sdet (K = g / area in uniform mode, 1 / a0 otherwise, stipple_strip.c):
+         * a share w < 1 gives w i_max + 1 (emit() dithers the last sample), none INFINITY */
+        const int uniform = b->j->p->mode == NPRFX_STIPPLE_UNIFORM;
+        for (int y = E.y0; y < E.y1; y++)
+            for (int x = E.x0; x < E.x1; x++) {
+                const size_t e = (size_t)(y - E.y0) * ew + (size_t)(x - E.x0);
+                const float share = w[l * ne + e];
+                if (share >= 1.0f) {
+                    s->sdet[e] = sdet0[e];
+                } else if (share > 0.0f) {
+                    const double K =
+                        uniform ? d->g[pd_at(d, x, y)] / b->j->p->area : 1.0 / b->j->p->a0;
+                    s->sdet[e] = (float)(K / (share * (K / sdet0[e]) + 1.0));
+                } else {
+                    s->sdet[e] = INFINITY;
+                }
+            }
+        b->out->level = l;
+        b->out->share = w + l * ne;
+        b->out->share_e = E;
+        owner_blocks(b, s, E, st, brow, nbr);
+        passes++;
+    }
+    memcpy(d->su, su0, sizeof(double) * nd);
+    memcpy(d->sv, sv0, sizeof(double) * nd);
+    memcpy(g->gu, gu0, sizeof(double) * ng);
+    memcpy(g->gv, gv0, sizeof(double) * ng);
+    memcpy(d->jac, jac0, sizeof(float) * 4 * nd);
+    memcpy(s->sdet, sdet0, sizeof(float) * ne);
+    b->out->level = 0;
+    b->out->share = NULL;
+    free(w);
+    free(su0);
+    free(jac0);
+    /* all the passes' stipples by owner, level and sample; where each row of blocks starts */
+    klist *kl = b->out;
+    if (kl->n > 1) qsort(kl->k, kl->n, sizeof *kl->k, keyed_cmp);
+    size_t at = 0;
+    for (int br = 0; br < nbr; br++) {
+        const int by = E.y0 + br * BLOCK;
+        while (at < kl->n && kl->k[at].oy < by)
+            at++;
+        brow[br] = at;
+    }
+    brow[nbr] = kl->n;
+    return passes;
+}
+
 /* The stipples owned by the pixels of E, appended to out in row-major order of their owners. */
 nprfx_result internal_stipple_owner_stipples(const sjob *j, scratch *s, nprfx_rect E, stlist *out,
                                              int *row_start)
@@ -547,29 +775,15 @@ nprfx_result internal_stipple_owner_stipples(const sjob *j, scratch *s, nprfx_re
     b.out = kl;
     memset(b.id, 0, sizeof b.id); /* read four a row (block_queries), outside the block too */
     kl->n = 0;
-    /* a row of blocks at a time, CHUNK columns at a time; each block's stipples sorted by
-     * owner */
-    for (int br = 0; br < nbr && b.r == NPRFX_OK; br++) {
-        const int by = E.y0 + br * BLOCK, by1 = by + BLOCK < E.y1 ? by + BLOCK : E.y1;
-        brow[br] = kl->n;
-        b.y0 = by;
-        b.rows = by1 - by;
-        for (int cx = E.x0; cx < E.x1 && b.r == NPRFX_OK; cx += CHUNK) {
-            const int cx1 = cx + CHUNK < E.x1 ? cx + CHUNK : E.x1;
-            internal_stipple_strip_fill(j, s, E, by, by1, cx, cx1, &st);
-            for (int bx = cx; bx < cx1 && b.r == NPRFX_OK; bx += BLOCK) {
-                b.x0 = bx;
-                b.at = (size_t)(bx - cx);
-                const unsigned kept = block_owners(&b, bx + BLOCK <= cx1 ? BLOCK : cx1 - bx);
-                if (!kept) continue;
-                size_t first = kl->n;
-                b.built = 0;
-                block_queries(&b, kept);
-                block_emit(&b);
-                sort_keyed(kl->k + first, kl->n - first);
-            }
-        }
+    kl->level = 0;
+    kl->share = NULL;
+    int passes = 0;
+    if (p->anisotropy) passes = aniso_passes(s, E, &b, &st, brow, nbr);
+    if (passes < 0) {
+        free(mem);
+        return NPRFX_ERR_OUT_OF_MEMORY;
     }
+    if (passes == 0) owner_blocks(&b, s, E, &st, brow, nbr);
     brow[nbr] = kl->n;
     if (b.r == NPRFX_OK && !kl->failed && out->cap < out->n + kl->n) {
         nprfx_stipple *ns = realloc(out->s, (out->n + kl->n) * sizeof *ns);

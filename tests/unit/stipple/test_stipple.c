@@ -283,6 +283,9 @@ static void test_no_duplicates(void)
     nprfx_stipple_params p;
     default_params(&p);
     p.tile = 0.1;
+    /* the sequence read through the UVs alone: with anisotropy, two readings of it (levels)
+     * may each place a sample of the same index, as different dots */
+    p.anisotropy = 0;
     nprfx_stipple_inputs in = {&s.tone, &s.uv, &s.id, s.tone.bounds};
     nprfx_stipple *list = NULL;
     size_t count = 0;
@@ -838,6 +841,72 @@ static void test_export(void)
     nprfx_image_free(&tone);
 }
 
+/* ---- foreshortening ---- */
+
+/* The resultant length R = |mean exp(2 i phi)| of the directions phi from each dot to its
+ * nearest neighbour, over the dots at least `margin` px inside the frame: 0 when no direction
+ * is preferred, 1 when every dot's nearest neighbour lies along one line (rows). */
+static double nn_orientation(const nprfx_stipple *l, size_t n, int w, int h, double margin)
+{
+    double c = 0, sn = 0;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (l[i].x < margin || l[i].y < margin || l[i].x > w - margin || l[i].y > h - margin)
+            continue;
+        double best = 1e30, bx = 0, by = 0;
+        for (size_t k = 0; k < n; k++) {
+            double dx = l[k].x - l[i].x, dy = l[k].y - l[i].y, d2 = dx * dx + dy * dy;
+            if (k != i && d2 < best) best = d2, bx = dx, by = dy;
+        }
+        double phi = atan2(by, bx);
+        c += cos(2 * phi);
+        sn += sin(2 * phi);
+        m++;
+    }
+    return m ? hypot(c, sn) / (double)m : 1.0;
+}
+
+/* A plane seen at a grazing angle (the screen squeezes it 6x along y: v changes six times as
+ * fast per pixel as u) against the same plane head-on. Read through the UVs alone, the
+ * sequence's dots are squeezed with the surface and line up in rows; read through the
+ * foreshortening (anisotropy, the default), they are as evenly spread as head-on, with the
+ * same number of dots. */
+static void test_foreshortening(void)
+{
+    const int w = 160, h = 120;
+    double r[2][2];
+    size_t count[2][2];
+    for (int squeeze = 0; squeeze < 2; squeeze++)
+        for (int an = 0; an < 2; an++) {
+            nprfx_image tone = th_image(w, h, 1, NULL), uv = th_image(w, h, 2, NULL);
+            for (int y = 0; y < h; y++)
+                for (int x = 0; x < w; x++) {
+                    nprfx_image_at(&tone, x, y)[0] = 0.8f;
+                    nprfx_image_at(&uv, x, y)[0] = (float)(x / 400.0);
+                    nprfx_image_at(&uv, x, y)[1] = (float)(y * (squeeze ? 6.0 : 1.0) / 400.0);
+                }
+            nprfx_stipple_params p;
+            default_params(&p);
+            p.anisotropy = an;
+            nprfx_stipple_inputs in = {&tone, &uv, NULL, tone.bounds};
+            nprfx_stipple *list = NULL;
+            size_t n = 0;
+            CHECK_OK(nprfx_stipple_collect(ctx4, &p, &in, tone.bounds, &list, &n));
+            r[squeeze][an] = nn_orientation(list, n, w, h, 6);
+            count[squeeze][an] = n;
+            free(list);
+            nprfx_image_free(&tone);
+            nprfx_image_free(&uv);
+        }
+    printf("nearest-neighbour orientation R (dots): head-on %.3f (%zu) / %.3f (%zu); squeezed 6x "
+           "along y, UVs alone %.3f (%zu), through the foreshortening %.3f (%zu)\n",
+           r[0][0], count[0][0], r[0][1], count[0][1], r[1][0], count[1][0], r[1][1], count[1][1]);
+    CHECK(r[0][1] < 0.1 && r[0][0] < 0.1);
+    CHECK(r[1][0] > 0.25); /* the rows the test is for */
+    CHECK(r[1][1] < 0.1);
+    CHECK(fabs((double)count[1][1] / (double)count[1][0] - 1.0) < 0.05);
+}
+
 int main(void)
 {
     nprfx_pool *pool = NULL;
@@ -851,6 +920,7 @@ int main(void)
     test_blue_noise();
     test_exactly_once();
     test_no_duplicates();
+    test_foreshortening();
     test_silhouettes();
     test_simd_paths();
     test_determinism();
