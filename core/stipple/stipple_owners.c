@@ -557,6 +557,10 @@ static void owner_blocks(block_ctx *b, scratch *s, nprfx_rect E, strip *st, size
 #define ANISO_LEVELS 13
 #define ANISO_MAX_L 3
 #define ANISO_DEAD 0.25
+/* ANISO_FAR: beyond a stretch of 2^(ANISO_MAX_L + 1) = 16 (towards a horizon) the UVs as they
+ * are. There a level's map leaves the footprints long and, at 45 degrees off, turns them
+ * diagonal, so their bounding boxes (what the index is queried with) grow with the square of
+ * the stretch: a 1080p ground plane took a minute a frame; the dots there are tiny anyway. */
 
 /* The shares of the levels at one owner from its Jacobian jc (du/dx, du/dy, dv/dx, dv/dy):
  * M = jc maps screen to UV, so the UV direction the screen stretches most is the eigenvector of
@@ -577,6 +581,7 @@ static void aniso_weights(const float *jc, int usable, float *w)
     /* below a stretch of 2^ANISO_DEAD the UVs as they are (rounding in the derivatives of a
      * square map must not move an owner off level 0), reaching level 1 at a stretch of 2 */
     double l = 0.5 * log2(big / small);
+    if (l > ANISO_MAX_L + 1) return; /* ANISO_FAR */
     if (l < 1.0) l = (l - ANISO_DEAD) / (1.0 - ANISO_DEAD);
     if (!(l > 0.0)) return;
     if (l > ANISO_MAX_L) l = ANISO_MAX_L;

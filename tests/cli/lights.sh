@@ -3,9 +3,9 @@
 # ways by nprfx synth --light: sun (beauty within [0, 1]), point (a strong point light, HDR
 # highlights up to ~40) and lowkey (most of the frame below 0.1).
 #  - HDR: under the point light every value of the look is finite, at most twice the beauty's
-#    brightest and at least -0.2 (pigment and overlay formulas written for [0, 1] squared
-#    highlights into 1e21 or pushed them to -5e20; pam-splat's Eq. 10 dips to -0.14 on dark
-#    saturated colours in any light).
+#    brightest and at least -0.2 (pigment and overlay formulas applied as written for [0, 1]
+#    square a highlight of 36 into 1e21 or push it to -5e20; pam-splat's Eq. 10 dips to -0.14
+#    on dark saturated colours in any light).
 #  - Darkest tone: the inked styles (stippling, cross_hatching, graphite, main) with every
 #    surface at tone 0 (the light node's range put above every value) keep texture: ink coverage
 #    (mean of 1 - luminance) at most 0.85 and local contrast (the luminance's standard deviation
@@ -67,7 +67,7 @@ done
 
 # texture LOOK: ink coverage and local contrast of LOOK.exr
 texture() {
-  oiiotool "$1.exr" --ch R,G,B --chsum:weight=.2126,.7152,.0722 -d float -o "$1_l.exr"
+  style_lum "$1.exr" "$1_l.exr"
   oiiotool "$1_l.exr" "$1_l.exr" --mul -o "$1_l2.exr"
   local grid=$((${size%x*} / 8))x$((${size#*x} / 8))
   oiiotool "$1_l.exr" --resize:filter=box $grid -o "$1_m1.exr"
@@ -75,8 +75,8 @@ texture() {
   # the block variance E[l^2] - E[l]^2, floored at 0 against rounding, its square root
   oiiotool "$1_m2.exr" "$1_m1.exr" "$1_m1.exr" --mul --sub --maxc 0 --powc 0.5 -o "$1_sd.exr"
   local lum sd
-  lum=$(oiiotool "$1_l.exr" --printstats 2>/dev/null | awk '/Stats Avg/ { print $3; exit }')
-  sd=$(oiiotool "$1_sd.exr" --printstats 2>/dev/null | awk '/Stats Avg/ { print $3; exit }')
+  lum=$(style_avg "$1_l.exr")
+  sd=$(style_avg "$1_sd.exr")
   awk -v l="$lum" -v s="$sd" 'BEGIN { printf "%.3f %.3f\n", 1 - l, s }'
 }
 dark=(--set light.range=manual --set light.black=1e6 --set light.white=2e6)

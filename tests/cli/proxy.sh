@@ -29,14 +29,6 @@ for s in $full $sizes; do
     > /dev/null || fail "synth $s"
 done
 
-# lum IMG OUT [GRID]: the luminance (optionally averaged into GRID blocks)
-lum() {
-  local resize=()
-  [ -n "${3:-}" ] && resize=(--resize:filter=box "$3")
-  oiiotool "$1" --ch R,G,B --chsum:weight=.2126,.7152,.0722 "${resize[@]}" -d float -o "$2"
-}
-# avg IMG: the mean of its one channel
-avg() { oiiotool "$1" --printstats 2>/dev/null | awk '/Stats Avg/ { print $3; exit }'; }
 
 # render GRAPH SIZE OUT [run options]: frame 2 of the look as OUT.exr
 render() {
@@ -48,15 +40,15 @@ render() {
 # compare NAME SIZE: the metric of NAME_SIZE against NAME_full; prints mad and ink ratio
 compare() {
   local n=$1 s=$2
-  lum "${n}_full.exr" "${n}_fullb.exr" $grid
-  lum "${n}_$s.exr" "${n}_${s}b.exr" $grid
+  style_lum "${n}_full.exr" "${n}_fullb.exr" $grid
+  style_lum "${n}_$s.exr" "${n}_${s}b.exr" $grid
   oiiotool "${n}_fullb.exr" "${n}_${s}b.exr" --absdiff -o "${n}_${s}d.exr"
-  lum "${n}_full.exr" "${n}_fulll.exr"
-  lum "${n}_$s.exr" "${n}_${s}l.exr"
+  style_lum "${n}_full.exr" "${n}_fulll.exr"
+  style_lum "${n}_$s.exr" "${n}_${s}l.exr"
   local mad inkf inks
-  mad=$(avg "${n}_${s}d.exr")
-  inkf=$(avg "${n}_fulll.exr")
-  inks=$(avg "${n}_${s}l.exr")
+  mad=$(style_avg "${n}_${s}d.exr")
+  inkf=$(style_avg "${n}_fulll.exr")
+  inks=$(style_avg "${n}_${s}l.exr")
   awk -v m="$mad" -v f="$inkf" -v s="$inks" 'BEGIN { printf "%.4f %.4f\n", m, (1 - s) / (1 - f) }'
 }
 

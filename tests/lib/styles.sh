@@ -55,3 +55,14 @@ for n in json.load(open(sys.argv[1]))["nodes"].values():
   mv "$f" "$out.exr"
   rm -rf "run_$out"
 }
+
+# style_lum IMG OUT [GRID]: the luminance (Rec. 709 weights) of IMG's R, G, B, optionally
+# averaged into GRID blocks (oiiotool's box resize), as a float image
+style_lum() {
+  local resize=()
+  [ -n "${3:-}" ] && resize=(--resize:filter=box "$3")
+  oiiotool "$1" --ch R,G,B --chsum:weight=.2126,.7152,.0722 "${resize[@]}" -d float -o "$2"
+}
+
+# style_avg IMG: the mean of its one channel
+style_avg() { oiiotool "$1" --printstats 2>/dev/null | awk '/Stats Avg/ { print $3; exit }'; }
