@@ -161,15 +161,17 @@ static const nprfx_param_desc params[P_COUNT] = {
      .label = "Follow Foreshortening",
      .help = "Keep the dots blue noise where a surface is seen at a grazing angle. The sequence "
              "lies on the UVs, so where the view squeezes a surface in one direction its dots "
-             "are squeezed too and line up in rows (a ground plane, the oblique faces of a "
-             "box). On, the sequence is read through the inverse of that squeeze (one of 13 "
-             "fixed stretches, 2x to 8x in four directions, blended across each pixel's "
-             "neighbours), so its dots are evenly spread on screen while they stay on the "
-             "surface (up to a 16x squeeze; beyond, towards a horizon, as off). Off (the "
-             "default), as Ma et al. do, the sequence follows the UVs alone. On costs 3 to 5 "
-             "times the render time where surfaces are foreshortened.",
+             "would be squeezed too and line up in rows (a ground plane, the oblique faces of a "
+             "box, the sides of a cylinder). On (the default), the sequence is read through the "
+             "inverse of that squeeze (one of 13 fixed stretches, 2x to 8x in four directions, "
+             "blended between neighbours), so its dots are evenly spread on screen while they "
+             "stay on the surface (up to a 16x squeeze; beyond, towards a horizon, as off). As "
+             "a surface turns, its dots dissolve from one stretch to the next over a few frames "
+             "(some dots are grey meanwhile) instead of popping. Off, as Ma et al. do, the "
+             "sequence follows the UVs alone: faster (on costs 2 to 4 times the render time "
+             "where surfaces are foreshortened) and every dot full black.",
      .type = NPRFX_PARAM_BOOL,
-     .def = {0},
+     .def = {1},
      .soft_min = 0,
      .soft_max = 1,
      .hard_min = 0,

@@ -83,17 +83,29 @@ typedef struct keyed {
     nprfx_stipple s;
 } keyed;
 
+/* An owner's shares of the anisotropy levels (stipple_owners.c): at most four have one. */
+typedef struct aniso_share {
+    unsigned char lv[4];
+    float sh[4];
+} aniso_share;
+
+/* The share of level l in w (0 where it has none). */
+static inline float aniso_share_of(const aniso_share *w, int l)
+{
+    float s = 0.0f;
+    for (int i = 0; i < 4; i++)
+        s += w->lv[i] == l ? w->sh[i] : 0.0f;
+    return s;
+}
+
 typedef struct klist {
     keyed *k;
     size_t n, cap;
     int failed;
     int level; /* given to what emit() adds */
-    /* anisotropy passes: each owner's share of the level over E (ew wide), NULL otherwise. An
-     * owner with a share below 1 has i_max = share * (its full i_max) + 1, so that the samples
-     * up to the next one are looked at, and emit() keeps sample i where i + h < i_max - 1, h a
-     * hash of (i, level) in [0, 1): the count the share asks for, in expectation, where a
-     * whole prefix would round it down (a far object keeps few samples a pixel). */
-    const float *share;
+    /* anisotropy passes: each owner's share of the level over E (ew wide), NULL otherwise
+     * (how emit() uses it: stipple_owners.c) */
+    const aniso_share *share;
     nprfx_rect share_e;
 } klist;
 
@@ -149,6 +161,8 @@ typedef struct scratch {
     stlist sl;
     float *t;
     size_t tcap;
+    unsigned char *aniso; /* anisotropy passes: the levels' shares and the UVs as read */
+    size_t acap;
 } scratch;
 
 typedef struct sjob {

@@ -50,7 +50,7 @@ void nprfx_stipple_params_default(nprfx_stipple_params *p)
     p->tile = 1.0;
     p->plane_scale = NPRFX_STIPPLE_PLANE_PIXELS;
     p->aspect = 1.0;
-    p->anisotropy = 0;
+    p->anisotropy = 1;
     p->ink[3] = 1.0f;
     for (int c = 0; c < 4; c++)
         p->paper[c] = 1.0f;

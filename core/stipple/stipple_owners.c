@@ -85,18 +85,59 @@ static int inverse_bilinear(const owner *o, double u, double v, double *a, doubl
     return 1;
 }
 
+/* Levels: 0 the UVs as they are; 1 + 4 (l - 1) + k a stretch r = 2^l (l = 1, 2, 3) along the
+ * UV direction k * 45 degrees. */
+#define ANISO_LEVELS 13
+#define ANISO_MAX_L 3
+#define ANISO_DEAD 0.25
+#define ANISO_DEAD_RATIO 1.5 /* the stretch^2 where 0.5 log2_pl() reaches ANISO_DEAD */
+/* ANISO_FADE: an owner shared between levels fades its dots in and out over this fraction of
+ * its samples (emit()), so that a dot changing level as a surface turns dissolves over frames
+ * instead of popping. */
+#define ANISO_FADE 1.0
+/* ANISO_FAR: beyond a stretch of 2^(ANISO_MAX_L + 1) = 16 (towards a horizon) the UVs as they
+ * are. There a level's map leaves the footprints long and, at 45 degrees off, turns them
+ * diagonal, so their bounding boxes (what the index is queried with) grow with the square of
+ * the stretch: a 1080p ground plane took a minute a frame; the dots there are tiny anyway. */
+
+/* The integral of the fade ramp min(1, max(0, z / ANISO_FADE)) from -infinity to z. */
+static double aniso_ramp_integral(double z)
+{
+    if (z <= 0.0) return 0.0;
+    if (z < ANISO_FADE) return z * z / (2.0 * ANISO_FADE);
+    return z - 0.5 * ANISO_FADE;
+}
+
 /* The stipple sample `index` at (u, v) makes in its owner, if the mode keeps it. */
 static void emit(const owner *o, int index, double u, double v, klist *out)
 {
     const nprfx_stipple_params *p = o->p;
-    double area, tone = 1.0, i_max = o->i_max;
+    double area, tone = 1.0, i_max = o->i_max, ink = 1.0;
+    /* An owner with a share w < 1 of this level (anisotropy) sees the samples up to
+     * min(1, w (1 + f)) of its whole i_max I, plus one (aniso_passes()). Sample i, at
+     * u = (i + h) / I with h a hash of (i, level) in [0, 1), takes ink falling linearly from 1 to
+     * 0 as u goes from a - f to a, a = w (1 + f), up to u = 1: none at w = 0, the whole prefix at
+     * w = 1, and as w changes each dot fades over a change of f in w instead of popping. Its
+     * mean over u, E(w) = H(a) - H(a - 1) (H the integral of the ramp), is scaled to w, so that
+     * the levels' inks sum to the owner's whatever the shares (tone at most 1: a few of the
+     * first dots of a level with a share below ~0.4 lose a little). With f = 0 it would be the
+     * count the share asks for, in expectation. */
     if (out->share) {
         const nprfx_rect e = out->share_e;
         const float share =
-            out->share[(size_t)(o->y - e.y0) * (size_t)nprfx_rect_width(e) + (size_t)(o->x - e.x0)];
+            aniso_share_of(&out->share[(size_t)(o->y - e.y0) * (size_t)nprfx_rect_width(e) +
+                                       (size_t)(o->x - e.x0)],
+                           out->level);
         if (share < 1.0f) {
-            i_max -= 1.0;
-            if (index + nprfx_rand_u01(p->seed, out->level, index, 0, 0, 0) >= i_max) return;
+            const double f = ANISO_FADE, w = share, a = w * (1.0 + f), m = a < 1.0 ? a : 1.0;
+            const double I = (i_max - 1.0) / m;
+            const double u = (index + nprfx_rand_u01(p->seed, out->level, index, 0, 0, 0)) / I;
+            if (u >= 1.0 || u >= a) return;
+            const double ramp = (a - u) / f;
+            const double E = aniso_ramp_integral(a) - aniso_ramp_integral(a - 1.0);
+            ink = (ramp < 1.0 ? ramp : 1.0) * (w / E);
+            if (ink > 1.0) ink = 1.0;
+            i_max = w * I;
         }
     }
     switch (p->mode) {
@@ -161,7 +202,7 @@ static void emit(const owner *o, int index, double u, double v, klist *out)
     k->s.x = x;
     k->s.y = y;
     k->s.radius = p->mode == NPRFX_STIPPLE_RADIUS ? (float)sqrt(area / PI_D) : o->radius;
-    k->s.tone = (float)tone;
+    k->s.tone = (float)(tone * ink);
     k->s.sample = index;
     k->s.object = o->id;
 }
@@ -520,19 +561,27 @@ static void sort_keyed(keyed *k, size_t n)
         }
 }
 
-/* The block loop over the owners of E: a row of blocks at a time, CHUNK columns at a time,
- * each block's stipples sorted by owner, appended to b->out; where each row of blocks starts
- * in it in brow. */
-static void owner_blocks(block_ctx *b, scratch *s, nprfx_rect E, strip *st, size_t *brow, int nbr)
+/* The block loop over the owners of E, or where span is given, over those of each row of
+ * blocks br in the columns [span[2 br], span[2 br + 1]) (none where empty): a row of blocks at a
+ * time, CHUNK columns at a time, each block's stipples sorted by owner, appended to b->out;
+ * where each row of blocks starts in it in brow. */
+static void owner_blocks(block_ctx *b, scratch *s, nprfx_rect E, strip *st, size_t *brow, int nbr,
+                         const int *span)
 {
     klist *kl = b->out;
     for (int br = 0; br < nbr && b->r == NPRFX_OK; br++) {
         const int by = E.y0 + br * BLOCK, by1 = by + BLOCK < E.y1 ? by + BLOCK : E.y1;
         brow[br] = kl->n;
+        int x0 = E.x0, x1 = E.x1;
+        if (span) {
+            if (span[2 * br] >= span[2 * br + 1]) continue;
+            x0 = E.x0 + (span[2 * br] - E.x0) / BLOCK * BLOCK; /* on a block of E */
+            x1 = span[2 * br + 1];
+        }
         b->y0 = by;
         b->rows = by1 - by;
-        for (int cx = E.x0; cx < E.x1 && b->r == NPRFX_OK; cx += CHUNK) {
-            const int cx1 = cx + CHUNK < E.x1 ? cx + CHUNK : E.x1;
+        for (int cx = x0; cx < x1 && b->r == NPRFX_OK; cx += CHUNK) {
+            const int cx1 = cx + CHUNK < x1 ? cx + CHUNK : x1;
             internal_stipple_strip_fill(b->j, s, E, by, by1, cx, cx1, st);
             for (int bx = cx; bx < cx1 && b->r == NPRFX_OK; bx += BLOCK) {
                 b->x0 = bx;
@@ -547,69 +596,88 @@ static void owner_blocks(block_ctx *b, scratch *s, nprfx_rect E, strip *st, size
             }
         }
     }
-    brow[nbr] = kl->n;
 }
 
 /* ---- anisotropy: the sequence read through the foreshortening ---- */
 
-/* Levels: 0 the UVs as they are; 1 + 4 (l - 1) + k a stretch r = 2^l (l = 1, 2, 3) along the
- * UV direction k * 45 degrees. */
-#define ANISO_LEVELS 13
-#define ANISO_MAX_L 3
-#define ANISO_DEAD 0.25
-/* ANISO_FAR: beyond a stretch of 2^(ANISO_MAX_L + 1) = 16 (towards a horizon) the UVs as they
- * are. There a level's map leaves the footprints long and, at 45 degrees off, turns them
- * diagonal, so their bounding boxes (what the index is queried with) grow with the square of
- * the stretch: a 1080p ground plane took a minute a frame; the dots there are tiny anyway. */
+/* log2 x for x > 0, piecewise linear between powers of 2 (exact there, where the levels are):
+ * continuous and increasing, which is all the blend between levels needs, at a fraction of
+ * log2()'s cost (each owner takes one). */
+static float log2_pl(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits); /* x is finite and positive: 2^(E - 127) (1 + f / 2^23) */
+    const int ex = (int)((bits >> 23) & 0xff) - 127;
+    bits = (bits & 0x007fffffu) | 0x3f800000u; /* the mantissa, [1, 2) */
+    float m;
+    memcpy(&m, &bits, sizeof m);
+    return (float)ex + (m - 1.0f);
+}
+
+/* The angle of (x, y) in quarter turns, [0, 4), piecewise linear in y / (|x| + |y|) (exact at
+ * the axes): continuous and increasing as atan2 is, without its cost. */
+static float quarter_turns(float x, float y)
+{
+    const float s = fabsf(x) + fabsf(y);
+    if (!(s > 0.0f)) return 0.0f;
+    const float f = y / s; /* in [-1, 1] */
+    if (x >= 0.0f) return f >= 0.0f ? f : 4.0f + f;
+    return 2.0f - f;
+}
 
 /* The shares of the levels at one owner from its Jacobian jc (du/dx, du/dy, dv/dx, dv/dy):
  * M = jc maps screen to UV, so the UV direction the screen stretches most is the eigenvector of
  * M M^T of the smaller eigenvalue, and r = sqrt(ratio of the eigenvalues) = s1 / s2. l =
  * log2 r, blended linearly between its levels, and the direction between its two nearest of
  * the four. Not usable (no derivatives): all on level 0. */
-static void aniso_weights(const float *jc, int usable, float *w)
+static void aniso_weights(const float *jc, int usable, aniso_share *w)
 {
-    for (int i = 0; i < ANISO_LEVELS; i++)
-        w[i] = 0.0f;
-    w[0] = 1.0f;
+    static const aniso_share none = {{0, 0, 0, 0}, {1.0f, 0.0f, 0.0f, 0.0f}}; /* the UVs */
+    *w = none;
     if (!usable) return;
-    const double a = jc[0], b = jc[1], c = jc[2], d = jc[3];
-    const double p = a * a + b * b, q = a * c + b * d, t = c * c + d * d;
-    const double h = 0.5 * (p - t), e = sqrt(h * h + q * q), m = 0.5 * (p + t);
-    const double big = m + e, small = m - e;
-    if (!(small > 0.0) || !isfinite(big)) return;
+    /* in float: the derivatives are floats, and the shares only need to vary continuously */
+    const float a = jc[0], b = jc[1], c = jc[2], d = jc[3];
+    const float p = a * a + b * b, q = a * c + b * d, t = c * c + d * d;
+    const float h = 0.5f * (p - t), e = sqrtf(h * h + q * q), m = 0.5f * (p + t);
+    const float big = m + e, small = m - e;
+    /* small > 0 and finite big, and a stretch r = sqrt(big / small) above 2^ANISO_DEAD */
+    if (!(small > 0.0f) || !(big < INFINITY) || big <= small * ANISO_DEAD_RATIO) return;
     /* below a stretch of 2^ANISO_DEAD the UVs as they are (rounding in the derivatives of a
      * square map must not move an owner off level 0), reaching level 1 at a stretch of 2 */
-    double l = 0.5 * log2(big / small);
+    float l = 0.5f * log2_pl(big / small);
     if (l > ANISO_MAX_L + 1) return; /* ANISO_FAR */
-    if (l < 1.0) l = (l - ANISO_DEAD) / (1.0 - ANISO_DEAD);
-    if (!(l > 0.0)) return;
+    if (l < 1.0f) l = (l - ANISO_DEAD) / (1.0f - ANISO_DEAD);
+    if (!(l > 0.0f)) return;
     if (l > ANISO_MAX_L) l = ANISO_MAX_L;
-    /* the eigenvector of the larger eigenvalue is at 0.5 atan2(2q, p - t): the direction the
-     * screen squeezes; the one it stretches is a right angle from it */
-    double th = 0.5 * atan2(2.0 * q, p - t) * (180.0 / PI_D) + 90.0;
-    th = fmod(th, 180.0);
-    if (th < 0) th += 180.0;
-    const double tk = th / 45.0;
-    int k0 = (int)floor(tk);
-    const double fk = tk - k0;
+    /* the eigenvector of the larger eigenvalue is at half the angle of (p - t, 2q): the
+     * direction the screen squeezes; the one it stretches is a right angle from it, so in
+     * units of 45 degrees, tk = (angle of (p - t, 2q) in quarter turns) + 2, modulo 4 */
+    float tk = quarter_turns(p - t, 2.0f * q) + 2.0f;
+    if (tk >= 4.0f) tk -= 4.0f;
+    int k0 = (int)tk; /* tk >= 0 */
+    const float fk = tk - (float)k0;
     k0 &= 3;
     const int k1 = (k0 + 1) & 3;
-    const int l0 = (int)floor(l);
-    const double fl = l - l0;
-    w[0] = 0.0f;
+    const int l0 = (int)l; /* l > 0 */
+    const float fl = l - (float)l0;
     /* level l0 (0: the UVs) with 1 - fl, level l0 + 1 with fl */
+    int n = 0;
     for (int side = 0; side < 2; side++) {
         const int ll = l0 + side;
-        const double share = side ? fl : 1.0 - fl;
-        if (share <= 0.0 || ll > ANISO_MAX_L) continue;
+        const float share = side ? fl : 1.0f - fl;
+        if (share <= 0.0f || ll > ANISO_MAX_L) continue;
         if (ll == 0) {
-            w[0] += (float)share;
+            w->lv[n] = 0;
+            w->sh[n++] = share;
             continue;
         }
-        w[1 + 4 * (ll - 1) + k0] += (float)(share * (1.0 - fk));
-        w[1 + 4 * (ll - 1) + k1] += (float)(share * fk);
+        w->lv[n] = (unsigned char)(1 + 4 * (ll - 1) + k0);
+        w->sh[n++] = share * (1.0f - fk);
+        w->lv[n] = (unsigned char)(1 + 4 * (ll - 1) + k1);
+        w->sh[n++] = share * fk;
     }
+    for (; n < 4; n++)
+        w->lv[n] = 0, w->sh[n] = 0.0f;
 }
 
 /* The level's map A = R diag(sqrt r, 1 / sqrt r) R^T (R: the turn by k * 45 degrees). */
@@ -625,109 +693,142 @@ static void aniso_matrix(int level, double A[4])
 }
 
 /* The owners' stipples when some owner of E sees its surface foreshortened: one pass of the
- * block loop per level with a share there, the UVs (su, sv, the Jacobian and the corner grid)
- * read through the level's map and each owner's i_max times its share (its smoothed |det J|
- * over the share), then all sorted by owner, level and sample, so the order does not depend
- * on how owners fall into units. Returns 0 where every owner is on level 0 (the caller's
- * single pass is the same), -1 when out of memory, else the number of passes. */
+ * block loop per level with a share there, over the rows and columns of the owners with a
+ * share (a level is mostly a patch of a unit), the UVs (su, sv, the Jacobian and the corner
+ * grid) read through the level's map and each owner's i_max as emit() wants it (its smoothed
+ * |det J| scaled), then all sorted by owner, level and sample, so the order does not depend on
+ * how owners fall into units. Returns 0 where every owner is on level 0 (the caller's single
+ * pass is the same), -1 when out of memory, else the number of passes. */
 static int aniso_passes(scratch *s, nprfx_rect E, block_ctx *b, strip *st, size_t *brow, int nbr)
 {
     pixdata *d = &s->d;
     cgrid *g = &s->g;
     const int ew = nprfx_rect_width(E), eh = nprfx_rect_height(E);
     const size_t ne = (size_t)ew * (size_t)eh;
-    float *w = malloc(sizeof(float) * ANISO_LEVELS * ne);
-    if (!w) return -1;
-    int active[ANISO_LEVELS] = {0};
-    for (int y = E.y0; y < E.y1; y++)
-        for (int x = E.x0; x < E.x1; x++) {
-            const size_t k = pd_at(d, x, y), e = (size_t)(y - E.y0) * ew + (size_t)(x - E.x0);
-            float wk[ANISO_LEVELS];
-            aniso_weights(d->jac + 4 * k, (d->ok[k] & OK_BOTH) == OK_BOTH, wk);
-            for (int l = 0; l < ANISO_LEVELS; l++) {
-                w[l * ne + e] = wk[l];
-                active[l] |= wk[l] > 0.0f;
-            }
-        }
-    int any = 0;
-    for (int l = 1; l < ANISO_LEVELS; l++)
-        any |= active[l];
-    if (!any) {
-        free(w);
-        return 0;
-    }
     const size_t nd = (size_t)d->w * (size_t)nprfx_rect_height(d->r);
     const size_t ng = (size_t)g->gw * (size_t)g->gh;
-    double *su0 = malloc(sizeof(double) * (2 * nd + 2 * ng));
-    float *jac0 = malloc(sizeof(float) * (4 * nd + ne));
-    if (!su0 || !jac0) {
-        free(w);
-        free(su0);
-        free(jac0);
-        return -1;
+    /* kept from unit to unit (fresh pages for each were a fifth of the time): the UVs,
+     * corners and Jacobian as a level reads them (written where its owners read them), the
+     * smoothed |det J| as it is, the shares */
+    const size_t need = sizeof(double) * (2 * nd + 2 * ng) + sizeof(float) * (4 * nd + ne) +
+                        sizeof(aniso_share) * ne + sizeof(float) * ne +
+                        sizeof(int) * 2 * ANISO_LEVELS * (size_t)nbr;
+    if (!internal_stipple_reserve((void **)&s->aniso, &s->acap, need, 1)) return -1;
+    double *su1 = (double *)s->aniso, *sv1 = su1 + nd, *gu1 = sv1 + nd, *gv1 = gu1 + ng;
+    float *jac1 = (float *)(gv1 + ng), *sdet0 = jac1 + 4 * nd;
+    double *const su0 = d->su, *const sv0 = d->sv, *const gu0 = g->gu, *const gv0 = g->gv;
+    float *const jac0 = d->jac;
+    aniso_share *w = (aniso_share *)(sdet0 + ne);
+    /* where each level has a share: in E, and the columns in each row of blocks */
+    float *imax0 = (float *)(w + ne);
+    int *span = (int *)(imax0 + ne);
+    nprfx_rect on[ANISO_LEVELS];
+    for (int l = 0; l < ANISO_LEVELS; l++) {
+        on[l] = nprfx_rect_make(E.x1, E.y1, E.x0, E.y0);
+        for (int br = 0; br < nbr; br++)
+            span[2 * (l * nbr + br)] = E.x1, span[2 * (l * nbr + br) + 1] = E.x0;
     }
-    double *sv0 = su0 + nd, *gu0 = sv0 + nd, *gv0 = gu0 + ng;
-    float *sdet0 = jac0 + 4 * nd;
-    memcpy(su0, d->su, sizeof(double) * nd);
-    memcpy(sv0, d->sv, sizeof(double) * nd);
-    memcpy(gu0, g->gu, sizeof(double) * ng);
-    memcpy(gv0, g->gv, sizeof(double) * ng);
-    memcpy(jac0, d->jac, sizeof(float) * 4 * nd);
+    for (int y = E.y0; y < E.y1; y++) {
+        const int br = (y - E.y0) / BLOCK;
+        for (int x = E.x0; x < E.x1; x++) {
+            const size_t k = pd_at(d, x, y), e = (size_t)(y - E.y0) * ew + (size_t)(x - E.x0);
+            aniso_weights(d->jac + 4 * k, (d->ok[k] & OK_BOTH) == OK_BOTH, &w[e]);
+            for (int i = 0; i < 4; i++) {
+                if (!(w[e].sh[i] > 0.0f)) continue;
+                const int l = w[e].lv[i];
+                nprfx_rect *r = &on[l];
+                r->x0 = x < r->x0 ? x : r->x0;
+                r->x1 = x + 1 > r->x1 ? x + 1 : r->x1;
+                r->y0 = y < r->y0 ? y : r->y0;
+                r->y1 = y + 1 > r->y1 ? y + 1 : r->y1;
+                int *sp = span + 2 * (l * nbr + br);
+                sp[0] = x < sp[0] ? x : sp[0];
+                sp[1] = x + 1 > sp[1] ? x + 1 : sp[1];
+            }
+        }
+    }
+    int any = 0;
+    for (int l = 1; l < ANISO_LEVELS; l++)
+        any |= !nprfx_rect_empty(on[l]);
+    if (!any) return 0;
     memcpy(sdet0, s->sdet, sizeof(float) * ne);
+    const int uniform = b->j->p->mode == NPRFX_STIPPLE_UNIFORM;
+    const float inv_area = (float)(1.0 / b->j->p->area), inv_a0 = (float)(1.0 / b->j->p->a0);
+    for (int y = E.y0; y < E.y1; y++)
+        for (int x = E.x0; x < E.x1; x++) {
+            const size_t e = (size_t)(y - E.y0) * ew + (size_t)(x - E.x0);
+            /* each owner's whole i_max; none keeps anything but where a level has a share */
+            imax0[e] = (uniform ? d->g[pd_at(d, x, y)] * inv_area : inv_a0) / sdet0[e];
+            s->sdet[e] = INFINITY;
+        }
     int passes = 0;
     for (int l = 0; l < ANISO_LEVELS && b->r == NPRFX_OK && !b->out->failed; l++) {
-        if (!active[l]) continue;
+        const nprfx_rect R = on[l];
+        if (nprfx_rect_empty(R)) continue;
         double A[4] = {1, 0, 0, 1};
         if (l) aniso_matrix(l, A);
-        for (size_t k = 0; k < nd; k++) {
-            d->su[k] = l ? A[0] * su0[k] + A[1] * sv0[k] : su0[k];
-            d->sv[k] = l ? A[2] * su0[k] + A[3] * sv0[k] : sv0[k];
-            const float *j0 = jac0 + 4 * k;
-            float *j1 = d->jac + 4 * k;
-            /* d(A s)/dx = A ds/dx */
-            j1[0] = l ? (float)(A[0] * j0[0] + A[1] * j0[2]) : j0[0];
-            j1[1] = l ? (float)(A[0] * j0[1] + A[1] * j0[3]) : j0[1];
-            j1[2] = l ? (float)(A[2] * j0[0] + A[3] * j0[2]) : j0[2];
-            j1[3] = l ? (float)(A[2] * j0[1] + A[3] * j0[3]) : j0[3];
-        }
-        for (size_t k = 0; k < ng; k++) {
-            g->gu[k] = l ? A[0] * gu0[k] + A[1] * gv0[k] : gu0[k];
-            g->gv[k] = l ? A[2] * gu0[k] + A[3] * gv0[k] : gv0[k];
+        /* the level's reading (level 0 reads the UVs as they are) */
+        if (l) {
+            /* the rows of pixels and corners the owners of R read (their footprints' corners and
+             * neighbours), a margin of 2 beyond */
+            const int y0 = R.y0 - 2 > d->r.y0 ? R.y0 - 2 : d->r.y0;
+            const int y1 = R.y1 + 2 < d->r.y1 ? R.y1 + 2 : d->r.y1;
+            const int x0 = R.x0 - 2 > d->r.x0 ? R.x0 - 2 : d->r.x0;
+            const int x1 = R.x1 + 2 < d->r.x1 ? R.x1 + 2 : d->r.x1;
+            for (int y = y0; y < y1; y++)
+                for (size_t k = pd_at(d, x0, y); k < pd_at(d, x1, y); k++) {
+                    su1[k] = A[0] * su0[k] + A[1] * sv0[k];
+                    sv1[k] = A[2] * su0[k] + A[3] * sv0[k];
+                    const float *j0 = jac0 + 4 * k;
+                    float *j1 = jac1 + 4 * k;
+                    /* d(A s)/dx = A ds/dx */
+                    j1[0] = (float)(A[0] * j0[0] + A[1] * j0[2]);
+                    j1[1] = (float)(A[0] * j0[1] + A[1] * j0[3]);
+                    j1[2] = (float)(A[2] * j0[0] + A[3] * j0[2]);
+                    j1[3] = (float)(A[2] * j0[1] + A[3] * j0[3]);
+                }
+            /* corner (x - 0.5, y - 0.5) is at grid (x + 1 - E.x0, y + 1 - E.y0) */
+            int gy0 = R.y0 - 2 - g->E.y0, gy1 = R.y1 + 3 - g->E.y0;
+            int gx0 = R.x0 - 2 - g->E.x0, gx1 = R.x1 + 3 - g->E.x0;
+            gy0 = gy0 < 0 ? 0 : gy0;
+            gy1 = gy1 > g->gh ? g->gh : gy1;
+            gx0 = gx0 < 0 ? 0 : gx0;
+            gx1 = gx1 > g->gw ? g->gw : gx1;
+            for (int gy = gy0; gy < gy1; gy++)
+                for (size_t k = (size_t)gy * g->gw + gx0; k < (size_t)gy * g->gw + gx1; k++) {
+                    gu1[k] = A[0] * gu0[k] + A[1] * gv0[k];
+                    gv1[k] = A[2] * gu0[k] + A[3] * gv0[k];
+                }
         }
         /* i_max = K / sdet (K = g / area in uniform mode, 1 / a0 otherwise, stipple_strip.c):
-         * a share w < 1 gives w i_max + 1 (emit() dithers the last sample), none INFINITY */
-        const int uniform = b->j->p->mode == NPRFX_STIPPLE_UNIFORM;
-        for (int y = E.y0; y < E.y1; y++)
-            for (int x = E.x0; x < E.x1; x++) {
+         * a share w < 1 looks at the samples up to min(1, w (1 + fade)) i_max + 1 (emit()) */
+        for (int y = R.y0; y < R.y1; y++)
+            for (int x = R.x0; x < R.x1; x++) {
                 const size_t e = (size_t)(y - E.y0) * ew + (size_t)(x - E.x0);
-                const float share = w[l * ne + e];
+                const float share = aniso_share_of(&w[e], l);
                 if (share >= 1.0f) {
                     s->sdet[e] = sdet0[e];
                 } else if (share > 0.0f) {
-                    const double K =
-                        uniform ? d->g[pd_at(d, x, y)] / b->j->p->area : 1.0 / b->j->p->a0;
-                    s->sdet[e] = (float)(K / (share * (K / sdet0[e]) + 1.0));
-                } else {
-                    s->sdet[e] = INFINITY;
+                    const float K = uniform ? d->g[pd_at(d, x, y)] * inv_area : inv_a0;
+                    const float m = share * (1.0f + ANISO_FADE);
+                    s->sdet[e] = K / ((m < 1.0f ? m : 1.0f) * imax0[e] + 1.0f);
                 }
             }
         b->out->level = l;
-        b->out->share = w + l * ne;
+        b->out->share = w;
         b->out->share_e = E;
-        owner_blocks(b, s, E, st, brow, nbr);
+        /* the pass reads the level's arrays (level 0: the UVs as they are) */
+        if (l) d->su = su1, d->sv = sv1, d->jac = jac1, g->gu = gu1, g->gv = gv1;
+        owner_blocks(b, s, E, st, brow, nbr, span + 2 * (size_t)l * nbr);
+        d->su = su0, d->sv = sv0, d->jac = jac0, g->gu = gu0, g->gv = gv0;
+        for (int y = R.y0; y < R.y1; y++)
+            for (int x = R.x0; x < R.x1; x++)
+                s->sdet[(size_t)(y - E.y0) * ew + (size_t)(x - E.x0)] = INFINITY;
         passes++;
     }
-    memcpy(d->su, su0, sizeof(double) * nd);
-    memcpy(d->sv, sv0, sizeof(double) * nd);
-    memcpy(g->gu, gu0, sizeof(double) * ng);
-    memcpy(g->gv, gv0, sizeof(double) * ng);
-    memcpy(d->jac, jac0, sizeof(float) * 4 * nd);
     memcpy(s->sdet, sdet0, sizeof(float) * ne);
     b->out->level = 0;
     b->out->share = NULL;
-    free(w);
-    free(su0);
-    free(jac0);
     /* all the passes' stipples by owner, level and sample; where each row of blocks starts */
     klist *kl = b->out;
     if (kl->n > 1) qsort(kl->k, kl->n, sizeof *kl->k, keyed_cmp);
@@ -788,7 +889,7 @@ nprfx_result internal_stipple_owner_stipples(const sjob *j, scratch *s, nprfx_re
         free(mem);
         return NPRFX_ERR_OUT_OF_MEMORY;
     }
-    if (passes == 0) owner_blocks(&b, s, E, &st, brow, nbr);
+    if (passes == 0) owner_blocks(&b, s, E, &st, brow, nbr, NULL);
     brow[nbr] = kl->n;
     if (b.r == NPRFX_OK && !kl->failed && out->cap < out->n + kl->n) {
         nprfx_stipple *ns = realloc(out->s, (out->n + kl->n) * sizeof *ns);

@@ -57,6 +57,7 @@ void internal_stipple_scratch_free(scratch *s)
     free(s->kl.k);
     free(s->sl.s);
     free(s->t);
+    free(s->aniso);
 }
 
 static int pixdata_reserve(pixdata *d, nprfx_rect r)

@@ -92,12 +92,14 @@ typedef struct nprfx_stipple_params {
     /* Testing: 0 the fastest loops the CPU has, 1 the baseline ISA's (SSE2 on x86-64), 2 AVX2
      * (where the CPU has it, else as 1). Every path gives bit-identical output. */
     int simd;
-    /* Follow the foreshortening (1; 0, the default, is Ma et al.'s reading): where the UV Jacobian
+    /* Follow the foreshortening (1, the default; 0 is Ma et al.'s reading): where the UV Jacobian
      * stretches one direction of the screen more than the other (singular values s1 > s2), the
      * sequence is read through A = R diag(sqrt(r), 1 / sqrt(r)) R^T, r = s1 / s2 and R the turn to
      * the UV direction stretched most, quantised to 13 levels (none; r = 2, 4, 8 at 0, 45, 90, 135
-     * degrees) and blended: each level keeps its share w of the prefix (i_max times w). det A = 1,
-     * so the thresholds of Eq. 3-8 are unchanged. Beyond r = 16 the UVs alone. */
+     * degrees) and blended: a level with share w keeps about w of the prefix, the samples about
+     * the cut fading (their stipples' tone scaled), so that two levels' inks sum to the owner's
+     * and a dot changing level dissolves rather than pops. det A = 1, so the thresholds of
+     * Eq. 3-8 are unchanged. Beyond r = 16 the UVs alone. */
     int anisotropy;
 } nprfx_stipple_params;
 

@@ -870,12 +870,11 @@ static double nn_orientation(const nprfx_stipple *l, size_t n, int w, int h, dou
  * fast per pixel as u) against the same plane head-on. Read through the UVs alone, the
  * sequence's dots are squeezed with the surface and line up in rows; read through the
  * foreshortening (anisotropy, the default), they are as evenly spread as head-on, with the
- * same number of dots. */
+ * same ink. */
 static void test_foreshortening(void)
 {
     const int w = 160, h = 120;
-    double r[2][2];
-    size_t count[2][2];
+    double r[2][2], ink[2][2];
     for (int squeeze = 0; squeeze < 2; squeeze++)
         for (int an = 0; an < 2; an++) {
             nprfx_image tone = th_image(w, h, 1, NULL), uv = th_image(w, h, 2, NULL);
@@ -893,18 +892,20 @@ static void test_foreshortening(void)
             size_t n = 0;
             CHECK_OK(nprfx_stipple_collect(ctx4, &p, &in, tone.bounds, &list, &n));
             r[squeeze][an] = nn_orientation(list, n, w, h, 6);
-            count[squeeze][an] = n;
+            ink[squeeze][an] = 0; /* dots, one fading between levels by its tone */
+            for (size_t k = 0; k < n; k++)
+                ink[squeeze][an] += list[k].tone;
             free(list);
             nprfx_image_free(&tone);
             nprfx_image_free(&uv);
         }
-    printf("nearest-neighbour orientation R (dots): head-on %.3f (%zu) / %.3f (%zu); squeezed 6x "
-           "along y, UVs alone %.3f (%zu), through the foreshortening %.3f (%zu)\n",
-           r[0][0], count[0][0], r[0][1], count[0][1], r[1][0], count[1][0], r[1][1], count[1][1]);
+    printf("nearest-neighbour orientation R (ink in dots): head-on %.3f (%.0f) / %.3f (%.0f); "
+           "squeezed 6x along y, UVs alone %.3f (%.0f), through the foreshortening %.3f (%.0f)\n",
+           r[0][0], ink[0][0], r[0][1], ink[0][1], r[1][0], ink[1][0], r[1][1], ink[1][1]);
     CHECK(r[0][1] < 0.1 && r[0][0] < 0.1);
     CHECK(r[1][0] > 0.25); /* the rows the test is for */
     CHECK(r[1][1] < 0.1);
-    CHECK(fabs((double)count[1][1] / (double)count[1][0] - 1.0) < 0.05);
+    CHECK(fabs(ink[1][1] / ink[1][0] - 1.0) < 0.05);
 }
 
 int main(void)
