@@ -19,6 +19,8 @@ static const command commands[] = {
     {"list", cli_cmd_list, "list the nodes (ids, groups, one-line help)"},
     {"help", cli_cmd_help, "document a node: inputs, expected AOVs, params, defaults, ranges"},
     {"run", cli_cmd_run, "render a JSON node graph over a frame range"},
+    {"analyze", cli_cmd_analyze,
+     "measure a graph's shot statistics (tone ranges) once, for every run and farm chunk"},
     {"info", cli_cmd_info, "print a plate's size, layers and channels (like iinfo)"},
     {"diff", cli_cmd_diff,
      "compare two images or sequences (idiff-style thresholds and exit codes)"},

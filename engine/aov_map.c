@@ -31,29 +31,6 @@ const char *internal_aov_map_candidates(const internal_aov_map *map, int profile
     return nprfx_aov_candidates(profile, aov);
 }
 
-static char *read_text(nprfx_context *ctx, const char *path, nprfx_result *r)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        *r = nprfx_error(ctx, NPRFX_ERR_IO, "cannot open AOV mapping '%s': %s", path,
-                         strerror(errno));
-        return NULL;
-    }
-    char *text = NULL;
-    long len = fseek(f, 0, SEEK_END) ? -1 : ftell(f);
-    /* a mapping names a dozen AOVs: anything near a megabyte is not one */
-    if (len >= 0 && len < (1L << 20) && !fseek(f, 0, SEEK_SET)) text = malloc((size_t)len + 1);
-    if (!text || fread(text, 1, (size_t)len, f) != (size_t)len) {
-        free(text);
-        fclose(f);
-        *r = nprfx_error(ctx, NPRFX_ERR_IO, "cannot read AOV mapping '%s'", path);
-        return NULL;
-    }
-    fclose(f);
-    text[len] = 0;
-    return text;
-}
-
 static nprfx_result bad(nprfx_context *ctx, const char *path, const char *what, const char *key)
 {
     return nprfx_error(ctx, NPRFX_ERR_PARSE, "AOV mapping '%s': %s%s%s", path, key ? key : "",
@@ -134,9 +111,10 @@ static nprfx_result fill(nprfx_context *ctx, const char *path, const internal_js
 nprfx_result internal_aov_map_load(nprfx_context *ctx, const char *path, internal_aov_map **out)
 {
     *out = NULL;
-    nprfx_result r = NPRFX_OK;
-    char *text = read_text(ctx, path, &r);
-    if (!text) return r;
+    /* a mapping names a dozen AOVs: anything near a megabyte is not one */
+    char *text = engine_read_text(ctx, path, "AOV mapping", 1L << 20);
+    if (!text) return NPRFX_ERR_IO;
+    nprfx_result r;
     internal_json *root = NULL;
     nprfx_context *fctx = NULL; /* a JSON error names the file first */
     r = nprfx_context_create_scoped(ctx, path, &fctx);

@@ -1,5 +1,7 @@
 /* nprfx graph engine — engine_util.h: the clocks, strdup and a parallel byte copy. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -67,4 +69,29 @@ void engine_names_free(char **names, int n)
     for (int i = 0; i < n; i++)
         free(names[i]);
     free(names);
+}
+
+char *engine_read_text(nprfx_context *ctx, const char *path, const char *what, long most)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        nprfx_error(ctx, NPRFX_ERR_IO, "cannot open %s '%s': %s", what, path, strerror(errno));
+        return NULL;
+    }
+    char *text = NULL;
+    long len = fseek(f, 0, SEEK_END) ? -1 : ftell(f);
+    if (len >= 0 && len < most && !fseek(f, 0, SEEK_SET)) text = malloc((size_t)len + 1);
+    if (!text || fread(text, 1, (size_t)len, f) != (size_t)len) {
+        free(text);
+        fclose(f);
+        if (len >= most)
+            nprfx_error(ctx, NPRFX_ERR_IO, "%s '%s' is %ld bytes: too large to be one", what, path,
+                        len);
+        else
+            nprfx_error(ctx, NPRFX_ERR_IO, "cannot read %s '%s'", what, path);
+        return NULL;
+    }
+    fclose(f);
+    text[len] = 0;
+    return text;
 }

@@ -18,6 +18,10 @@ double engine_cpu_now(void);
 
 /* A malloc'd copy of s (NULL for NULL or no memory). */
 char *engine_strdup(const char *s);
+/* The whole of a small text file (`what` names it in messages: "graph file"), malloc'd and
+ * NUL-terminated; NULL with NPRFX_ERR_IO raised on ctx when it cannot be read or is not below
+ * `most` bytes. */
+char *engine_read_text(nprfx_context *ctx, const char *path, const char *what, long most);
 /* Free n strings and the array that holds them (NULL: nothing). */
 void engine_names_free(char **names, int n);
 

@@ -112,7 +112,7 @@ static int selects(const char *const *names, int nc, const char *hint)
     return hint && nprfx_channels_from_hint(names, nc, hint, idx, NPRFX_MAX_CHANNELS + 1) > 0;
 }
 
-static void notice(nprfx_graph *g, const char *fmt, ...)
+void internal_graph_notice(nprfx_graph *g, const char *fmt, ...)
 {
     if (!g->notice) return;
     char msg[2048];
@@ -165,10 +165,11 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
                     n->vec = nprfx_aov_vectors_at(k);
         }
         if (n->vec && n->vec->prev_from_next && plate_needs(g, i, NPRFX_AOV_MOTION_PREV))
-            notice(g,
-                   "note: plate '%s' (%s): the renderer writes one motion vector, to the next "
-                   "frame; motion_prev is its opposite (vectors: %s)",
-                   n->name, profile, n->vec->name);
+            internal_graph_notice(
+                g,
+                "note: plate '%s' (%s): the renderer writes one motion vector, to the next "
+                "frame; motion_prev is its opposite (vectors: %s)",
+                n->name, profile, n->vec->name);
     }
     /* Ids: the profile's index pass, else a Cryptomatte layer ("cryptomatte" picks one). */
     free(n->crypto);
@@ -202,8 +203,9 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
                 snprintf(sel, sizeof sel, "%s,%s", names[layers[pick].id0],
                          names[layers[pick].cov0]);
                 n->crypto = engine_strdup(sel);
-                notice(g, "note: plate '%s' (%s): object ids from Cryptomatte layer %s", n->name,
-                       profile, layers[pick].name);
+                internal_graph_notice(g,
+                                      "note: plate '%s' (%s): object ids from Cryptomatte layer %s",
+                                      n->name, profile, layers[pick].name);
             }
         }
     }
@@ -248,11 +250,12 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
                 names, nc, nprfx_aov_candidates(NPRFX_PROFILE_GENERIC, NPRFX_AOV_DEPTH), idx, 2);
         if (!have && d == 1 && !n->depth_inverse) {
             n->position_from = engine_strdup(names[idx[0]]);
-            notice(g,
-                   "warning: plate '%s' (%s profile) has no position, rest or uv: a camera-space "
-                   "position from its depth stands in (patterns hold to the camera, not to the "
-                   "surfaces)",
-                   n->name, profile);
+            internal_graph_notice(
+                g,
+                "warning: plate '%s' (%s profile) has no position, rest or uv: a camera-space "
+                "position from its depth stands in (patterns hold to the camera, not to the "
+                "surfaces)",
+                n->name, profile);
         }
     }
     n->prepared = 1;
@@ -318,8 +321,8 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
                     char what[300];
                     snprintf(what, sizeof what, "'%s' (%s profile) has no %s", src->name, profile,
                              nprfx_aov_name(aov));
-                    notice(g, "warning: plate %s: %s stands in for it (%s)", what,
-                           nprfx_aov_name(fallbacks[f].with[w]), fallbacks[f].why);
+                    internal_graph_notice(g, "warning: plate %s: %s stands in for it (%s)", what,
+                                          nprfx_aov_name(fallbacks[f].with[w]), fallbacks[f].why);
                 }
                 return NPRFX_OK;
             }
@@ -340,11 +343,12 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
             g->flows_wired = 1;
         }
         if (announce(&announced[si][aov], 2))
-            notice(g,
-                   "warning: plate '%s' (%s profile) has no motion vectors: optical flow on its "
-                   "beauty stands in (node '%s', as for footage: slower, and it restarts the "
-                   "pattern where the flow is unsure)",
-                   g->nodes[si].name, profile, g->nodes[fi].name);
+            internal_graph_notice(
+                g,
+                "warning: plate '%s' (%s profile) has no motion vectors: optical flow on its "
+                "beauty stands in (node '%s', as for footage: slower, and it restarts the "
+                "pattern where the flow is unsure)",
+                g->nodes[si].name, profile, g->nodes[fi].name);
         free(ref->sel);
         ref->sel = NULL;
         ref->src = fi;
@@ -368,10 +372,11 @@ static nprfx_result settle_input(nprfx_graph *g, int j, int k, const plate_names
         others += c != k && n->inputs[c].src >= 0;
     if (aov >= 0 && others && optional) {
         if (announce(&announced[ref->src][aov], 4))
-            notice(g,
-                   "warning: plate '%s' (%s profile) has no %s: the inputs that take it are left "
-                   "unconnected",
-                   src->name, profile, nprfx_aov_name(aov));
+            internal_graph_notice(
+                g,
+                "warning: plate '%s' (%s profile) has no %s: the inputs that take it are left "
+                "unconnected",
+                src->name, profile, nprfx_aov_name(aov));
         free(ref->sel);
         ref->sel = NULL;
         ref->src = -1;

@@ -393,9 +393,11 @@ static nprfx_result eval_node(nprfx_graph *g, int node, int frame, nprfx_image *
                                nprfx_rect_height(inputs[k].bounds);
     g->render_bytes +=
         4.0 * oi.channels * (double)nprfx_rect_width(frame_rect) * nprfx_rect_height(frame_rect);
-    if (!r)
+    if (!r) {
         internal_graph_count_state(g, n, nprfx_rect_width(frame_rect),
                                    nprfx_rect_height(frame_rect), in_ch, a.params);
+        internal_graph_analysis_check(g, n, frame);
+    }
     if (!r && !(g->has_hook && g->hook.exports)) r = export_node(g, n, &a, frame);
     if (r) { /* the message went out through n->ctx, naming the node */
         internal_graph_frame_release(g, im);

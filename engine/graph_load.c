@@ -568,21 +568,9 @@ nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_
                               nprfx_graph **out)
 {
     *out = NULL;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot open graph file '%s': %s", path,
-                           strerror(errno));
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *text = len >= 0 ? malloc((size_t)len + 1) : NULL;
-    if (!text || fread(text, 1, (size_t)len, f) != (size_t)len) {
-        fclose(f);
-        free(text);
-        return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read graph file '%s'", path);
-    }
-    fclose(f);
-    text[len] = 0;
+    /* a graph file of a million nodes is tens of megabytes: a gigabyte is not one */
+    char *text = engine_read_text(ctx, path, "graph file", 1L << 30);
+    if (!text) return NPRFX_ERR_IO;
     char *dir = engine_strdup(path);
     char *slash = strrchr(dir, '/');
     if (slash)
@@ -615,6 +603,7 @@ void nprfx_graph_free(nprfx_graph *g)
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
+        free(n->seeded);
         if (n->instance && g->has_hook && g->hook.release)
             g->hook.release(g->hook.user, n->desc, n->instance);
         for (int k = 0; k < n->ninputs; k++) {
@@ -647,6 +636,7 @@ void nprfx_graph_free(nprfx_graph *g)
         free(n->wants); /* the strings belong to references and tables */
     }
     free(g->nodes);
+    free(g->analysis_path);
     free(g->name_slots);
     nprfx_context_destroy(g->owned_ctx);
     free(g->frames_text);
@@ -718,6 +708,7 @@ nprfx_result nprfx_graph_set_shot(nprfx_graph *g, const char *frames)
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
+        free(n->seeded);
         n->state = NULL;
     }
     return NPRFX_OK;

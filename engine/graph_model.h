@@ -31,6 +31,7 @@ typedef struct gnode {
     nprfx_value *params;
     char **param_text; /* owned copies of STRING values */
     void *state;
+    char *seeded;       /* the measurement an analysis seeded state with (graph_analysis.c) */
     int state_counted;  /* its caches are in the graph's state_bytes (from its first render) */
     void *instance;     /* the render hook's per-node slot */
     nprfx_context *ctx; /* raises through the graph's with "node 'NAME'" before the message */
@@ -116,9 +117,9 @@ struct nprfx_graph {
     char *frames_text;
     int first_frame, last_frame;
     char *base_dir, *out_dir, *ocio;
-    char *fmt_text;  /* "format": "WxH" for graphs without inputs */
+    char *fmt_text;      /* "format": "WxH" for graphs without inputs */
     double design_width; /* "design_width": the plate width its pixel params are for; 0: none */
-    int *name_slots; /* hash index of node names (graph_names.c) */
+    int *name_slots;     /* hash index of node names (graph_names.c) */
     size_t name_nslots;
     centry *head, *tail;
     centry **cache_slots; /* hash table of the entries (graph_cache.c) */
@@ -170,6 +171,20 @@ struct nprfx_graph {
     void *notice_user;
     nprfx_io io;              /* nprfx_graph_options.io, completed (graph_io.h) */
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
+    char *analysis_path;      /* the analysis that seeded nodes' states (graph_analysis.c) */
+    int analysis_stale;       /* seeded nodes that measured the shot again */
 };
+
+/* A note or warning for the caller (nprfx_graph_options.notice), printf-style; nothing without
+ * a notice callback (graph_aovs.c). */
+void internal_graph_notice(nprfx_graph *g, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* After node n rendered `frame`: when an analysis seeded its state and the state now says
+ * otherwise (its input differs from what was measured), a notice, once (graph_analysis.c). */
+void internal_graph_analysis_check(nprfx_graph *g, gnode *n, int frame);
 
 #endif

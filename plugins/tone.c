@@ -263,4 +263,6 @@ const nprfx_node_desc nprfx_node_tone = {
     .params_size = sizeof(tp),
     .version_major = 1,
     .frames_needed = tone_frames_needed,
+    .state_save = nprfx_tone_state_save,
+    .state_load = nprfx_tone_state_load,
 };

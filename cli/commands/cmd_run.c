@@ -13,6 +13,25 @@
 #include "util/output_lock.h"
 #include "util/cli_util.h"
 
+static void usage_analyze(FILE *f, const char *prog)
+{
+    fprintf(f,
+            "usage: %s analyze GRAPH.json [GRAPH.json ...] [options]\n\n"
+            "Measures once what a graph's nodes measure over the whole shot (the range of every\n"
+            "tone node whose range is 'shot' or 'frame') and stores it in a small JSON file,\n"
+            "by default beside the graph's first output, named after the graph\n"
+            "(out/main/main.analysis.json). '%s run' and every farm chunk find it there and\n"
+            "render their frames without reading the rest of the shot; the pixels are the same\n"
+            "as without it. The file records the shot and each plate file's size and time: a run\n"
+            "on other or changed plates, or another shot, measures again with a note, and so\n"
+            "does a node whose rendered frame differs from what was measured.\n\n"
+            "options (as for '%s run', with which it must agree):\n"
+            "  --analysis PATH     where to write it (default: as above)\n"
+            "  --shot SPEC, --set N.P=VALUE, --aovs PROFILE, --design-width W, --threads N,\n"
+            "  --output-dir DIR, --cache-mb N, --mem-limit SIZE, --stats, --quiet\n",
+            prog, prog, prog);
+}
+
 static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
 {
     /* The nodes that render by rows, from their descriptors. */
@@ -73,6 +92,9 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "  --keep-going        render the remaining frames after a failed one, exit 1\n"
         "  --wait              when another run is writing one of the graph's sequences,\n"
         "                      wait for it to finish (default: fail at once, naming it)\n"
+        "  --analysis PATH     the shot statistics '%s analyze' stored (default: the graph's\n"
+        "                      own beside its first output, when it is there); off: measure\n"
+        "                      the shot in this run. Pixels are the same either way\n"
         "  --shared-lock       share the sequences' locks with other --shared-lock runs, which\n"
         "                      write other frames of them (nprfx farm's chunk tasks); a run\n"
         "                      without it still excludes them all\n"
@@ -100,7 +122,7 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "beside it; across hosts only where the file system supports locks, e.g. NFSv4) and\n"
         "removes what a killed run left there. See 'nprfx list' and 'nprfx help NODE' for the\n"
         "node types.\n",
-        prog, rows, ext && ext->options_usage ? ext->options_usage : "");
+        prog, rows, prog, ext && ext->options_usage ? ext->options_usage : "");
 }
 
 /* What `run` applies to every graph it renders. */
@@ -110,6 +132,8 @@ typedef struct run_opts {
     int nsets, keep_going, quiet, several, wait, stats, check, shared_lock;
     const char *aovs;         /* --aovs: every read node's profile */
     const char *design_width; /* --design-width */
+    const char *analysis;     /* --analysis: PATH, "off", or NULL (the graph's own, if any) */
+    int analyze;              /* `nprfx analyze`: measure and store, render nothing */
 } run_opts;
 
 /* Is --set "N.P=V" about a node of g? With several graphs a --set may name a node only some of
@@ -126,7 +150,7 @@ static int graph_has_node_of(nprfx_graph *g, const char *assignment)
 static void lock_notice(void *user, const char *message)
 {
     const run_opts *ro = user;
-    if (!ro->quiet) fprintf(stderr, "%s run: %s\n", ro->prog, message);
+    if (!ro->quiet) fprintf(stderr, "%s: %s\n", ro->prog, message);
 }
 
 /* A read's note on the parts and views it took: warnings always, notes unless --quiet. */
@@ -134,7 +158,7 @@ static void graph_notice(void *user, const char *message)
 {
     const run_opts *ro = user;
     if (!ro->quiet || !strncmp(message, "warning", 7))
-        fprintf(stderr, "%s run: %s\n", ro->prog, message);
+        fprintf(stderr, "%s: %s\n", ro->prog, message);
 }
 
 /* Lock every sequence g writes before its first frame (output_lock.h). */
@@ -165,7 +189,7 @@ static int show_progress(void *user, const nprfx_graph_progress *p)
     int k = p->done - 1;
     if (p->result) {
         if (rp->tty) fputc('\n', stderr);
-        fprintf(stderr, "%s run: frame %d failed: %s\n", rp->prog, p->frame, cli_message(rp->ctx));
+        fprintf(stderr, "%s: frame %d failed: %s\n", rp->prog, p->frame, cli_message(rp->ctx));
         return 0;
     }
     double el = p->elapsed, fps = (k + 1) / (el > 0 ? el : 1e-9);
@@ -175,7 +199,7 @@ static int show_progress(void *user, const nprfx_graph_progress *p)
         rp->warned_eta = 1;
         if (rp->tty) fputc('\n', stderr);
         fprintf(stderr,
-                "%s run: warning: %.2f s a frame so far: the remaining %d frames take about "
+                "%s: warning: %.2f s a frame so far: the remaining %d frames take about "
                 "%.1f hours\n",
                 rp->prog, el / (k + 1), p->count - k - 1, eta / 3600.0);
     }
@@ -184,6 +208,69 @@ static int show_progress(void *user, const nprfx_graph_progress *p)
                 fps, eta);
     else if (!rp->quiet)
         fprintf(stderr, "frame %d (%d/%d) %.3f s\n", p->frame, k + 1, p->count, p->seconds);
+    return 0;
+}
+
+/* `nprfx analyze`: measure the shot once and store it; the exit status. */
+static int analyze_graph(nprfx_context *ctx, nprfx_graph *g, const char *graph_path,
+                         const run_opts *ro, const nprfx_frame_list *fl,
+                         const nprfx_graph_plan_info *plan)
+{
+    char path[8192];
+    if (ro->analysis && strcmp(ro->analysis, "off"))
+        snprintf(path, sizeof path, "%s", ro->analysis);
+    else
+        nprfx_graph_analysis_path(g, graph_path, path, sizeof path);
+    double t0 = engine_now();
+    int measured = 0;
+    char dir[8192];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash && slash != dir) *slash = 0;
+    if (slash && slash != dir && cli_make_dirs(dir)) {
+        fprintf(stderr, "%s: cannot create the directory '%s' for %s\n", ro->prog, dir, path);
+        return 2;
+    }
+    if (nprfx_graph_analyze(g, &measured) || nprfx_graph_analysis_save(g, path)) {
+        fprintf(stderr, "%s: %s\n", ro->prog, cli_message(ctx));
+        return 2;
+    }
+    int first = 0, last = 0;
+    nprfx_graph_shot(g, &first, &last);
+    if (!ro->quiet)
+        printf("%s: measured %d node%s over frames %d-%d in %.1f s: %s\n", graph_path, measured,
+               measured == 1 ? "" : "s", first, last, engine_now() - t0, path);
+    if (ro->stats) cli_print_stats(stdout, g, fl->count, plan);
+    return 0;
+}
+
+/* Seed g's measuring nodes from --analysis or the graph's own analysis when it is there. A
+ * missing or broken file costs a measurement, never the run: a warning, and 0. */
+static int seed_graph(nprfx_context *ctx, nprfx_graph *g, const char *graph_path,
+                      const run_opts *ro)
+{
+    char path[8192];
+    int any = 0;
+    for (int i = 0; i < nprfx_graph_node_count(g); i++) {
+        nprfx_graph_node_info info = {sizeof info};
+        if (!nprfx_graph_node(g, i, &info) && info.kind == NPRFX_GRAPH_NODE &&
+            nprfx_node_measures_shot(info.desc))
+            any = 1;
+    }
+    if (!any || (ro->analysis && !strcmp(ro->analysis, "off"))) return 0;
+    if (ro->analysis)
+        snprintf(path, sizeof path, "%s", ro->analysis);
+    else {
+        nprfx_graph_analysis_path(g, graph_path, path, sizeof path);
+        if (access(path, F_OK)) return 0;
+    }
+    int seeded = 0;
+    if (nprfx_graph_analysis_load(g, path, &seeded))
+        fprintf(stderr, "%s: warning: %s: measuring the shot in this run\n", ro->prog,
+                cli_message(ctx));
+    else if (seeded && !ro->quiet)
+        fprintf(stderr, "%s: note: the shot statistics of %d node%s from %s\n", ro->prog, seeded,
+                seeded == 1 ? "" : "s", path);
     return 0;
 }
 
@@ -201,18 +288,18 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     cli_output_locks *locks = NULL;
     int status = 0;
     if (nprfx_graph_load(env.ctx, graph_path, &opt, &g)) {
-        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
+        fprintf(stderr, "%s: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
     if (!nprfx_graph_write_count(g)) {
-        fprintf(stderr, "%s run: %s: the graph has no write node, so it would produce nothing\n",
-                prog, graph_path);
+        fprintf(stderr, "%s: %s: the graph has no write node, so it would produce nothing\n", prog,
+                graph_path);
         status = 2;
         goto done;
     }
     if (shot && nprfx_graph_set_shot(g, shot)) {
-        fprintf(stderr, "%s run: --shot: %s\n", prog, cli_message(env.ctx));
+        fprintf(stderr, "%s: --shot: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -221,7 +308,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         double w = !strcmp(ro->design_width, "off") ? 0 : strtod(ro->design_width, &end);
         if ((end && (end == ro->design_width || *end)) || nprfx_graph_set_design_width(g, w)) {
             fprintf(stderr,
-                    "%s run: --design-width '%s': give the plate width the params were set for "
+                    "%s: --design-width '%s': give the plate width the params were set for "
                     "(e.g. 1920), or off for the plate's own pixels\n",
                     prog, ro->design_width);
             status = 2;
@@ -234,19 +321,19 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         if (nprfx_graph_node(g, i, &info) || info.kind != NPRFX_GRAPH_READ) continue;
         snprintf(set, sizeof set, "%s.aovs=%s", info.name, ro->aovs);
         if (nprfx_graph_set(g, set)) {
-            fprintf(stderr, "%s run: --aovs: %s\n", prog, cli_message(env.ctx));
+            fprintf(stderr, "%s: --aovs: %s\n", prog, cli_message(env.ctx));
             status = 2;
             goto done;
         }
     }
     for (int i = 0; i < nsets; i++)
         if ((!ro->several || graph_has_node_of(g, sets[i])) && nprfx_graph_set(g, sets[i])) {
-            fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
+            fprintf(stderr, "%s: %s\n", prog, cli_message(env.ctx));
             status = 2;
             goto done;
         }
     if (nprfx_graph_frames(g, frames, &fl)) {
-        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
+        fprintf(stderr, "%s: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
@@ -255,7 +342,15 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     nprfx_graph_plan_info plan;
     memset(&plan, 0, sizeof plan);
     if (nprfx_graph_check(g, &fl, &plan)) {
-        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
+        fprintf(stderr, "%s: %s\n", prog, cli_message(env.ctx));
+        status = 2;
+        goto done;
+    }
+    if (ro->analyze) {
+        status = analyze_graph(env.ctx, g, graph_path, ro, &fl, &plan);
+        goto done;
+    }
+    if (seed_graph(env.ctx, g, graph_path, ro)) {
         status = 2;
         goto done;
     }
@@ -269,14 +364,14 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
         goto done;
     }
     if (lock_outputs(env.ctx, g, graph_path, ro, &locks)) {
-        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
+        fprintf(stderr, "%s: %s\n", prog, cli_message(env.ctx));
         status = 2;
         goto done;
     }
     {
         char why[2048];
         if (nprfx_graph_cost_warnings(g, fl.count, why, sizeof why) > 0)
-            fprintf(stderr, "%s run: warning: %s: this may take hours:\n%s", prog, graph_path, why);
+            fprintf(stderr, "%s: warning: %s: this may take hours:\n%s", prog, graph_path, why);
     }
     run_progress rp = {prog, env.ctx, isatty(STDERR_FILENO) && !quiet, quiet, 0};
     nprfx_graph_run_options runo = {sizeof runo, keep_going, show_progress, NULL, &rp};
@@ -286,7 +381,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     if (tty) fputc('\n', stderr);
     if (failed) {
         status = 1;
-        fprintf(stderr, "%s run: %d of %d frames failed\n", prog, failed, fl.count);
+        fprintf(stderr, "%s: %d of %d frames failed\n", prog, failed, fl.count);
     }
     if (files && !quiet) {
         char buf[4096];
@@ -302,27 +397,44 @@ done:
     return status;
 }
 
+static int run_main(int argc, char **argv, const cli_run_extension *ext, int analyze);
+
 int cli_cmd_run(int argc, char **argv)
 {
-    return cli_cmd_run_extended(argc, argv, NULL);
+    return run_main(argc, argv, NULL, 0);
 }
 
 int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
 {
+    return run_main(argc, argv, ext, 0);
+}
+
+int cli_cmd_analyze(int argc, char **argv)
+{
+    return run_main(argc, argv, NULL, 1);
+}
+
+static int run_main(int argc, char **argv, const cli_run_extension *ext, int analyze)
+{
     const char *prog = ext && ext->program ? ext->program : "nprfx";
+    char label[256]; /* "nprfx run": what messages start with */
+    snprintf(label, sizeof label, "%s %s", prog, analyze ? "analyze" : "run");
     const char *graphs[64], *frames = NULL, *outdir = NULL, *shot = NULL;
     int ngraphs = 0;
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
     int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0;
-    const char *mem_limit = NULL, *aovs = NULL, *design_width = NULL;
+    const char *mem_limit = NULL, *aovs = NULL, *design_width = NULL, *analysis = NULL;
     char aovs_path[8192];
     long cache_mb = 2048;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has = i + 1 < argc, took = 0;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            usage(stdout, prog, ext);
+            if (analyze)
+                usage_analyze(stdout, prog);
+            else
+                usage(stdout, prog, ext);
             return 0;
         } else if (!strcmp(a, "--frames") && has)
             frames = argv[++i];
@@ -337,12 +449,14 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
                 char cwd[4096];
                 if (!getcwd(cwd, sizeof cwd) || snprintf(aovs_path, sizeof aovs_path, "%s/%s", cwd,
                                                          aovs) >= (int)sizeof aovs_path) {
-                    fprintf(stderr, "%s run: --aovs: the path '%s' is too long\n", prog, aovs);
+                    fprintf(stderr, "%s: --aovs: the path '%s' is too long\n", label, aovs);
                     return 2;
                 }
                 aovs = aovs_path;
             }
-        } else if (!strcmp(a, "--design-width") && has)
+        } else if (!strcmp(a, "--analysis") && has)
+            analysis = argv[++i];
+        else if (!strcmp(a, "--design-width") && has)
             design_width = argv[++i];
         else if (!strcmp(a, "--set") && has && nsets < 256)
             sets[nsets++] = argv[++i];
@@ -378,17 +492,31 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
                  (took = ext->option(ext->user, a, has ? argv[i + 1] : NULL)) > 0)
             i += took - 1;
         else {
-            fprintf(stderr, "%s run: unexpected argument '%s'\n\n", prog, a);
-            usage(stderr, prog, ext);
+            fprintf(stderr, "%s: unexpected argument '%s'\n\n", label, a);
+            if (analyze)
+                usage_analyze(stderr, prog);
+            else
+                usage(stderr, prog, ext);
             return 2;
         }
     }
     if (!ngraphs) {
-        usage(stderr, prog, ext);
+        if (analyze)
+            usage_analyze(stderr, prog);
+        else
+            usage(stderr, prog, ext);
         return 2;
     }
     if (cache_mb < 16) cache_mb = 16;
-    if (mem_limit && cli_set_mem_limit(prog, "run", mem_limit)) return 2;
+    if (mem_limit && cli_set_mem_limit(prog, analyze ? "analyze" : "run", mem_limit)) return 2;
+    if (analyze && (frames || check || keep_going)) {
+        fprintf(stderr, "%s: %s: it measures the whole shot and renders nothing (give --shot)\n",
+                label,
+                frames  ? "--frames"
+                : check ? "--check"
+                        : "--keep-going");
+        return 2;
+    }
     cli_env env;
     if (cli_env_init(&env, threads)) return 1;
     nprfx_graph_options opt = {sizeof opt, (size_t)cache_mb << 20, tile, outdir, NULL};
@@ -397,19 +525,21 @@ int cli_cmd_run_extended(int argc, char **argv, const cli_run_extension *ext)
     opt.no_pool = no_pool;
     opt.strip_rows = strip_rows;
     int status = 0;
-    run_opts ro = {prog,        frames, shot,  sets,  nsets,       keep_going, quiet,
-                   ngraphs > 1, wait,   stats, check, shared_lock, aovs,       design_width};
+    run_opts ro = {label, frames, shot,  sets,        nsets, keep_going,   quiet,    ngraphs > 1,
+                   wait,  stats,  check, shared_lock, aovs,  design_width, analysis, analyze};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {
-        fprintf(stderr, "%s run: %s\n", prog, cli_message(env.ctx));
+        fprintf(stderr, "%s: %s\n", label, cli_message(env.ctx));
         status = 2;
         goto done;
     }
     for (int i = 0; i < ngraphs; i++) {
         int st = run_graph(&env, &opt, graphs[i], &ro);
         if (st > status) status = st;
-        if (st == 2 && ngraphs > 1) fprintf(stderr, "%s run: %s: not rendered\n", prog, graphs[i]);
+        if (st == 2 && ngraphs > 1)
+            fprintf(stderr, "%s: %s: not %s\n", label, graphs[i],
+                    analyze ? "analysed" : "rendered");
     }
 done:
     if (ext && ext->close) ext->close(ext->user); /* after the graph, which releases the hook */

@@ -12,6 +12,7 @@ extern "C" {
 int cli_cmd_list(int argc, char **argv);
 int cli_cmd_help(int argc, char **argv);
 int cli_cmd_run(int argc, char **argv);
+int cli_cmd_analyze(int argc, char **argv);
 int cli_cmd_info(int argc, char **argv);
 int cli_cmd_diff(int argc, char **argv);
 int cli_cmd_synth(int argc, char **argv);

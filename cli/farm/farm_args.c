@@ -60,12 +60,26 @@ void farm_put_graph_args(FILE *f, const farm_job *job)
     }
 }
 
-void farm_put_run(FILE *f, const farm_job *job)
+static void put_command(FILE *f, const farm_job *job, const char *cmd)
 {
     farm_put_quoted(f, job->nprfx);
-    fputs(" run ", f);
+    fprintf(f, " %s ", cmd);
     farm_put_quoted(f, job->graph);
     farm_put_graph_args(f, job);
+    if (job->analysis[0]) {
+        fputs(" --analysis ", f);
+        farm_put_quoted(f, job->analysis);
+    }
+}
+
+void farm_put_run(FILE *f, const farm_job *job)
+{
+    put_command(f, job, "run");
+}
+
+void farm_put_analyze(FILE *f, const farm_job *job)
+{
+    put_command(f, job, "analyze");
 }
 
 int farm_take_graph_arg(farm_graph_args *a, const char *arg, const char *next)
@@ -213,6 +227,19 @@ int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int ch
             if (fl.frames[k] > last) last = fl.frames[k];
         }
         snprintf(job->shot, sizeof job->shot, "%d-%d", first, last);
+    }
+    /* Shot statistics: the analysis job measures them once, every chunk reads them. */
+    job->analysis[0] = 0;
+    for (int i = 0; i < nprfx_graph_node_count(g); i++) {
+        nprfx_graph_node_info info = {sizeof info};
+        if (nprfx_graph_node(g, i, &info) || info.kind != NPRFX_GRAPH_NODE ||
+            !nprfx_node_measures_shot(info.desc))
+            continue;
+        char path[4096];
+        nprfx_graph_analysis_path(g, job->graph, path, sizeof path);
+        snprintf(job->analysis, sizeof job->analysis, "%s%s%s", path[0] == '/' ? "" : job->workdir,
+                 path[0] == '/' ? "" : "/", path);
+        break;
     }
     job->nframes = fl.count;
     if (!(job->frames = farm_frames_spec(fl.frames, fl.count)) ||

@@ -22,6 +22,9 @@ typedef struct farm_job {
      * (a chunk would otherwise take its own frames for the shot and start its noise there);
      * "" when the graph's own shot applies. */
     char shot[256];
+    /* The shot statistics file (absolute) the analysis job writes and every chunk reads; ""
+     * when the graph measures nothing over its shot (no analysis job). */
+    char analysis[8200];
     const char *output_dir; /* --output-dir as given (NULL: none) */
     const char *const *sets;
     int nsets;
@@ -37,9 +40,12 @@ void farm_put_quoted(FILE *f, const char *s);
 
 /* The graph's arguments every command of the job repeats: --shot, each --set, --output-dir. */
 void farm_put_graph_args(FILE *f, const farm_job *job);
-/* "'NPRFX' run 'GRAPH' [--shot S] [--set ...] [--output-dir D]": the chunk command without its
- * frames. */
+/* "'NPRFX' run 'GRAPH' [--shot S] [--set ...] [--output-dir D] [--analysis A]": the chunk
+ * command without its frames. */
 void farm_put_run(FILE *f, const farm_job *job);
+/* "'NPRFX' analyze 'GRAPH' [--shot S] [--set ...] [--output-dir D] --analysis A": the analysis
+ * job's command. */
+void farm_put_analyze(FILE *f, const farm_job *job);
 
 /* The options farm and farm check share (argv[i], with the next argument): 1 or 2 when taken, 0
  * when not one of them. */

@@ -11,20 +11,6 @@
 #include "farm_args.h"
 #include "farm_slurm.h"
 
-/* Create dir and its missing parents. */
-static int make_dirs(const char *dir)
-{
-    char buf[4300];
-    snprintf(buf, sizeof buf, "%s", dir);
-    for (char *p = buf + 1; *p; p++) {
-        if (*p != '/') continue;
-        *p = '\0';
-        if (mkdir(buf, 0777) && errno != EEXIST) return -1;
-        *p = '/';
-    }
-    return mkdir(buf, 0777) && errno != EEXIST ? -1 : 0;
-}
-
 /* #SBATCH lines are split by Slurm's own reader, not a shell: a path there must be one word. */
 static int sbatch_word(const char *what, const char *s)
 {
@@ -101,6 +87,29 @@ static int write_render(const char *path, const farm_job *job, const farm_slurm 
     return fclose(f) ? -1 : 0;
 }
 
+static int write_analyze(const char *path, const farm_job *job, const farm_slurm *opt,
+                         const char *name, const char *logs)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return -1;
+    put_common(f, job, opt, name, opt->cpus);
+    fputs("#SBATCH --output=", f);
+    put_sbatch_path(f, logs);
+    fputs("/analyze.log\n#SBATCH --open-mode=append\n#SBATCH --requeue\n", f);
+    fprintf(f,
+            "# Written by nprfx farm: measures the shot statistics of %s (tone ranges) once,\n"
+            "# over frames %s, into the file every chunk of render.sbatch reads (submit.sh:\n"
+            "# the chunks start after it succeeded, --dependency=afterok), so no chunk reads\n"
+            "# the rest of the shot. By hand, without Slurm: bash %s\n"
+            "cd ",
+            job->graph, job->shot[0] ? job->shot : "of the graph", path);
+    farm_put_quoted(f, job->workdir);
+    fputs(" || exit 1\nexec ", f);
+    farm_put_analyze(f, job);
+    fputs(" --threads \"${SLURM_CPUS_PER_TASK:-1}\"\n", f);
+    return fclose(f) ? -1 : 0;
+}
+
 static int write_check(const char *path, const farm_job *job, const farm_slurm *opt,
                        const char *name, const char *logs)
 {
@@ -127,23 +136,33 @@ static int write_check(const char *path, const farm_job *job, const farm_slurm *
     return fclose(f) ? -1 : 0;
 }
 
-static int write_submit(const char *path, const char *render, const char *check,
-                        const farm_job *job, const char *logs)
+static int write_submit(const char *path, const char *analyze, const char *render,
+                        const char *check, const farm_job *job, const char *logs)
 {
     FILE *f = fopen(path, "w");
     if (!f) return -1;
     fputs("#!/bin/sh\n"
-          "# Written by nprfx farm: submits the render array, then the check job to run after\n"
-          "# all of its tasks, whatever their outcome.\n"
-          "set -eu\nrender=$(sbatch --parsable ",
+          "# Written by nprfx farm: submits the analysis job when the graph measures its shot,\n"
+          "# the render array to start once it succeeded, then the check job to run after all\n"
+          "# of the array's tasks, whatever their outcome.\n"
+          "set -eu\n",
           f);
+    if (analyze) {
+        fputs("analyze=$(sbatch --parsable ", f);
+        farm_put_quoted(f, analyze);
+        fputs(")\nanalyze=${analyze%%;*}\nrender=$(sbatch --parsable "
+              "--dependency=afterok:\"$analyze\" ",
+              f);
+    } else
+        fputs("render=$(sbatch --parsable ", f);
     farm_put_quoted(f, render);
     fputs(")\nrender=${render%%;*}\n"
           "check=$(sbatch --parsable --dependency=afterany:\"$render\" ",
           f);
     farm_put_quoted(f, check);
+    fputs(")\ncheck=${check%%;*}\n", f);
+    if (analyze) fputs("echo \"analysis job: $analyze\"\n", f);
     fprintf(f,
-            ")\ncheck=${check%%%%;*}\n"
             "echo \"render job: $render (%d chunks)\"\necho \"check job: $check\"\n"
             "echo \"logs: %s\"\n",
             job->nchunks, logs);
@@ -154,10 +173,10 @@ static int write_submit(const char *path, const char *render, const char *check,
 int farm_slurm_emit(const farm_job *job, const farm_slurm *opt, const char *dir)
 {
     char real[PATH_MAX], logs[PATH_MAX + 8], render[PATH_MAX + 16], check[PATH_MAX + 16],
-        submit[PATH_MAX + 16], name[256];
+        submit[PATH_MAX + 16], analyze[PATH_MAX + 16], name[256];
     char logs_given[4200];
     snprintf(logs_given, sizeof logs_given, "%s/logs", dir);
-    if (make_dirs(logs_given) || !realpath(dir, real)) {
+    if (cli_make_dirs(logs_given) || !realpath(dir, real)) {
         fprintf(stderr, "nprfx farm: cannot create '%s': %s\n", logs_given, strerror(errno));
         return 1;
     }
@@ -167,6 +186,7 @@ int farm_slurm_emit(const farm_job *job, const farm_slurm *opt, const char *dir)
     snprintf(render, sizeof render, "%s/render.sbatch", real);
     snprintf(check, sizeof check, "%s/check.sbatch", real);
     snprintf(submit, sizeof submit, "%s/submit.sh", real);
+    snprintf(analyze, sizeof analyze, "%s/analyze.sbatch", real);
     if (opt->name)
         snprintf(name, sizeof name, "%s", opt->name);
     else {
@@ -180,29 +200,34 @@ int farm_slurm_emit(const farm_job *job, const farm_slurm *opt, const char *dir)
                 *p = '_';
     }
     if (!sbatch_word("--name", name)) return 1;
-    char check_name[300];
+    char check_name[300], analyze_name[300];
     snprintf(check_name, sizeof check_name, "%s-check", name);
-    if (write_render(render, job, opt, name, logs) ||
+    snprintf(analyze_name, sizeof analyze_name, "%s-analyze", name);
+    int analysis = job->analysis[0] != 0;
+    if (!analysis) remove(analyze); /* a previous farm of another graph may have left one */
+    if ((analysis && write_analyze(analyze, job, opt, analyze_name, logs)) ||
+        write_render(render, job, opt, name, logs) ||
         write_check(check, job, opt, check_name, logs) ||
-        write_submit(submit, render, check, job, logs)) {
+        write_submit(submit, analysis ? analyze : NULL, render, check, job, logs)) {
         fprintf(stderr, "nprfx farm: cannot write the job files in '%s': %s\n", real,
                 strerror(errno));
         return 1;
     }
+    if (analysis) printf("wrote %s (the shot statistics, into %s)\n", analyze, job->analysis);
     printf("wrote %s (%d chunk%s of %d frames), %s, %s; logs in %s\n", render, job->nchunks,
            job->nchunks == 1 ? "" : "s", job->chunk, check, submit, logs);
     return 0;
 }
 
 /* Run `sbatch --parsable ARGS` and put the job id it prints into id; 0 or -1. */
-static int sbatch(const char *dependency, const char *script, char *id, size_t n)
+static int sbatch(const char *kind, const char *dependency, const char *script, char *id, size_t n)
 {
     char *cmd = NULL;
     size_t len = 0;
     FILE *f = open_memstream(&cmd, &len);
     if (!f) return -1;
     fputs("sbatch --parsable ", f);
-    if (dependency) fprintf(f, "--dependency=afterany:%s ", dependency);
+    if (dependency) fprintf(f, "--dependency=%s:%s ", kind, dependency);
     farm_put_quoted(f, script);
     fclose(f);
     FILE *p = popen(cmd, "r");
@@ -219,24 +244,32 @@ static int sbatch(const char *dependency, const char *script, char *id, size_t n
 
 int farm_slurm_submit(const farm_job *job, const char *dir)
 {
-    char real[PATH_MAX], render[PATH_MAX + 16], check[PATH_MAX + 16], rid[64], cid[64];
+    char real[PATH_MAX], render[PATH_MAX + 16], check[PATH_MAX + 16], analyze[PATH_MAX + 16];
+    char aid[64] = "", rid[64], cid[64];
     if (!realpath(dir, real)) {
         fprintf(stderr, "nprfx farm: '%s': %s\n", dir, strerror(errno));
         return 1;
     }
     snprintf(render, sizeof render, "%s/render.sbatch", real);
     snprintf(check, sizeof check, "%s/check.sbatch", real);
-    if (sbatch(NULL, render, rid, sizeof rid)) {
-        fprintf(stderr, "nprfx farm: sbatch refused '%s' (its message is above)\n", render);
+    snprintf(analyze, sizeof analyze, "%s/analyze.sbatch", real);
+    if (job->analysis[0] && sbatch(NULL, NULL, analyze, aid, sizeof aid)) {
+        fprintf(stderr, "nprfx farm: sbatch refused '%s' (its message is above)\n", analyze);
         return 1;
     }
-    if (sbatch(rid, check, cid, sizeof cid)) {
+    if (sbatch("afterok", aid[0] ? aid : NULL, render, rid, sizeof rid)) {
+        fprintf(stderr, "nprfx farm: sbatch refused '%s' (its message is above)%s%s%s\n", render,
+                aid[0] ? "; the analysis job " : "", aid, aid[0] ? " is queued: 'scancel' it" : "");
+        return 1;
+    }
+    if (sbatch("afterany", rid, check, cid, sizeof cid)) {
         fprintf(stderr,
                 "nprfx farm: sbatch refused '%s' (its message is above); the render job %s is "
                 "queued: cancel it with 'scancel %s' or check by hand with 'nprfx farm check'\n",
                 check, rid, rid);
         return 1;
     }
+    if (aid[0]) printf("analysis job: %s\n", aid);
     printf("render job: %s (%d chunks)\ncheck job: %s\nlogs: %s/logs\n", rid, job->nchunks, cid,
            real);
     return 0;

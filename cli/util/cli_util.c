@@ -1,11 +1,13 @@
 /* nprfx CLI — the runner's lowest layer: the context commands run with and peak memory (the
  * clocks, strdup and the parallel copy are the engine's: engine/engine_util.h). Includes nothing of
  * the runner's other folders. */
+#include <errno.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -104,4 +106,17 @@ double cli_peak_mib(void)
     struct rusage ru;
     if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
     return (double)ru.ru_maxrss / 1024.0; /* Linux reports KiB */
+}
+
+int cli_make_dirs(const char *dir)
+{
+    char buf[8192];
+    snprintf(buf, sizeof buf, "%s", dir);
+    for (char *p = buf + 1; *p; p++) {
+        if (*p != '/') continue;
+        *p = '\0';
+        if (mkdir(buf, 0777) && errno != EEXIST) return -1;
+        *p = '/';
+    }
+    return mkdir(buf, 0777) && errno != EEXIST ? -1 : 0;
 }

@@ -37,6 +37,10 @@ const char *cli_message(const nprfx_context *ctx);
 /* Peak resident memory of this process in MiB. */
 double cli_peak_mib(void);
 
+/* Create dir and its missing parents, as the writers would before the first frame; 0 or -1
+ * (errno set). */
+int cli_make_dirs(const char *dir);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,6 +1,7 @@
 /* Output sequence locks (see output_lock.h): flock on ".<pattern>.nprfx-lock" beside each
  * sequence, the holder described inside, stale temporary files removed by the next holder. */
 #define _DEFAULT_SOURCE /* flock, gethostname, realpath */
+#include "cli_util.h"
 #include "output_lock.h"
 
 #include <dirent.h>
@@ -32,20 +33,6 @@ struct cli_output_locks {
     int shared; /* LOCK_SH: other shared holders may hold the same files */
 };
 
-/* Create dir and its missing parents, as the writers would before the first frame. */
-static int make_dirs(const char *dir)
-{
-    char buf[4096];
-    snprintf(buf, sizeof buf, "%s", dir);
-    for (char *p = buf + 1; *p; p++) {
-        if (*p != '/') continue;
-        *p = '\0';
-        if (mkdir(buf, 0777) && errno != EEXIST) return -1;
-        *p = '/';
-    }
-    return mkdir(buf, 0777) && errno != EEXIST ? -1 : 0;
-}
-
 static nprfx_result entry_init(nprfx_context *ctx, const char *pattern, lock_entry *e)
 {
     const char *slash = strrchr(pattern, '/');
@@ -65,7 +52,7 @@ static nprfx_result entry_init(nprfx_context *ctx, const char *pattern, lock_ent
         snprintf(e->dir, sizeof e->dir, "%.*s", (int)(slash - pattern), pattern);
     nprfx_result r = nprfx_seq_canonical(ctx, base, canon, sizeof canon);
     if (r) return r;
-    if (make_dirs(e->dir) || !realpath(e->dir, real))
+    if (cli_make_dirs(e->dir) || !realpath(e->dir, real))
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot create directory '%s' for '%s': %s", e->dir,
                            pattern, strerror(errno));
     snprintf(e->path, sizeof e->path, "%s/.%s.nprfx-lock", e->dir, canon);

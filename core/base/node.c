@@ -576,6 +576,35 @@ nprfx_result nprfx_node_state_bytes(nprfx_context *ctx, const nprfx_node_desc *n
     return r;
 }
 
+/* ---- shot-wide measurements ----------------------------------------------------------------- */
+
+int nprfx_node_measures_shot(const nprfx_node_desc *node)
+{
+    return node && node->size >= offsetof(nprfx_node_desc, state_load) + sizeof(void *) &&
+           node->state_save && node->state_load;
+}
+
+nprfx_result nprfx_node_state_save(nprfx_context *ctx, const nprfx_node_desc *node,
+                                   const void *state, char **text)
+{
+    if (!text) return NPRFX_ERR_INVALID_ARGUMENT;
+    *text = NULL;
+    if (!nprfx_node_measures_shot(node))
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED, "%s: measures nothing over the shot",
+                           node ? node->id : "(no node)");
+    return state ? node->state_save(ctx, state, text) : NPRFX_OK;
+}
+
+nprfx_result nprfx_node_state_load(nprfx_context *ctx, const nprfx_node_desc *node, void **state,
+                                   const char *text)
+{
+    if (!state || !text) return NPRFX_ERR_INVALID_ARGUMENT;
+    if (!nprfx_node_measures_shot(node))
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED, "%s: measures nothing over the shot",
+                           node ? node->id : "(no node)");
+    return node->state_load(ctx, state, text);
+}
+
 /* ---- descriptor lint ------------------------------------------------------------------------ */
 
 /* Identifiers are what graphs, --set and OFX use: lower-case letters, digits, '_' ('-' in node

@@ -12,6 +12,8 @@
 
 #include "nprfx/exec.h"
 #include "base/internal_state.h"
+#include "internal_tone.h"
+#include "nprfx/rng.h"
 #include "nprfx/tone.h"
 
 /* A shot's measured samples are capped so that a long shot stays in bounded memory (16 MB). */
@@ -115,18 +117,6 @@ double nprfx_tone_percentile(float *values, size_t n, double q)
     return a + f * (b - a);
 }
 
-/* ---- samples of one frame -------------------------------------------------------------------- */
-
-static uint64_t hash_bytes(uint64_t h, const void *data, size_t n)
-{
-    const unsigned char *b = data;
-    for (size_t i = 0; i < n; i++) {
-        h ^= b[i];
-        h *= 0x100000001b3ull;
-    }
-    return h;
-}
-
 /* The value mapped at (x, y): the tone, divided by the albedo when there is one. Outside an
  * input's data window it reads as 0 (the OpenEXR convention). */
 static double pixel_value(const nprfx_image *tone, const nprfx_image *albedo, int x, int y)
@@ -161,9 +151,9 @@ static nprfx_result tone_samples_capped(nprfx_context *ctx, const nprfx_image *t
     float *v = malloc((most ? most : 1) * sizeof *v);
     if (!v)
         return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "tone: no memory for %zu samples", most);
-    uint64_t hh = 0xcbf29ce484222325ull;
-    hh = hash_bytes(hh, &tone->bounds, sizeof tone->bounds);
-    hh = hash_bytes(hh, &s, sizeof s);
+    uint64_t hh = NPRFX_FNV_INIT;
+    hh = nprfx_fnv1a(hh, &tone->bounds, sizeof tone->bounds);
+    hh = nprfx_fnv1a(hh, &s, sizeof s);
     size_t k = 0;
     for (int y = tone->bounds.y0; y < tone->bounds.y1; y += s)
         for (int x = tone->bounds.x0; x < tone->bounds.x1; x += s) {
@@ -177,9 +167,9 @@ static nprfx_result tone_samples_capped(nprfx_context *ctx, const nprfx_image *t
             if (!isfinite(t)) continue;
             float f = (float)t;
             v[k++] = f;
-            hh = hash_bytes(hh, &f, sizeof f);
+            hh = nprfx_fnv1a(hh, &f, sizeof f);
         }
-    hh = hash_bytes(hh, &k, sizeof k);
+    hh = nprfx_fnv1a(hh, &k, sizeof k);
     *values = v;
     *n = k;
     *hash = hh;
@@ -197,38 +187,9 @@ nprfx_result nprfx_tone_samples(nprfx_context *ctx, const nprfx_image *tone,
                                values, n, hash);
 }
 
-/* ---- the per-instance cache ------------------------------------------------------------------ */
+/* ---- the per-instance cache (internal_tone.h; its text form: tone_state.c) ------------------- */
 
-/* What a measured range depends on: the param values that pick the samples and percentiles,
- * the shot, and a fingerprint of every frame's samples. A render compares the fingerprint of
- * its own frame with the stored one, so an upstream change is noticed and the range measured
- * again: the cache saves work and never changes a result. */
-typedef struct tone_cache {
-    pthread_mutex_t lock; /* first: internal_state.h */
-    int valid;
-    int range, reference, first, last;
-    double low, high;
-    double lo, hi;
-    int nframes;
-    uint64_t *hash; /* one per frame of the shot (RANGE_FRAME: one) */
-} tone_cache;
-
-void nprfx_tone_state_free(void *state)
-{
-    tone_cache *c = state;
-    if (!c) return;
-    free(c->hash);
-    internal_state_free(c);
-}
-
-int nprfx_tone_state_range(const void *state, double *lo, double *hi)
-{
-    const tone_cache *c = state;
-    if (!c || !c->valid) return 0;
-    *lo = c->lo;
-    *hi = c->hi;
-    return 1;
-}
+typedef internal_tone_cache tone_cache;
 
 /* ---- measuring ------------------------------------------------------------------------------- */
 

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "nprfx/advect.h"
+#include "nprfx/rng.h"
 #include "nprfx/context.h"
 #include "nprfx/exec.h"
 
@@ -337,32 +338,22 @@ void nprfx_advect_state_free(void *state)
     internal_state_free(c);
 }
 
-/* FNV-1a. */
-static uint64_t hash_bytes(uint64_t h, const void *data, size_t n)
-{
-    const unsigned char *b = data;
-    for (size_t i = 0; i < n; i++) {
-        h ^= b[i];
-        h *= 0x100000001b3ull;
-    }
-    return h;
-}
-#define HASH_INIT 0xcbf29ce484222325ull
+#define HASH_INIT NPRFX_FNV_INIT
 
 /* A sparse fingerprint of a view (its shape and a 32x32 grid of samples): cheap enough for every
  * call, and enough for a long-lived host instance to notice that an upstream input changed. */
 static uint64_t fingerprint(uint64_t h, const nprfx_image *im)
 {
-    if (!im || !im->data) return hash_bytes(h, "none", 4);
-    h = hash_bytes(h, &im->bounds, sizeof im->bounds);
-    h = hash_bytes(h, &im->channels, sizeof im->channels);
+    if (!im || !im->data) return nprfx_fnv1a(h, "none", 4);
+    h = nprfx_fnv1a(h, &im->bounds, sizeof im->bounds);
+    h = nprfx_fnv1a(h, &im->channels, sizeof im->channels);
     int w = nprfx_rect_width(im->bounds), ht = nprfx_rect_height(im->bounds);
     if (w <= 0 || ht <= 0) return h;
     for (int j = 0; j < 32; j++)
         for (int i = 0; i < 32; i++) {
             int x = im->bounds.x0 + (int)(((int64_t)(2 * i + 1) * w) / 64);
             int y = im->bounds.y0 + (int)(((int64_t)(2 * j + 1) * ht) / 64);
-            h = hash_bytes(h, nprfx_image_at(im, x, y), sizeof(float) * (size_t)im->channels);
+            h = nprfx_fnv1a(h, nprfx_image_at(im, x, y), sizeof(float) * (size_t)im->channels);
         }
     return h;
 }
@@ -521,16 +512,16 @@ nprfx_result nprfx_advect_render(const nprfx_render_args *args, const nprfx_adve
     }
     /* What the layer states depend on besides their inputs. */
     uint64_t key = HASH_INIT;
-    key = hash_bytes(key, &p->layers, sizeof p->layers);
-    key = hash_bytes(key, &p->period, sizeof p->period);
-    key = hash_bytes(key, &p->max_distortion, sizeof p->max_distortion);
-    key = hash_bytes(key, &p->min_confidence, sizeof p->min_confidence);
-    key = hash_bytes(key, &frame, sizeof frame);
-    key = hash_bytes(key, &scale, sizeof scale);
-    key = hash_bytes(key, &pm.motion_scale, sizeof pm.motion_scale);
-    key = hash_bytes(key, &args->first_frame, sizeof args->first_frame);
-    key = hash_bytes(key, &args->last_frame, sizeof args->last_frame);
-    key = hash_bytes(key, &run.have_conf, sizeof run.have_conf);
+    key = nprfx_fnv1a(key, &p->layers, sizeof p->layers);
+    key = nprfx_fnv1a(key, &p->period, sizeof p->period);
+    key = nprfx_fnv1a(key, &p->max_distortion, sizeof p->max_distortion);
+    key = nprfx_fnv1a(key, &p->min_confidence, sizeof p->min_confidence);
+    key = nprfx_fnv1a(key, &frame, sizeof frame);
+    key = nprfx_fnv1a(key, &scale, sizeof scale);
+    key = nprfx_fnv1a(key, &pm.motion_scale, sizeof pm.motion_scale);
+    key = nprfx_fnv1a(key, &args->first_frame, sizeof args->first_frame);
+    key = nprfx_fnv1a(key, &args->last_frame, sizeof args->last_frame);
+    key = nprfx_fnv1a(key, &run.have_conf, sizeof run.have_conf);
 
     if (c != &local) pthread_mutex_lock(&c->lock);
     if (!c->have_key || c->key != key) {

@@ -8,6 +8,7 @@
 
 #include "base/internal_state.h"
 #include "cn_cache.h"
+#include "nprfx/rng.h"
 
 void internal_cn_slot_free(cn_slot *s)
 {
@@ -42,12 +43,7 @@ void nprfx_coherent_noise_state_free(void *state)
 /* FNV-1a over bytes. */
 uint64_t internal_cn_hash_bytes(uint64_t h, const void *data, size_t n)
 {
-    const unsigned char *b = data;
-    for (size_t i = 0; i < n; i++) {
-        h ^= b[i];
-        h *= 0x100000001b3ull;
-    }
-    return h;
+    return nprfx_fnv1a(h, data, n);
 }
 uint64_t internal_cn_hash_f64(uint64_t h, double v)
 {

@@ -179,6 +179,28 @@ NPRFX_API int nprfx_graph_write_count(const nprfx_graph *g);
 NPRFX_API nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame,
                                         nprfx_image *out, const char *const **names);
 
+/* ---- shot statistics: measured once, stored beside the outputs (docs/design.md §1) ---- */
+
+/* Render once every node that measures over the shot (nprfx_node_measures_shot: tone's range),
+ * at the shot's first frame, so that each state holds its measurement; *measured (may be NULL)
+ * receives how many hold one. The graph needs a shot ("frames" or nprfx_graph_set_shot). */
+NPRFX_API nprfx_result nprfx_graph_analyze(nprfx_graph *g, int *measured);
+/* Write what those states hold to `path` (JSON, under a temporary name then renamed), with the
+ * shot and a fingerprint of every read node's files over it (sizes and times; no pixel). */
+NPRFX_API nprfx_result nprfx_graph_analysis_save(nprfx_graph *g, const char *path);
+/* Seed the measuring nodes' states from an analysis file; *seeded (may be NULL) receives how
+ * many. A file measured for another shot or other plates (or plates changed since) seeds
+ * nothing and gives a notice (nprfx_graph_options.notice); a seeded node whose rendered frame
+ * differs from what was measured measures again, with a notice, so the pixels never depend on
+ * the file. Errors: an unreadable or malformed file (the caller may go on without it). */
+NPRFX_API nprfx_result nprfx_graph_analysis_load(nprfx_graph *g, const char *path, int *seeded);
+/* Seeded nodes that found their frame differ from the analysis and measured again so far. */
+NPRFX_API int nprfx_graph_analysis_stale(const nprfx_graph *g);
+/* Where a graph loaded from graph_path keeps its analysis by default: beside its first write
+ * node's output, named after the graph file ("out/main/main.analysis.json"). */
+NPRFX_API void nprfx_graph_analysis_path(const nprfx_graph *g, const char *graph_path, char *buf,
+                                         size_t n);
+
 /* Estimate the memory that evaluating `frame` needs from the graph and the frame size alone
  * (plates' headers, synth sizes, "format"; no pixel is read), as the memory plan runs it: each
  * result freed after its last consumer, a temporal source's frames kept one frame longer, freed

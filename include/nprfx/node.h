@@ -258,6 +258,16 @@ struct nprfx_node_desc {
      * frames it holds, so a memory limit covers them. Without it: 0. Called through
      * nprfx_node_state_bytes. Appended: read it only when `size` covers it. */
     double (*state_bytes)(const void *params, const nprfx_state_query *q);
+    /* Optional, for STATEFUL nodes whose state holds what they measured over the whole shot (the
+     * tone node's range): that measurement as text, lines of "key value ..." (*text malloc'd;
+     * NULL while nothing is measured), and the state rebuilt from such text. A
+     * runner measures a shot once (`nprfx analyze`), stores the text and seeds every later run
+     * and farm chunk with it. A seeded state still checks what it can see (the rendered frame's
+     * own fingerprint) and measures again when that differs, so a result never depends on
+     * whether the state was seeded. Called through nprfx_node_state_save / _load. Appended: read
+     * them only when `size` covers them. */
+    nprfx_result (*state_save)(nprfx_context *ctx, const void *state, char **text);
+    nprfx_result (*state_load)(nprfx_context *ctx, void **state, const char *text);
 };
 
 /* Input i of a render call, or NULL when it is not connected (for nodes' optional inputs). */
@@ -300,6 +310,17 @@ NPRFX_API nprfx_result nprfx_node_frames_needed(nprfx_context *ctx, const nprfx_
 NPRFX_API nprfx_result nprfx_node_state_bytes(nprfx_context *ctx, const nprfx_node_desc *node,
                                               const nprfx_value *params, const nprfx_state_query *q,
                                               double *bytes);
+
+/* The shot-wide measurement in a node's state as text (desc->state_save): NPRFX_ERR_UNSUPPORTED
+ * when the node keeps none; *text NULL while nothing is measured. */
+NPRFX_API nprfx_result nprfx_node_state_save(nprfx_context *ctx, const nprfx_node_desc *node,
+                                             const void *state, char **text);
+/* Seed *state (freed and replaced when set) from text nprfx_node_state_save gave; errors name
+ * the node and the line. */
+NPRFX_API nprfx_result nprfx_node_state_load(nprfx_context *ctx, const nprfx_node_desc *node,
+                                             void **state, const char *text);
+/* Whether the node measures over the shot (has desc->state_save and desc->state_load). */
+NPRFX_API int nprfx_node_measures_shot(const nprfx_node_desc *node);
 
 /* The node's footprint for these params (desc->footprint; 0 without one) into *radius: pixels
  * at render scale 1, -1 for anywhere in the frame. Params are checked as for render. */

@@ -21,6 +21,19 @@ static inline uint64_t nprfx_mix64(uint64_t z)
     return z ^ (z >> 31);
 }
 
+/* FNV-1a over bytes, from NPRFX_FNV_INIT: the fingerprints caches compare (what a measured range
+ * or a kept frame was made from), never a random number. */
+#define NPRFX_FNV_INIT 0xcbf29ce484222325ull
+static inline uint64_t nprfx_fnv1a(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *b = (const unsigned char *)data;
+    for (size_t i = 0; i < n; i++) {
+        h ^= b[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
 /* Hash of the full counter. Each field is folded in through its own mixing round, so
  * neighbouring counters give unrelated outputs. */
 static inline uint64_t nprfx_hash(uint64_t seed, int64_t frame, int32_t x, int32_t y,

@@ -101,6 +101,12 @@ NPRFX_API int nprfx_tone_state_range(const void *state, double *lo, double *hi);
 
 NPRFX_API void nprfx_tone_state_free(void *state);
 
+/* The measured range as text (tone_state.c documents the lines; *text NULL while nothing is
+ * measured, or with range 'manual'), and a state seeded from it: the tone descriptor's
+ * state_save and state_load. */
+NPRFX_API nprfx_result nprfx_tone_state_save(nprfx_context *ctx, const void *state, char **text);
+NPRFX_API nprfx_result nprfx_tone_state_load(nprfx_context *ctx, void **state, const char *text);
+
 #ifdef __cplusplus
 }
 #endif

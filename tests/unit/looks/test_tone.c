@@ -255,6 +255,83 @@ static void test_shot_range(nprfx_context *ctx)
     free_shot(&s);
 }
 
+/* The measurement as text (what `nprfx analyze` stores): a state seeded from it maps every frame
+ * as the measured one, bit for bit, without fetching; a frame whose fingerprint differs from the
+ * text measures the shot again; bad text is refused naming the line. */
+static void test_state_text(nprfx_context *ctx)
+{
+    const nprfx_node_desc *n = &nprfx_node_tone;
+    CHECK(nprfx_node_measures_shot(n));
+    shot s;
+    make_shot(ctx, &s);
+    nprfx_value pv[16];
+    nprfx_node_defaults(n, pv);
+    nprfx_image out, again;
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &out);
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &again);
+    void *state = NULL;
+    char *text = NULL;
+    CHECK_OK(nprfx_node_state_save(ctx, n, state, &text));
+    CHECK(text == NULL); /* nothing measured yet */
+    CHECK_OK(render_frame(ctx, &s, pv, 1, &state, &out, 1));
+    CHECK_OK(nprfx_node_state_save(ctx, n, state, &text));
+    CHECK(text && strstr(text, "range shot\nframes 1 5\npercentiles 1 99\n") == text);
+    CHECK(strstr(text, "\nbits ") && strstr(text, "\nfingerprints "));
+    void *seeded = NULL;
+    CHECK_OK(nprfx_node_state_load(ctx, n, &seeded, text));
+    char *back = NULL;
+    CHECK_OK(nprfx_node_state_save(ctx, n, seeded, &back));
+    CHECK(back && !strcmp(back, text));
+    free(back);
+    for (int f = 1; f <= NF; f++) {
+        s.calls = 0;
+        CHECK_OK(render_frame(ctx, &s, pv, f, &seeded, &again, 1));
+        CHECK(s.calls == 0); /* seeded: nothing fetched */
+        CHECK_OK(render_frame(ctx, &s, pv, f, &state, &out, 1));
+        CHECK(memcmp(out.data, again.data, sizeof(float) * W * H) == 0);
+    }
+    nprfx_tone_state_free(seeded);
+    /* frame 4's fingerprint differs: rendering frame 4 measures again (fetches the shot) */
+    char *tampered = strdup(text);
+    char *fp = strstr(tampered, "fingerprints ") + 13 + 3 * 17;
+    *fp = *fp == '0' ? '1' : '0';
+    seeded = NULL;
+    CHECK_OK(nprfx_node_state_load(ctx, n, &seeded, tampered));
+    s.calls = 0;
+    CHECK_OK(render_frame(ctx, &s, pv, 3, &seeded, &again, 1));
+    CHECK(s.calls == 0);
+    CHECK_OK(render_frame(ctx, &s, pv, 4, &seeded, &again, 1));
+    CHECK(s.calls > 0);
+    CHECK_OK(nprfx_node_state_save(ctx, n, seeded, &back));
+    CHECK(back && !strcmp(back, text)); /* measured again: the true fingerprints */
+    free(back);
+    nprfx_tone_state_free(seeded);
+    free(tampered);
+    /* bad text */
+    const char *bad[][2] = {
+        {"frames 1 5\n", "line 'range': missing"},
+        {"range all\n", "line 'range': neither 'shot' nor 'frame'"},
+        {"range shot\nframes 5 1\npercentiles 1 99\nbits 0 0\nfingerprints 1 2 3 4 5\n",
+         "line 'frames'"},
+        {"range shot\nframes 1 5\npercentiles 1 99\nbits 0 0\nfingerprints 1 2 3\n",
+         "fewer than one a frame"},
+        {"range shot\nframes 1 2\npercentiles 1 99\nbits 0 0\nfingerprints 1 2 3\n",
+         "more than one a frame"},
+        {"range frame\nframes 3 3\npercentiles 1 99\nbits x 0\nfingerprints 1\n", "line 'bits'"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        seeded = NULL;
+        CHECK(nprfx_node_state_load(ctx, n, &seeded, bad[k][0]) == NPRFX_ERR_PARSE);
+        CHECK(strstr(th_error(ctx), bad[k][1]) != NULL);
+        nprfx_tone_state_free(seeded);
+    }
+    free(text);
+    nprfx_tone_state_free(state);
+    nprfx_image_free(&out);
+    nprfx_image_free(&again);
+    free_shot(&s);
+}
+
 static void test_albedo(nprfx_context *ctx)
 {
     /* tone / albedo: a checker texture under even light maps to one value */
@@ -315,6 +392,7 @@ int main(void)
     test_map();
     test_percentile();
     test_shot_range(ctx);
+    test_state_text(ctx);
     test_albedo(ctx);
     test_threads();
     nprfx_context_destroy(ctx);
