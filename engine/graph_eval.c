@@ -418,13 +418,14 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
     gmeta meta;
     memset(&meta, 0, sizeof meta);
     nprfx_result r;
+    int pooled = g->nodes[node].kind == GK_SYNTH;
     /* The node's own time for --stats: evaluations nested in it (a temporal node's fetches of
      * other frames) are counted in their own nodes. */
     double saved_child = g->child_seconds, t0 = engine_now();
     g->child_seconds = 0;
     switch (g->nodes[node].kind) {
     case GK_READ:
-        r = internal_graph_read_plate(g, node, frame, &im, &names, &meta);
+        r = internal_graph_read_plate(g, node, frame, &im, &names, &meta, &pooled);
         break;
     case GK_SYNTH:
         r = internal_graph_synth_plate(g, node, frame, &im, &names, &meta);
@@ -440,8 +441,7 @@ static nprfx_result eval_one(nprfx_graph *g, int node, int frame, centry **out)
      * then holds 11 while a temporal reader's window keeps it (its channel types with it). */
     int from_reader = 0;
     if (!r && (g->nodes[node].kind == GK_READ || g->nodes[node].kind == GK_SYNTH))
-        from_reader = !internal_graph_trim_plate(g, node, &im, &names, &meta) &&
-                      g->nodes[node].kind == GK_READ;
+        from_reader = !internal_graph_trim_plate(g, node, &im, &names, &meta, pooled) && !pooled;
     double el = engine_now() - t0;
     g->stats[node].seconds += el - g->child_seconds;
     g->stats[node].calls++;

@@ -61,6 +61,12 @@ static nprfx_result no_write_preview(nprfx_context *ctx, const char *path, const
 {
     return NO_IO(ctx, "write a preview");
 }
+static nprfx_result no_rows_note(nprfx_context *ctx, nprfx_row_reader *r, char **note, int *warning)
+{
+    *note = NULL; /* the shape's note stands */
+    *warning = 0;
+    return NPRFX_OK;
+}
 static nprfx_result no_convert_colorspace(nprfx_context *ctx, nprfx_image *im, const char *from,
                                           const char *to, const char *ocio_config)
 {
@@ -73,10 +79,10 @@ static nprfx_result no_convert_colorspace(nprfx_context *ctx, nprfx_image *im, c
 
 void internal_graph_io_init(nprfx_io *out, const nprfx_io *io)
 {
-    const nprfx_io none = {sizeof(nprfx_io),     no_read,        no_rows_open,  no_rows_read,
-                           no_rows_close,        no_info,        no_write,      no_rows_create,
-                           no_rows_write,        no_rows_finish, no_write_text, no_write_preview,
-                           no_convert_colorspace};
+    const nprfx_io none = {sizeof(nprfx_io),      no_read,        no_rows_open,  no_rows_read,
+                           no_rows_close,         no_info,        no_write,      no_rows_create,
+                           no_rows_write,         no_rows_finish, no_write_text, no_write_preview,
+                           no_convert_colorspace, no_rows_note};
     *out = none;
     TAKE(read);
     TAKE(rows_open);
@@ -90,4 +96,5 @@ void internal_graph_io_init(nprfx_io *out, const nprfx_io *io)
     TAKE(write_text);
     TAKE(write_preview);
     TAKE(convert_colorspace);
+    TAKE(rows_note);
 }

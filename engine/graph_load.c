@@ -201,7 +201,8 @@ static nprfx_result set_io_field(nprfx_graph *g, gnode *n, const char *key, cons
         }
         char **dst = (char **)((char *)n + f->offset);
         free(*dst);
-        *dst = engine_strdup(s);
+        /* an empty preview is none (--set out.preview= turns previews off) */
+        *dst = !strcmp(key, "preview") && !*s ? NULL : engine_strdup(s);
         if (!strcmp(key, "aovs")) { /* a mapping file is read again when the plate settles */
             internal_aov_map_free(n->aov_map);
             n->aov_map = NULL;

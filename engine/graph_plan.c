@@ -234,7 +234,8 @@ int internal_graph_plate_pick(nprfx_graph *g, int node, const char *const *names
     return kept;
 }
 
-int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta)
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta,
+                              int pooled)
 {
     int nc = im->channels, map[1024];
     int kept = internal_graph_plate_pick(g, node, (const char *const *)*names, nc, map);
@@ -270,10 +271,11 @@ int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char **
     if (meta && meta->types)
         for (int c = 0; c < kept; c++)
             meta->types[c] = meta->types[map[c]];
-    /* A synth frame goes back to the pool: the next frame's synth takes it without faulting
-     * its pages in again. A reader's plate goes back to the system: the reader allocates its
-     * own, so idle in the pool it would only hold the memory the trim saves. */
-    if (g->nodes[node].kind == GK_SYNTH) {
+    /* A pool frame (synth, a read by rows) goes back to the pool: the next frame's plate takes
+     * it without faulting its pages in again. A reader's own plate goes back to the system: the
+     * reader allocates its own, so idle in the pool it would only hold the memory the trim
+     * saves. */
+    if (pooled) {
         internal_graph_frame_release(g, im);
     } else {
         size_t bytes = internal_graph_image_bytes(im);

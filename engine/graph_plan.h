@@ -30,8 +30,9 @@ int internal_graph_plate_pick(nprfx_graph *g, int node, const char *const *names
 
 /* Keep only the channels of plate node's result (im, names, and meta's per-channel types when it
  * has them) that its readers take, when every reader then selects the very same channels
- * (internal_graph_plate_channels); whether it did. */
-int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names,
-                              gmeta *meta);
+ * (internal_graph_plate_channels); whether it did. pooled: im is a frame of the pool (a synth
+ * node's, a read's by rows), else the reader's own memory. */
+int internal_graph_trim_plate(nprfx_graph *g, int node, nprfx_image *im, char ***names, gmeta *meta,
+                              int pooled);
 
 #endif

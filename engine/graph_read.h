@@ -1,4 +1,5 @@
-/* nprfx graph engine — read and synth nodes' plates, whole or by rows (graph_read.c). Never installed. */
+/* nprfx graph engine — read and synth nodes' plates, whole or by rows (graph_read.c). Never
+ * installed. */
 #ifndef NPRFX_CLI_GRAPH_READ_H
 #define NPRFX_CLI_GRAPH_READ_H
 
@@ -7,10 +8,11 @@
 #include "nprfx/io.h"
 #include "nprfx/io_oiio.h"
 
-/* Read node `node` at frame into a plate of its own (im, names, meta): the channels the graph
- * uses, the motion channels its convention appends, converted to scene-linear. */
+/* Read node `node` at frame into a plate (im, names, meta): the channels the graph uses, the
+ * motion channels its convention appends, converted to scene-linear. *pooled: 1 when im is a
+ * frame of the pool (EXR), 0 when it is the reader's own memory (adopted). */
 nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprfx_image *im,
-                                       char ***names, gmeta *meta);
+                                       char ***names, gmeta *meta, int *pooled);
 
 /* Synth node `node` at frame: the channels its readers take of its scene. */
 nprfx_result internal_graph_synth_plate(nprfx_graph *g, int node, int frame, nprfx_image *im,

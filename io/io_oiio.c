@@ -16,6 +16,7 @@ static const nprfx_io table = {
     nprfx_io_write_text,
     nprfx_io_write_preview,
     nprfx_io_convert_colorspace,
+    nprfx_io_rows_note,
 };
 
 const nprfx_io *nprfx_io_oiio(void)

@@ -1,5 +1,5 @@
-/* nprfx I/O (libnprfx-io) — 8-bit PNG previews of scene-linear images, through an OCIO display and view or the
- * sRGB transfer function. */
+/* nprfx I/O (libnprfx-io) — 8-bit PNG previews of scene-linear images, through an OCIO display and
+ * view or the sRGB transfer function. */
 #include "nprfx/io_oiio.h"
 #include "io_colour.h"
 #include "io_write.h"
@@ -123,6 +123,10 @@ extern "C" nprfx_result nprfx_io_write_preview(nprfx_context *ctx, const char *p
         spec.alpha_channel = alpha ? 3 : -1;
         /* Already unassociated (or raw data): stop OIIO from un-premultiplying a second time. */
         spec.attribute("oiio:UnassociatedAlpha", 1);
+        /* zlib's fastest level: a preview is for looking at, and at the default level (6) its
+         * compression took most of a frame's write (the coloured pencil's 1080p RGBA preview:
+         * 4.45 MB instead of 4.25, in about half the time) */
+        spec.attribute("png:compressionLevel", 1);
         if (!o.raw && !*cfg_path) spec.attribute("oiio:ColorSpace", "sRGB");
         return write_atomic(ctx, path, spec, TypeDesc::UINT8, px.data(), OIIO::AutoStride,
                             OIIO::AutoStride);

@@ -1,6 +1,6 @@
-/* nprfx I/O (libnprfx-io) — reading image files (OpenImageIO): whole plates, the channels a caller picks, a
- * strip of rows at a time, header facts for nprfx info and attributes. Every entry point is
- * extern "C", catches every exception (a C caller cannot unwind through it) and reports through
+/* nprfx I/O (libnprfx-io) — reading image files (OpenImageIO): whole plates, the channels a caller
+ * picks, a strip of rows at a time, header facts for nprfx info and attributes. Every entry point
+ * is extern "C", catches every exception (a C caller cannot unwind through it) and reports through
  * nprfx_error, naming the file and, where one is at fault, the channel. */
 #include "nprfx/io_oiio.h"
 #include "io_guard.h"
@@ -26,6 +26,7 @@
 #include <unistd.h>
 
 #include <OpenColorIO/OpenColorIO.h>
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 
 namespace OCIO = OCIO_NAMESPACE;
@@ -88,6 +89,7 @@ struct reading {
     std::vector<uint32_t> umax; /* per delivered uint channel: the largest value read */
     std::vector<float> fbuf;
     std::vector<uint32_t> ubuf;
+    std::vector<Imath::half> hbuf;
 };
 
 /* The spans [lo, hi] of the delivered float (or half) and uint channels of part p; -1: none. */
@@ -226,17 +228,31 @@ static nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1,
                 const int lo = as_uint ? ulo : flo, hi = as_uint ? uhi : fhi, n = hi - lo + 1;
                 if (lo < 0) continue;
                 const size_t count = (size_t)(be - by) * w * (size_t)n;
+                /* A span of channels of one type is read as it is stored (TypeDesc::UNKNOWN)
+                 * and widened here: asked for a type, or for a subset of the channels, OIIO
+                 * converts through a buffer of its own, tens of megabytes allocated (and their
+                 * pages faulted in) at every call. A span of mixed types is converted by OIIO.
+                 * EXR uint channels (object ids) are read as integers and cast, since a float
+                 * read would normalise them to [0,1]. */
+                const TypeDesc want = as_uint ? TypeDesc::UINT : TypeDesc::FLOAT;
+                const TypeDesc stored = p->spec.channelformat(lo);
+                bool uniform = true;
+                for (int c = lo + 1; uniform && c <= hi; c++)
+                    uniform = p->spec.channelformat(c) == stored;
+                const bool half = uniform && !as_uint && stored == TypeDesc::HALF;
+                const bool native = half || (uniform && stored == want);
                 void *buf;
                 if (as_uint) {
                     rd.ubuf.resize(count);
                     buf = rd.ubuf.data();
+                } else if (half) {
+                    rd.hbuf.resize(count);
+                    buf = rd.hbuf.data();
                 } else {
                     rd.fbuf.resize(count);
                     buf = rd.fbuf.data();
                 }
-                /* EXR uint channels (object ids) are read as integers and cast, since a float
-                 * read would normalise them to [0,1]. */
-                const TypeDesc type = as_uint ? TypeDesc::UINT : TypeDesc::FLOAT;
+                const TypeDesc type = native ? TypeDesc::UNKNOWN : want;
                 bool ok =
                     p->spec.tile_width > 0
                         ? rd.in->read_tiles(p->index, 0, p->spec.x, p->spec.x + p->spec.width, by,
@@ -267,6 +283,10 @@ static nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1,
                                 d[x * nsel] = (float)v;
                                 if (v > most) most = v;
                             }
+                        } else if (half) {
+                            const Imath::half *s = rd.hbuf.data() + src;
+                            for (size_t x = 0; x < w; x++)
+                                d[x * nsel] = (float)s[x * (size_t)n];
                         } else {
                             const float *s = rd.fbuf.data() + src;
                             for (size_t x = 0; x < w; x++)
@@ -621,6 +641,19 @@ extern "C" nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader 
     } catch (const std::exception &e) {
         return nprfx_error(ctx, NPRFX_ERR_IO, "cannot read '%s': %s", r->rd.path.c_str(), e.what());
     }
+}
+
+extern "C" nprfx_result nprfx_io_rows_note(nprfx_context *ctx, nprfx_row_reader *r, char **note,
+                                           int *warning)
+{
+    if (!r || !note || !warning)
+        return nprfx_error(ctx, NPRFX_ERR_INVALID_ARGUMENT, "nprfx_io_rows_note: NULL argument");
+    nprfx_plate p;
+    std::memset(&p, 0, sizeof p);
+    nprfx_result e = set_note(ctx, r->rd, &p);
+    *note = p.note;
+    *warning = p.note_is_warning;
+    return e;
 }
 
 extern "C" void nprfx_io_rows_close(nprfx_row_reader *r)

@@ -205,6 +205,10 @@ typedef struct nprfx_io {
      * (NULL: $OCIO, else the built-in one). */
     nprfx_result (*convert_colorspace)(nprfx_context *ctx, nprfx_image *im, const char *from,
                                        const char *to, const char *ocio_config);
+    /* Appended (read when size covers it): the read's note as it stands after the rows read so
+     * far, which may say more than the shape's (uint values above 2^24 are known only once
+     * read); *note malloc'd, NULL when there is none. */
+    nprfx_result (*rows_note)(nprfx_context *ctx, nprfx_row_reader *r, char **note, int *warning);
 } nprfx_io;
 
 #ifdef __cplusplus

@@ -45,6 +45,9 @@ NPRFX_IO_API nprfx_result nprfx_io_rows_open(nprfx_context *ctx, const char *pat
 NPRFX_IO_API nprfx_result nprfx_io_rows_read(nprfx_context *ctx, nprfx_row_reader *r, int y0,
                                              int y1, float *dst);
 NPRFX_IO_API void nprfx_io_rows_close(nprfx_row_reader *r);
+/* The read's note after the rows read so far (nprfx_io.rows_note). */
+NPRFX_IO_API nprfx_result nprfx_io_rows_note(nprfx_context *ctx, nprfx_row_reader *r, char **note,
+                                             int *warning);
 
 NPRFX_IO_API nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprfx_file_info *out);
 
