@@ -49,6 +49,8 @@ nprfx_result nprfx_graph_node(const nprfx_graph *g, int i, nprfx_graph_node_info
     v.raw = n->raw;
     v.width = n->width;
     v.height = n->height;
+    v.read_channels = n->read_channels;
+    v.file_channels = n->file_channels;
     /* An older, shorter struct gets the fields it has. */
     size_t size = out->size && out->size < sizeof v ? out->size : sizeof v;
     memcpy(out, &v, size);

@@ -30,6 +30,7 @@
 #include "graph_limits.h"
 #include "aov_map.h"
 #include "graph_model.h"
+#include "graph_read.h"
 #include "graph_names.h"
 #include "nprfx/io.h"
 #include "nprfx/nprfx.h"
@@ -594,6 +595,8 @@ nprfx_result nprfx_graph_load(nprfx_context *ctx, const char *path, const nprfx_
 void nprfx_graph_free(nprfx_graph *g)
 {
     if (!g) return;
+    internal_graph_prefetch_stop(g); /* its frames go back to the pool first */
+    free(g->prefetch);
     internal_graph_cache_clear(g);
     frame_pool_destroy(g->pool);
     free(g->plan_uses);
@@ -605,6 +608,7 @@ void nprfx_graph_free(nprfx_graph *g)
         gnode *n = &g->nodes[i];
         if (n->state && n->desc && n->desc->state_free) n->desc->state_free(n->state);
         free(n->seeded);
+        free(n->read_channels);
         if (n->instance && g->has_hook && g->hook.release)
             g->hook.release(g->hook.user, n->desc, n->instance);
         for (int k = 0; k < n->ninputs; k++) {

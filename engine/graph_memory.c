@@ -1,7 +1,7 @@
-/* nprfx graph engine — frames under the memory limit (docs/design.md §1 "Memory"): a frame is handed out
- * only when it fits, after the pool's idle buffers and unpinned cached results, least recently
- * used first, have made room; a result leaves the cache once its last consumer at the frame has
- * run, and after each frame every result outside the temporal sources' window goes. */
+/* nprfx graph engine — frames under the memory limit (docs/design.md §1 "Memory"): a frame is
+ * handed out only when it fits, after the pool's idle buffers and unpinned cached results, least
+ * recently used first, have made room; a result leaves the cache once its last consumer at the
+ * frame has run, and after each frame every result outside the temporal sources' window goes. */
 #include <stdint.h>
 #include <stdio.h>
 #include "frame_pool.h"
@@ -70,6 +70,30 @@ nprfx_result internal_graph_frame_alloc_unset(nprfx_graph *g, int node, const ch
                                               nprfx_rect bounds, int channels, nprfx_image *im)
 {
     return frame_alloc(g, node, what, bounds, channels, 0, im);
+}
+
+nprfx_result internal_graph_frame_alloc_spare(nprfx_graph *g, int node, nprfx_rect bounds,
+                                              int channels, nprfx_image *im)
+{
+    size_t bytes = (size_t)nprfx_rect_width(bounds) * (size_t)nprfx_rect_height(bounds) *
+                   (size_t)(channels > 0 ? channels : 0) * sizeof(float);
+    if (g->mem_limit != UINT64_MAX) {
+        if (g->held_bytes + g->state_bytes + bytes > g->mem_limit) return NPRFX_ERR_OUT_OF_MEMORY;
+        if (g->held_bytes + g->state_bytes + frame_pool_idle_bytes(g->pool) + bytes > g->mem_limit)
+            frame_pool_trim(g->pool, 0);
+    }
+    int reused = 0;
+    if (nprfx_image_limit_check(NULL, "", nprfx_rect_width(bounds), nprfx_rect_height(bounds),
+                                channels, 0) ||
+        frame_pool_alloc(g->pool, NULL, bounds, channels, 0, im, &reused))
+        return NPRFX_ERR_OUT_OF_MEMORY;
+    g->held_bytes += bytes;
+    if (node >= 0 && node < g->count) {
+        g->stats[node].bytes += bytes;
+        if (!reused) g->stats[node].fresh_bytes += bytes;
+    }
+    internal_graph_note_peak(g);
+    return NPRFX_OK;
 }
 
 void internal_graph_consumed(nprfx_graph *g, centry *e)

@@ -17,6 +17,12 @@ nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *wh
 nprfx_result internal_graph_frame_alloc_unset(nprfx_graph *g, int node, const char *what,
                                               nprfx_rect bounds, int channels, nprfx_image *im);
 
+/* A frame for work ahead (the next frame's plate), only when it fits under the limit beside what
+ * the graph holds without dropping a cached result: NPRFX_ERR_OUT_OF_MEMORY, raised nowhere,
+ * when it does not. Not cleared. */
+nprfx_result internal_graph_frame_alloc_spare(nprfx_graph *g, int node, nprfx_rect bounds,
+                                              int channels, nprfx_image *im);
+
 /* One consumer at e's frame has used e: when none is left and no temporal node reads e's node
  * at other frames, e leaves the cache now (unless pinned) instead of waiting for eviction. */
 void internal_graph_consumed(nprfx_graph *g, centry *e);

@@ -42,6 +42,9 @@ typedef struct gnode {
     char *aovs;             /* read: its renderer profile (nprfx/aov.h); NULL or "auto": detected */
     int half, raw, width, height;
     int noted; /* read: its note on parts and views was given (once per run) */
+    /* read: the channels its last read took ("a,b,c"; graph_read.c) of the file's count */
+    char *read_channels;
+    int file_channels;
     /* read: the channels the graph asks of it by name (references' selections, the vectors
      * convention), gathered for all reads at the first one; they pick the default part. */
     char **wants;
@@ -172,7 +175,11 @@ struct nprfx_graph {
     nprfx_io io;              /* nprfx_graph_options.io, completed (graph_io.h) */
     nprfx_context *owned_ctx; /* ctx when the graph made it (the file's scope): freed with it */
     char *analysis_path;      /* the analysis that seeded nodes' states (graph_analysis.c) */
-    int analysis_stale;       /* seeded nodes that measured the shot again */
+    /* The frame nprfx_graph_run renders next (has_next), whose plates decode ahead, one per
+     * read node (graph_prefetch.c). */
+    int has_next, next_frame;
+    struct internal_prefetch *prefetch;
+    int analysis_stale; /* seeded nodes that measured the shot again */
 };
 
 /* A note or warning for the caller (nprfx_graph_options.notice), printf-style; nothing without

@@ -103,7 +103,24 @@ typedef struct read_pick {
 static int pick_channels(void *user, const char *const *names, int n, int *pick)
 {
     const read_pick *rp = user;
-    return internal_graph_read_pick(rp->g, rp->node, names, n, pick);
+    int m = internal_graph_read_pick(rp->g, rp->node, names, n, pick);
+    /* what --stats says the read takes of its files */
+    gnode *nd = &rp->g->nodes[rp->node];
+    size_t len = 1;
+    for (int k = 0; k < (m > 0 ? m : n); k++)
+        len += strlen(names[m > 0 ? pick[k] : k]) + 1;
+    char *list = malloc(len);
+    if (list) {
+        list[0] = 0;
+        for (int k = 0; k < (m > 0 ? m : n); k++) {
+            if (k) strcat(list, ",");
+            strcat(list, names[m > 0 ? pick[k] : k]);
+        }
+        free(nd->read_channels);
+        nd->read_channels = list;
+        nd->file_channels = n;
+    }
+    return m;
 }
 
 /* The read's note on parts and views, once per node. */
@@ -213,84 +230,119 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
  * scratch, each band copied beside the channels the read appends while it is in the cache. A
  * whole read into memory of its own cost a fresh mapping of the plate every frame (100+ MB at
  * 1080p: a fifth of the read in page faults), another for the appended channels, and a copy
- * each. *pooled is 0 when the file cannot be read by rows (not EXR): the caller reads it whole. */
-static nprfx_result read_pooled(nprfx_graph *g, int node, const char *file, nprfx_image *im,
-                                char ***names, gmeta *meta, int *pooled)
+ * each. Three steps, so that the middle one, all of the decoding, may run on another thread
+ * while the current frame computes (graph_prefetch.c): open (the header, the frame from the
+ * pool), fill (the pixels: touches nothing of the graph), finish (names, note, colour). */
+nprfx_result internal_graph_pooled_open(nprfx_graph *g, int node, int frame, int spare,
+                                        pooled_read *p, int *ok)
 {
     gnode *n = &g->nodes[node];
-    *pooled = 0;
+    memset(p, 0, sizeof *p);
+    *ok = 0;
+    p->node = node;
+    p->frame = frame;
+    internal_graph_resolve_path(g, g->base_dir, n->path, frame, p->file, sizeof p->file);
+    nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
+    if (r) return r;
     read_pick rp = {g, node};
     nprfx_read_options ro = read_options_of(n, &rp);
-    nprfx_plate shape;
-    nprfx_row_reader *rr = NULL;
-    nprfx_result r = g->io.rows_open(n->ctx, file, &ro, &shape, &rr);
-    if (r == NPRFX_ERR_UNSUPPORTED) return NPRFX_OK;
+    /* a prefetch says nothing: the frame's own read says what is wrong, when it comes */
+    nprfx_context *ctx = spare ? NULL : n->ctx;
+    r = g->io.rows_open(ctx, p->file, &ro, &p->shape, &p->rr);
+    if (r == NPRFX_ERR_UNSUPPORTED || (r && spare)) return NPRFX_OK;
     if (r) return r;
-    gextra x;
-    float *band = NULL;
-    char **all = NULL;
-    int nc = shape.nchannels, frame_held = 0;
-    r = internal_graph_extras(g, n, file, (const char *const *)shape.names, nc, &x);
-    int nn = nc + (r ? 0 : x.count);
-    const int w = nprfx_rect_width(shape.bounds), h = nprfx_rect_height(shape.bounds);
-    const int band_rows = 32;
+    p->nc = p->shape.nchannels;
+    r = internal_graph_extras(g, n, p->file, (const char *const *)p->shape.names, p->nc, &p->x);
+    p->nn = p->nc + (r ? 0 : p->x.count);
     char what[600];
     snprintf(what, sizeof what, "node '%s': plate", n->name);
-    if (!r) r = internal_graph_frame_alloc_unset(g, node, what, shape.bounds, nn, im);
-    frame_held = !r;
-    if (!r) {
-        band = malloc((size_t)w * band_rows * (size_t)nc * sizeof *band);
-        all = calloc((size_t)nn, sizeof *all);
-        if (!band || !all)
-            r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
+    if (!r)
+        r = spare ? internal_graph_frame_alloc_spare(g, node, p->shape.bounds, p->nn, &p->im)
+                  : internal_graph_frame_alloc_unset(g, node, what, p->shape.bounds, p->nn, &p->im);
+    if (r) {
+        g->io.rows_close(p->rr);
+        nprfx_plate_free(&p->shape);
+        memset(p, 0, sizeof *p);
+        return spare ? NPRFX_OK : r;
     }
+    p->io = g->io;
+    *ok = 1;
+    return NPRFX_OK;
+}
+
+void internal_graph_pooled_fill(pooled_read *p, nprfx_context *ctx)
+{
+    const int w = nprfx_rect_width(p->shape.bounds), h = nprfx_rect_height(p->shape.bounds);
+    const int band_rows = 32, nc = p->nc, nn = p->nn;
+    float *band = malloc((size_t)w * band_rows * (size_t)nc * sizeof *band);
+    nprfx_result r =
+        band ? NPRFX_OK
+             : nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", p->file);
     for (int y = 0; !r && y < h; y += band_rows) {
         const int y1 = y + band_rows < h ? y + band_rows : h;
-        nprfx_rect b = {shape.bounds.x0, shape.bounds.y0 + y, shape.bounds.x1,
-                        shape.bounds.y0 + y1};
-        if ((r = g->io.rows_read(n->ctx, rr, b.y0, b.y1, band))) break;
-        float *dst = nprfx_image_at(im, b.x0, b.y0);
-        for (size_t p = 0; p < (size_t)(y1 - y) * (size_t)w; p++)
-            memcpy(dst + p * (size_t)nn, band + p * (size_t)nc, (size_t)nc * sizeof(float));
-        if (nn > nc) internal_graph_extra_fill(&x, band, nc, dst, nn, b, shape.display);
+        nprfx_rect b = {p->shape.bounds.x0, p->shape.bounds.y0 + y, p->shape.bounds.x1,
+                        p->shape.bounds.y0 + y1};
+        if ((r = p->io.rows_read(ctx, p->rr, b.y0, b.y1, band))) break;
+        float *dst = nprfx_image_at(&p->im, b.x0, b.y0);
+        for (size_t k = 0; k < (size_t)(y1 - y) * (size_t)w; k++)
+            memcpy(dst + k * (size_t)nn, band + k * (size_t)nc, (size_t)nc * sizeof(float));
+        if (nn > nc) internal_graph_extra_fill(&p->x, band, nc, dst, nn, b, p->shape.display);
     }
-    /* the note as the rows left it (uint ids above 2^24 are known once read) */
-    char *note = NULL;
-    int warning = 0;
-    if (!r) r = g->io.rows_note(n->ctx, rr, &note, &warning);
-    g->io.rows_close(rr);
     free(band);
+    /* the note as the rows left it (uint ids above 2^24 are known once read) */
+    if (!r) r = p->io.rows_note(ctx, p->rr, &p->note, &p->warning);
+    p->io.rows_close(p->rr);
+    p->rr = NULL;
+    p->r = r;
+}
+
+void internal_graph_pooled_drop(nprfx_graph *g, pooled_read *p)
+{
+    if (p->rr) g->io.rows_close(p->rr);
+    if (p->im.data) internal_graph_frame_release(g, &p->im);
+    free(p->note);
+    nprfx_plate_free(&p->shape);
+    memset(p, 0, sizeof *p);
+}
+
+nprfx_result internal_graph_pooled_finish(nprfx_graph *g, pooled_read *p, nprfx_image *im,
+                                          char ***names, gmeta *meta)
+{
+    gnode *n = &g->nodes[p->node];
+    const int nc = p->nc, nn = p->nn;
+    nprfx_result r = p->r;
+    char **all = r ? NULL : calloc((size_t)nn, sizeof *all);
+    if (!r && !all) r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     for (int c = 0; !r && c < nn; c++)
         if (!(all[c] =
-                  engine_strdup(c < nc ? shape.names[c] : internal_graph_extra_name(n, c - nc))))
-            r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", file);
+                  engine_strdup(c < nc ? p->shape.names[c] : internal_graph_extra_name(n, c - nc))))
+            r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", p->file);
     if (!r) {
-        if (note)
-            plate_note(g, n, note, warning);
+        if (p->note)
+            plate_note(g, n, p->note, p->warning);
         else
-            plate_note(g, n, shape.note, shape.note_is_warning);
-        r = plate_colour(g, n, file, im, (const char *const *)all);
+            plate_note(g, n, p->shape.note, p->shape.note_is_warning);
+        r = plate_colour(g, n, p->file, &p->im, (const char *const *)all);
     }
-    free(note);
-    unsigned char *types = r ? NULL : realloc(shape.types, (size_t)nn);
+    unsigned char *types = r ? NULL : realloc(p->shape.types, (size_t)nn);
     if (types) {
         for (int c = nc; c < nn; c++) /* the appended channels are floats of their own */
             types[c] = NPRFX_PIXEL_FLOAT;
-        shape.types = NULL;
+        p->shape.types = NULL;
     }
     if (r) {
         engine_names_free(all, all ? nn : 0);
-        if (frame_held) internal_graph_frame_release(g, im);
-        nprfx_plate_free(&shape);
+        internal_graph_pooled_drop(g, p);
         return r;
     }
+    *im = p->im;
+    p->im.data = NULL;
     *names = all;
     internal_graph_variant_plate(g, im, *names);
-    meta->display = shape.display;
-    meta->pixel_aspect = shape.pixel_aspect;
+    meta->display = p->shape.display;
+    meta->pixel_aspect = p->shape.pixel_aspect;
     meta->types = types;
-    nprfx_plate_free(&shape);
-    *pooled = 1;
+    internal_graph_pooled_drop(g, p);
     return NPRFX_OK;
 }
 
@@ -305,8 +357,22 @@ nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprf
     nprfx_result r = n->wants_known ? NPRFX_OK : gather_wants(g);
     if (r) return r;
     *pooled = 0;
-    if (!g->no_pool && (r = read_pooled(g, node, file, im, names, meta, pooled))) return r;
-    if (*pooled) return NPRFX_OK;
+    if (!g->no_pool) {
+        /* decoded already while the frame before computed, or now */
+        pooled_read p;
+        int ok = 0;
+        if (!(r = internal_graph_prefetched(g, node, frame, &p, &ok)) && !ok &&
+            !(r = internal_graph_pooled_open(g, node, frame, 0, &p, &ok)) && ok)
+            internal_graph_pooled_fill(&p, n->ctx);
+        if (!r && ok) r = internal_graph_pooled_finish(g, &p, im, names, meta);
+        /* the next frame's plate decodes while this one computes */
+        if (!r) internal_graph_prefetch_next(g, node, frame);
+        if (r) return r;
+        if (ok) {
+            *pooled = 1;
+            return NPRFX_OK;
+        }
+    }
     read_pick rp = {g, node};
     nprfx_read_options ro = read_options_of(n, &rp);
     if ((r = g->io.read(n->ctx, file, &ro, &plate))) return r;

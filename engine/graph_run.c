@@ -6,6 +6,7 @@
 #include "engine_util.h"
 #include "graph_aovs.h"
 #include "graph_model.h"
+#include "graph_read.h"
 #include "nprfx/graph.h"
 
 nprfx_result nprfx_graph_check(nprfx_graph *g, const nprfx_frame_list *frames,
@@ -36,6 +37,9 @@ nprfx_result nprfx_graph_run(nprfx_graph *g, const nprfx_frame_list *frames,
     for (int k = 0; k < count; k++) {
         double tf = engine_now();
         int written = 0;
+        /* the next frame's plates decode while this one computes */
+        g->has_next = k + 1 < count;
+        g->next_frame = g->has_next ? frames->frames[k + 1] : 0;
         nprfx_result r = nprfx_graph_render_frame(g, frames->frames[k], &written);
         if (r) {
             sum.failed++;
@@ -49,6 +53,8 @@ nprfx_result nprfx_graph_run(nprfx_graph *g, const nprfx_frame_list *frames,
         if (o.progress && o.progress(o.user, &p)) break;
         if (r && !o.keep_going) break;
     }
+    g->has_next = 0;
+    internal_graph_prefetch_stop(g);
     sum.seconds = engine_now() - t0;
     if (o.stats) {
         const nprfx_graph_node_stats *st;

@@ -263,6 +263,11 @@ typedef struct nprfx_graph_node_info {
     const char *path, *preview, *colorspace, *vectors, *compression, *scene, *display, *view;
     const char *part, *read_view;
     int half, raw, width, height;
+    /* Appended. A read node after its first read: the channels it reads of its files (only
+     * those its readers use, and what its motion channels are made of), comma-separated, and
+     * how many its files have; NULL and 0 before. */
+    const char *read_channels;
+    int file_channels;
 } nprfx_graph_node_info;
 
 NPRFX_API int nprfx_graph_node_count(const nprfx_graph *g);
