@@ -137,7 +137,9 @@ static OfxStatus main_entry(int index, const char *action, const void *handle,
         return ofx_frames_needed(inst, in_args, out_args);
     if (!strcmp(action, kOfxImageEffectActionGetClipPreferences))
         return ofx_clip_preferences(inst, out_args);
-    if (!strcmp(action, kOfxActionInstanceChanged)) return ofx_instance_changed(inst, in_args);
+    if (!strcmp(action, kOfxActionInstanceChanged))
+        return ofx_is_analyze(inst, in_args) ? ofx_analyze(inst)
+                                             : ofx_instance_changed(inst, in_args);
     if (!strcmp(action, kOfxActionPurgeCaches)) {
         ofx_instance_drop_state(inst);
         return kOfxStatOK;

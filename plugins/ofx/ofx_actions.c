@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "ofx_actions.h"
+#include "ofx_render.h"
 #include "ofx_derive.h"
 #include "ofx_names.h"
 #include "ofx_params.h"
@@ -115,6 +116,10 @@ OfxStatus ofx_frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
         nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
         int n = 0;
         if (!ofx_g.temporal) {
+            r[0].first = r[0].last = time;
+            n = 1;
+        } else if (ofx_analysis_text(inst)) {
+            /* measured by Analyze Shot: a render reads its own frame */
             r[0].first = r[0].last = time;
             n = 1;
         } else if (nprfx_node_frames_needed(ctx, d, values, &q, k, r, &n) != NPRFX_OK) {

@@ -391,6 +391,28 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         ofx_set_int(pp, kOfxParamPropDisplayMax, 0, 4096);
         add_page_child(page, &nchildren, name);
     }
+    if (nprfx_node_measures_shot(d)) {
+        /* as trackers do: a button that measures, and what it measured kept in the project */
+        ofx_names_extra_param(d, "analyze", name, sizeof name);
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, name, &pp)) != kOfxStatOK)
+            return st;
+        ofx_set_str(pp, kOfxPropLabel, 0, "Analyze Shot");
+        ofx_set_str(pp, kOfxParamPropHint, 0,
+                    "Measure what this node measures over the whole shot (the tone range) now, "
+                    "once, reading every frame of its inputs, and keep it with the project "
+                    "(as nprfx analyze does for the runner): renders then read only their own "
+                    "frame. The pixels are the same as without it. Press it again after the "
+                    "plates change; a frame that differs from what was measured measures the "
+                    "shot again.");
+        add_page_child(page, &nchildren, name);
+        if ((st = define_extra(ps, d, kOfxParamTypeString, "analysis", "Analysis",
+                               "What Analyze Shot measured, kept with the project. Empty: the "
+                               "first render measures the shot.",
+                               name, sizeof name, &pp)) != kOfxStatOK)
+            return st;
+        ofx_set_str(pp, kOfxParamPropDefault, 0, "");
+        ofx_set_int(pp, kOfxParamPropSecret, 0, 1);
+    }
     for (int k = 0; k < d->num_inputs; k++) {
         if (!general && k != main) continue;
         /* Source read whole by the flow: a main input that is derived has no channels to pick */

@@ -88,6 +88,10 @@ OfxStatus ofx_instance_create(const nprfx_node_desc *d, OfxImageEffectHandle fx)
     if (!ofx_names_has_pixel_params(d) ||
         pm->paramGetHandle(ps, name, &inst->design_width, NULL) != kOfxStatOK)
         inst->design_width = NULL;
+    ofx_names_extra_param(d, "analysis", name, sizeof name);
+    if (!nprfx_node_measures_shot(d) ||
+        pm->paramGetHandle(ps, name, &inst->analysis, NULL) != kOfxStatOK)
+        inst->analysis = NULL;
     if (inst->mask) {
         ofx_names_extra_param(d, "mix", name, sizeof name);
         if (pm->paramGetHandle(ps, name, &inst->mix, NULL) != kOfxStatOK) inst->mix = NULL;

@@ -20,6 +20,9 @@ typedef struct ofx_instance {
     OfxParamHandle *selectors;       /* per input; NULL without a channel selector */
     OfxParamHandle mix, mask_invert; /* NULL unless the node is maskable */
     OfxParamHandle design_width;     /* NULL unless the node has params in pixels */
+    /* What Analyze Shot measured (nprfx_node_state_save's text), kept in the project; NULL
+     * unless the node measures over its shot (ofx_render.c, ofx_analyze). */
+    OfxParamHandle analysis;
     pthread_mutex_t lock; /* held around renders of stateful nodes and around freeing state */
     void *state;          /* the node's per-instance slot (nprfx_render_args.state) */
     int persistent;       /* a persistent error message is shown on the effect */

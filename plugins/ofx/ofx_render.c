@@ -32,9 +32,32 @@ static OfxRectI to_pixels(OfxRectD r, double sx, double sy, double par)
     return p;
 }
 
+const char *ofx_analysis_text(const ofx_instance *inst)
+{
+    char *text = NULL;
+    if (!inst->analysis || ofx_g.param->paramGetValue(inst->analysis, &text) != kOfxStatOK ||
+        !text || !*text)
+        return NULL;
+    return text;
+}
+
+static OfxStatus render_at(ofx_instance *inst, double time, double *scale, const int *win,
+                           int measure);
+
+int ofx_is_analyze(const ofx_instance *inst, OfxPropertySetHandle in_args)
+{
+    char *type = NULL, *name = NULL, analyze[NPRFX_OFX_NAME_MAX];
+    if (!inst->analysis || !in_args ||
+        ofx_g.prop->propGetString(in_args, kOfxPropType, 0, &type) != kOfxStatOK ||
+        ofx_g.prop->propGetString(in_args, kOfxPropName, 0, &name) != kOfxStatOK || !type ||
+        !name || strcmp(type, kOfxTypeParameter))
+        return 0;
+    ofx_names_extra_param(inst->desc, "analyze", analyze, sizeof analyze);
+    return !strcmp(name, analyze);
+}
+
 OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 {
-    const nprfx_node_desc *d = inst->desc;
     const OfxPropertySuiteV1 *ps = ofx_g.prop;
     double time = 0, scale[2] = {1, 1};
     int win[4] = {0, 0, 0, 0};
@@ -45,6 +68,32 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         !(scale[0] > 0))
         scale[0] = scale[1] = 1;
     if (!(scale[1] > 0)) scale[1] = scale[0];
+    return render_at(inst, time, scale, win, 0);
+}
+
+OfxStatus ofx_analyze(ofx_instance *inst)
+{
+    double first = 0, last = 0, scale[2] = {1, 1};
+    ofx_shot_range(inst, &first, &last);
+    /* measured afresh: what the param held goes */
+    ofx_instance_drop_state(inst);
+    if (ofx_g.param->paramSetValue(inst->analysis, "") != kOfxStatOK) return kOfxStatFailed;
+    /* one pixel of the first frame: the node measures the shot whatever the window */
+    OfxRectD rod;
+    if (ofx_frame_rod(inst, first, &rod) != kOfxStatOK) return kOfxStatFailed;
+    int x = (int)floor(rod.x1), y = (int)floor(rod.y1);
+    int win[4] = {x, y, x + 1, y + 1};
+    return render_at(inst, first, scale, win, 1);
+}
+
+/* Render the window at time into the output clip's image; measure: into a scratch image of the
+ * window alone (no host image: the instance-changed action has none), then keep what the state
+ * measured in the analysis param. */
+static OfxStatus render_at(ofx_instance *inst, double time, double *scale, const int *win,
+                           int measure)
+{
+    const nprfx_node_desc *d = inst->desc;
+    const OfxPropertySuiteV1 *ps = ofx_g.prop;
 
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     ci.executor = &ofx_host_executor;
@@ -181,7 +230,8 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_output_info oi;
     if ((r = nprfx_node_output_info(rc.ctx, d, values, in_ch, &oi))) goto done;
     int nout = oi.channels;
-    OfxStatus st = ofx_img_fetch(inst->output, time, 0, &out);
+    OfxStatus st = measure ? kOfxStatOK : ofx_img_fetch(inst->output, time, 0, &out);
+    if (measure) out.b = wr;
     if (st != kOfxStatOK) {
         r = nprfx_error(rc.ctx, NPRFX_ERR_INTERNAL, "%s: the host gave no output image (%d)", d->id,
                         st);
@@ -192,7 +242,7 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     nprfx_rect window = nprfx_rect_intersect(host_window, frame);
     /* The result: in place where the host image holds the first nout components in order,
      * else in a scratch image covering the window. */
-    if (out.bytes == 4 && (out.ncomp == 4 || out.ncomp == 3) && nout <= out.ncomp &&
+    if (!measure && out.bytes == 4 && (out.ncomp == 4 || out.ncomp == 3) && nout <= out.ncomp &&
         !nprfx_rect_empty(window)) {
         if ((r = ofx_img_view(&out, rc.f, 0, nout, &res, &res_scratch))) goto done;
     } else if (!nprfx_rect_empty(window)) {
@@ -209,7 +259,7 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
     fj.f = rc.f;
     fj.nout = nout;
     fj.mix = 1.0;
-    if (inst->mix) {
+    if (inst->mix && !measure) {
         double mix = 1.0;
         int inv = 0;
         if (ofx_g.param->paramGetValueAtTime(inst->mix, time, &mix) == kOfxStatOK) fj.mix = mix;
@@ -247,11 +297,31 @@ OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
         a.fetch = inst->derive ? ofx_footage_fetch : ofx_g.temporal ? ofx_fetch_input : NULL;
         a.fetch_user = &rc;
         a.state = &inst->state;
+        /* What Analyze Shot measured, into a fresh state (the text is checked as it is used:
+         * a frame that differs measures again); unreadable text is as none. */
+        const char *analysis = measure ? NULL : ofx_analysis_text(inst);
+        if (analysis && !inst->state &&
+            nprfx_node_state_load(rc.ctx, d, &inst->state, analysis) != NPRFX_OK && inst->state) {
+            d->state_free(inst->state);
+            inst->state = NULL;
+        }
         r = nprfx_node_render(&a);
+        if (!r && measure) {
+            char *text = NULL;
+            if (!(r = nprfx_node_state_save(rc.ctx, d, inst->state, &text)) && text &&
+                ofx_g.param->paramSetValue(inst->analysis, text) != kOfxStatOK)
+                r = nprfx_error(rc.ctx, NPRFX_ERR_INTERNAL,
+                                "%s: the host did not keep the analysis", d->id);
+            free(text);
+        }
         if (!r && inst->derive && !ofx_g.temporal) r = ofx_footage_keep(&rc, ofx_round_frame(time));
         if (locked) pthread_mutex_unlock(&inst->lock);
         locked = 0;
         if (r) goto done;
+        if (measure) {
+            status = kOfxStatOK;
+            goto done;
+        }
         nprfx_parallel_for(&ofx_host_executor, nprfx_rect_height(window), 16, ofx_finish_rows, &fj);
         /* The export param writes the frame's vectors from hosts as from the runner; proxy
          * renders do not (their coordinates would be scaled). */

@@ -35,6 +35,7 @@ for s in $STYLES; do
         --output-dir probe --analysis off > probe.txt 2>&1 || { echo "| $s | failed: $(tail -1 probe.txt) |"; continue; }
     chans=$(sed -n "s/^read 'plate' takes [0-9]* of its files' [0-9]* channels: //p" probe.txt)
     rm -rf "p_$s"
+    mkdir -p "p_$s"
     for f in $(seq 1 $N); do
         oiiotool "whole/o.$(printf %04d $f).exr" --ch "$chans" -d half --compression zip \
             -o "p_$s/o.$(printf %04d $f).exr" 2> /dev/null
@@ -58,4 +59,5 @@ oiiotool --threads "$T" whole/o.0001.exr --ch R,G,B -o floor.exr 2> /dev/null ||
     oiiotool --threads "$T" whole/o.0001.exr --ch ViewLayer.Combined.R,ViewLayer.Combined.G,ViewLayer.Combined.B -o floor.exr
 t1=$(date +%s.%N)
 echo
-echo "I/O floor: oiiotool reads the $SIZE plate (all $(oiiotool --info -v whole/o.0001.exr | grep -c '^ *channel' || true) passes, half) and writes its RGB in $(echo "$t1 - $t0" | bc) s"
+nch=$("$NPRFX" info whole/o.0001.exr | sed -n '1s/.* \([0-9]*\) channels.*/\1/p')
+echo "I/O floor: oiiotool reads one $SIZE frame of the whole plate ($nch half channels, zip) and writes its RGB in $(echo "$t1 - $t0" | bc) s"

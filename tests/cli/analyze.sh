@@ -132,4 +132,20 @@ EOF
 expect_rc 0 "$NPRFX" farm copy.json --frames 1-24 --chunk 6 --emit jobs2
 [ ! -e jobs2/analyze.sbatch ] || fail "an analysis job for a graph that measures nothing"
 lacks jobs2/submit.sh "afterok"
+# --- OpenFX: the Analyze Shot button of a tone plug-in measures in the instance-changed action;
+# the first render then declares and fetches its own frame alone (the test host checks that the
+# frames fetched are the frames declared), and the pixels are the runner's.
+OFXTEST=${NPRFX_OFXTEST:-$(dirname "$NPRFX")/nprfx-ofxtest}
+BUNDLE=$(cd "$(dirname "$NPRFX")" && pwd)/plugins/ofx/nprfx.ofx.bundle
+if [ -x "$OFXTEST" ] && [ -d "$BUNDLE" ]; then
+    expect_rc 0 "$OFXTEST" run g.json --ofx "$BUNDLE" --frames 5-7 --output-dir ofx_a \
+        --analysis off --analyze-shot -q
+    expect_rc 0 "$NPRFX" run g.json --frames 5-7 --output-dir run_a --analysis off -q
+    same ofx_a/out run_a/out 5-7
+    expect_rc 0 "$OFXTEST" run g.json --ofx "$BUNDLE" --frames 5-7 --output-dir ofx_b \
+        --analysis off -q
+    same ofx_b/out run_a/out 5-7
+else
+    echo "analyze: no OpenFX test host next to $NPRFX: the Analyze Shot button is not checked"
+fi
 echo "analyze: ok"

@@ -56,7 +56,9 @@ grep -q 'nprfx:pamMeanY: "' hdr.txt || fail "nprfx:pamMeanY"
 # The generator still paints the shipped samples.
 expect_rc 0 "$NPRFX" pam samples -o gen --size 256
 for i in 1 2 3 4; do
-    cmp -s "gen/strokes_$i.png" "$S/strokes_$i.png" || fail "strokes_$i.png differs from samples/pam"
+    # the pixels (a PNG's bytes follow its compression level)
+    "$NPRFX" diff "gen/strokes_$i.png" "$S/strokes_$i.png" --fail 0 --warn 0 -q >/dev/null 2>&1 ||
+        fail "strokes_$i.png differs from samples/pam"
 done
 
 # Bad input, each naming the file.

@@ -360,6 +360,11 @@ void nprfx_ofx_host_set_footage(nprfx_ofx_host *h, int on)
     if (h) h->footage = on;
 }
 
+void nprfx_ofx_host_set_analyze(nprfx_ofx_host *h, int on)
+{
+    if (h) h->analyze = on;
+}
+
 const char *nprfx_ofx_host_profile(const nprfx_ofx_host *h)
 {
     return h ? h->profile->name : "";

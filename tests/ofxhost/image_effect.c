@@ -291,7 +291,7 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
                      "temporal clip access",
                      c->name, time, a->time, h->profile->like);
             st = kOfxStatFailed;
-        } else if (!internal_frames_allows(fr, time)) {
+        } else if (!ni->analyzing && !internal_frames_allows(fr, time)) {
             snprintf(ni->host_error, sizeof ni->host_error,
                      "clip %s fetched at frame %g, outside the frames that getFramesNeeded "
                      "declared",

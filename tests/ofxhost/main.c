@@ -13,6 +13,7 @@ typedef struct ofx_run {
     const char *bundle;  /* --ofx */
     const char *profile; /* --profile */
     int footage;         /* --footage */
+    int analyze;         /* --analyze-shot */
     nprfx_ofx_host *host;
 } ofx_run;
 
@@ -21,6 +22,10 @@ static int ofx_option(void *user, const char *arg, const char *next)
     ofx_run *o = user;
     if (!strcmp(arg, "--footage")) {
         o->footage = 1;
+        return 1;
+    }
+    if (!strcmp(arg, "--analyze-shot")) {
+        o->analyze = 1;
         return 1;
     }
     if (!next) return 0;
@@ -43,6 +48,7 @@ static nprfx_result ofx_open(void *user, nprfx_context *ctx, int quiet,
     nprfx_result r = nprfx_ofx_host_open(ctx, o->bundle, o->profile, &o->host);
     if (r) return r;
     nprfx_ofx_host_set_footage(o->host, o->footage);
+    nprfx_ofx_host_set_analyze(o->host, o->analyze);
     *hook = nprfx_ofx_host_hook(o->host);
     if (quiet) return NPRFX_OK;
     int n = nprfx_ofx_host_plugin_count(o->host);
@@ -83,7 +89,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "nprfx-ofxtest: unknown command '%s' (the only one is run)\n", argv[1]);
         return 2;
     }
-    ofx_run o = {NULL, NULL, 0, NULL};
+    ofx_run o = {NULL, NULL, 0, 0, NULL};
     const cli_run_extension ext = {
         "nprfx-ofxtest",
         "  --ofx BUNDLE        render every node through the OpenFX plug-ins of BUNDLE\n"

@@ -31,6 +31,11 @@ nprfx_result nprfx_ofx_host_open(nprfx_context *ctx, const char *bundle, const c
  * size matters). */
 void nprfx_ofx_host_set_footage(nprfx_ofx_host *h, int on);
 
+/* --analyze-shot: before a node's first render, press its Analyze Shot button, as a user does
+ * (an instance-changed action in which the plug-in fetches its clips at every frame of the
+ * shot); the first render must then fetch exactly the frames it declares. */
+void nprfx_ofx_host_set_analyze(nprfx_ofx_host *h, int on);
+
 /* Number of plug-ins the bundle exports. */
 int nprfx_ofx_host_plugin_count(const nprfx_ofx_host *h);
 /* The profile's name. */

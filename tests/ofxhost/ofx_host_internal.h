@@ -204,6 +204,7 @@ struct nprfx_ofx_host {
     /* --footage: a node whose flow-derivable inputs come from a flow node is rendered in the
      * Filter context on the flow node's picture (render.c). */
     int footage;
+    int analyze; /* --analyze-shot (render.c) */
 };
 
 /* Suite functions get no user pointer: they reach the host through this, and one host per
@@ -257,6 +258,8 @@ typedef struct node_inst {
     char persistent[HMSG];
     char host_error[HMSG];
     unsigned message_seq; /* the host's message_seq when the render began */
+
+    int analyzing; /* in the Analyze Shot action: a clip may be fetched at any frame */
 } node_inst;
 
 /* Send an action to a plug-in. */

@@ -243,6 +243,38 @@ static void set_change_args(hprops *in, const nprfx_render_args *a, const char *
     internal_set_double(p, kOfxImageEffectPropRenderScale, 1, internal_host_scale(a));
 }
 
+/* --analyze-shot: the Analyze Shot button pressed, when the plug-in has one; the clips serve
+ * the render's frames meanwhile (ni->args is set). What it fetched does not count as the first
+ * render's. */
+static nprfx_result press_analyze(node_inst *ni, const nprfx_render_args *a)
+{
+    char name[NPRFX_OFX_NAME_MAX];
+    ofx_names_extra_param(ni->desc, "analyze", name, sizeof name);
+    if (!internal_effect_param(ni->fx, name)) return NPRFX_OK;
+    hprops in;
+    internal_props_init(&in, K_PLAIN);
+    set_change_args(&in, a, NULL, NULL);
+    OfxStatus st = internal_call(ni->pl, kOfxActionBeginInstanceChanged, ni->fx, &in, NULL);
+    internal_props_free(&in);
+    internal_props_init(&in, K_PLAIN);
+    set_change_args(&in, a, kOfxTypeParameter, name);
+    ni->analyzing = 1;
+    if (st == kOfxStatOK || st == kOfxStatReplyDefault)
+        st = internal_call(ni->pl, kOfxActionInstanceChanged, ni->fx, &in, NULL);
+    ni->analyzing = 0;
+    internal_props_free(&in);
+    internal_props_init(&in, K_PLAIN);
+    set_change_args(&in, a, NULL, NULL);
+    if (st == kOfxStatOK || st == kOfxStatReplyDefault)
+        st = internal_call(ni->pl, kOfxActionEndInstanceChanged, ni->fx, &in, NULL);
+    internal_props_free(&in);
+    for (int k = 0; k < ni->desc->num_inputs; k++)
+        ni->frames[k].nfetched = 0;
+    if (st != kOfxStatOK && st != kOfxStatReplyDefault)
+        return internal_failure(ni, a->ctx, "Analyze Shot failed");
+    return NPRFX_OK;
+}
+
 /* Params and channel selectors from the graph, with the instance-changed actions a host sends
  * for edits; then the clip preferences they imply. */
 static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int first)
@@ -622,7 +654,9 @@ static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, v
     internal_messages_reset(ni);
     for (int k = 0; k < ni->desc->num_inputs; k++)
         ni->frames[k].nfetched = 0;
-    if ((r = sync_params(ni, a, first)) || (r = query_regions(ni, a))) goto done;
+    if ((r = sync_params(ni, a, first)) || (first && h->analyze && (r = press_analyze(ni, a))) ||
+        (r = query_regions(ni, a)))
+        goto done;
     double s = internal_host_scale(a);
     if (s != 1.0 && !h->profile->multires) {
         r = nprfx_error(a->ctx, NPRFX_ERR_UNSUPPORTED, "%s: this host (%s) renders at scale 1 only",
