@@ -748,6 +748,9 @@ nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h, const ch
     for (int i = 0; i < g->count; i++) {
         gnode *n = &g->nodes[i];
         if (n->kind != GK_READ && n->kind != GK_SYNTH) continue;
+        /* a read of one file, not a sequence, is a texture the look paints with (a painterly
+         * art map), not a render's plate: it stays */
+        if (n->kind == GK_READ && n->path && !nprfx_seq_has_pattern(n->path)) continue;
         if (n->kind == GK_READ) {
             char *s = engine_strdup(scene);
             if (!s) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");

@@ -215,7 +215,8 @@ NPRFX_API int nprfx_graph_stats(const nprfx_graph *g, const nprfx_graph_node_sta
 /* The most bytes the graph's frames held at once (cached, in use and idle in the pool). */
 NPRFX_API size_t nprfx_graph_mem_peak(const nprfx_graph *g);
 
-/* Make every read node a synth node of `scene` at w x h, and every synth node and "format" that
+/* Make every read node of a frame sequence a synth node of `scene` at w x h (a read of one file,
+ * a texture such as a painterly art map, stays), and every synth node and "format" that
  * size (bench-graph: a graph timed without its plates). */
 NPRFX_API nprfx_result nprfx_graph_synthesize_reads(nprfx_graph *g, int w, int h,
                                                     const char *scene);

@@ -151,6 +151,9 @@ out=$("$NPRFX" bench-graph reads.json --size 64x32 --frames 2 --write bgw --stat
 echo "$out" | grep -qE "output [0-9.]*[1-9][0-9.]* ms per frame" && [ -e bgw/w/grain.0002.exr ] && pass ||
   fail "bench-graph --write: $out"
 echo "$out" | grep -qE '^  plate +synth +2 ' && pass || fail "bench-graph did not make the read a synth plate: $out"
+# A read of one file (painterly_pam's art map) is a texture, not a plate: it stays a read.
+out=$("$NPRFX" bench-graph "$SRC/samples/graphs/painterly_pam.json" --size 64x32 --frames 1 --stats 2>&1)
+echo "$out" | grep -qE '^  pam +read +1 ' && pass || fail "bench-graph synthesized the art map: $out"
 "$NPRFX" bench-graph reads.json --size big > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "WxH" bad.txt && pass || fail "--size big: $(cat bad.txt)"
 "$NPRFX" bench-graph > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "usage" bad.txt && pass || fail "no graph: $(cat bad.txt)"
 "$NPRFX" bench-graph reads.json --bogus > bad.txt 2>&1; [ $? -eq 2 ] && grep -q "unexpected argument" bad.txt && pass || fail "--bogus: $(cat bad.txt)"
