@@ -27,6 +27,18 @@ static int make_room(nprfx_graph *g, size_t bytes)
     return g->held_bytes + kept + bytes <= g->mem_limit;
 }
 
+/* A frame handed out: counted as held, and in node's --stats. */
+static nprfx_result held(nprfx_graph *g, int node, size_t bytes, int reused)
+{
+    g->held_bytes += bytes;
+    if (node >= 0 && node < g->count) {
+        g->stats[node].bytes += bytes;
+        if (!reused) g->stats[node].fresh_bytes += bytes;
+    }
+    internal_graph_note_peak(g);
+    return NPRFX_OK;
+}
+
 static nprfx_result frame_alloc(nprfx_graph *g, int node, const char *what, nprfx_rect bounds,
                                 int channels, int clear, nprfx_image *im)
 {
@@ -51,13 +63,7 @@ static nprfx_result frame_alloc(nprfx_graph *g, int node, const char *what, nprf
     }
     int reused = 0;
     if ((r = frame_pool_alloc(g->pool, g->ctx, bounds, channels, clear, im, &reused))) return r;
-    g->held_bytes += bytes;
-    if (node >= 0 && node < g->count) {
-        g->stats[node].bytes += bytes;
-        if (!reused) g->stats[node].fresh_bytes += bytes;
-    }
-    internal_graph_note_peak(g);
-    return NPRFX_OK;
+    return held(g, node, bytes, reused);
 }
 
 nprfx_result internal_graph_frame_alloc(nprfx_graph *g, int node, const char *what,
@@ -87,13 +93,7 @@ nprfx_result internal_graph_frame_alloc_spare(nprfx_graph *g, int node, nprfx_re
                                 channels, 0) ||
         frame_pool_alloc(g->pool, NULL, bounds, channels, 0, im, &reused))
         return NPRFX_ERR_OUT_OF_MEMORY;
-    g->held_bytes += bytes;
-    if (node >= 0 && node < g->count) {
-        g->stats[node].bytes += bytes;
-        if (!reused) g->stats[node].fresh_bytes += bytes;
-    }
-    internal_graph_note_peak(g);
-    return NPRFX_OK;
+    return held(g, node, bytes, reused);
 }
 
 void internal_graph_consumed(nprfx_graph *g, centry *e)
