@@ -30,6 +30,7 @@
 #include "graph_limits.h"
 #include "aov_map.h"
 #include "graph_model.h"
+#include "graph_write_jobs.h"
 #include "graph_read.h"
 #include "graph_names.h"
 #include "nprfx/io.h"
@@ -596,6 +597,10 @@ void nprfx_graph_free(nprfx_graph *g)
 {
     if (!g) return;
     internal_graph_prefetch_stop(g); /* its frames go back to the pool first */
+    for (int failed; g->write_jobs;) {
+        double end;
+        internal_graph_write_jobs_reap(g, g->write_jobs->frame, &failed, &end);
+    }
     free(g->prefetch);
     internal_graph_cache_clear(g);
     frame_pool_destroy(g->pool);

@@ -24,6 +24,7 @@ static int make_room(nprfx_graph *g, size_t bytes)
         prev = e->prev;
         if (!e->pins) internal_graph_cache_drop(g, e);
     }
+    frame_pool_trim(g->pool, 0); /* the dropped results' buffers went back to the pool */
     return g->held_bytes + kept + bytes <= g->mem_limit;
 }
 
@@ -46,7 +47,8 @@ static nprfx_result frame_alloc(nprfx_graph *g, int node, const char *what, nprf
     nprfx_result r = nprfx_image_limit_check(g->ctx, what, w, h, channels, 0);
     if (r) return r;
     size_t bytes = (size_t)w * (size_t)h * (size_t)(channels > 0 ? channels : 0) * sizeof(float);
-    if (!make_room(g, bytes)) {
+    /* writes in the background hold their frames pinned: the room comes after them */
+    if (!make_room(g, bytes) && !(g->wait_writes && g->wait_writes(g) && make_room(g, bytes))) {
         char need[32], held[32], lim[32], kept[32], caches[64] = "";
         nprfx_format_bytes(need, sizeof need, bytes);
         nprfx_format_bytes(held, sizeof held, g->held_bytes);
@@ -100,6 +102,13 @@ void internal_graph_consumed(nprfx_graph *g, centry *e)
 {
     if (g->no_pool || !g->plan_ready) return;
     e->uses--;
+    if (e->uses <= 0 && !e->pins && !g->plan_temporal[e->node]) internal_graph_cache_drop(g, e);
+}
+
+void internal_graph_unpin(nprfx_graph *g, centry *e)
+{
+    e->pins--;
+    if (g->no_pool || !g->plan_ready) return;
     if (e->uses <= 0 && !e->pins && !g->plan_temporal[e->node]) internal_graph_cache_drop(g, e);
 }
 

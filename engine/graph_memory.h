@@ -27,6 +27,9 @@ nprfx_result internal_graph_frame_alloc_spare(nprfx_graph *g, int node, nprfx_re
  * at other frames, e leaves the cache now (unless pinned) instead of waiting for eviction. */
 void internal_graph_consumed(nprfx_graph *g, centry *e);
 
+/* A pin on e let go: e leaves the cache as internal_graph_consumed would have let it. */
+void internal_graph_unpin(nprfx_graph *g, centry *e);
+
 /* After a frame: drop every unpinned result but a temporal source's within the window the next
  * frame is expected to read (the offsets touched in this one, moved on by the step between the
  * last two frames, +1 at first). */

@@ -179,6 +179,13 @@ struct nprfx_graph {
      * read node (graph_prefetch.c). */
     int has_next, next_frame;
     struct internal_prefetch *prefetch;
+    /* nprfx_graph_run's frames write their files in the background while the next computes;
+     * the writes not yet reported, newest first (graph_write_jobs.c) */
+    int background_writes;
+    struct write_job *write_jobs;
+    /* waits for them when a frame needs their memory (a pointer: the writes come after the
+     * memory they use in the layers, graph_write_jobs.c above graph_memory.c) */
+    int (*wait_writes)(nprfx_graph *g);
     int analysis_stale; /* seeded nodes that measured the shot again */
 };
 

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "nprfx/exec.h"
 #include "nprfx/graph.h"
 #include "graph_extras.h"
 #include "graph_frames.h"
@@ -270,28 +271,113 @@ nprfx_result internal_graph_pooled_open(nprfx_graph *g, int node, int frame, int
     return NPRFX_OK;
 }
 
-void internal_graph_pooled_fill(pooled_read *p, nprfx_context *ctx)
+/* Rows [y0, y1) (offsets in the data window) of p's plate into its frame through rr. */
+static nprfx_result fill_rows(pooled_read *p, nprfx_row_reader *rr, nprfx_context *ctx, int y0,
+                              int y1)
 {
-    const int w = nprfx_rect_width(p->shape.bounds), h = nprfx_rect_height(p->shape.bounds);
+    const int w = nprfx_rect_width(p->shape.bounds);
     const int band_rows = 32, nc = p->nc, nn = p->nn;
     float *band = malloc((size_t)w * band_rows * (size_t)nc * sizeof *band);
     nprfx_result r =
         band ? NPRFX_OK
              : nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory reading %s", p->file);
-    for (int y = 0; !r && y < h; y += band_rows) {
-        const int y1 = y + band_rows < h ? y + band_rows : h;
+    for (int y = y0; !r && y < y1; y += band_rows) {
+        const int ye = y + band_rows < y1 ? y + band_rows : y1;
         nprfx_rect b = {p->shape.bounds.x0, p->shape.bounds.y0 + y, p->shape.bounds.x1,
-                        p->shape.bounds.y0 + y1};
-        if ((r = p->io.rows_read(ctx, p->rr, b.y0, b.y1, band))) break;
+                        p->shape.bounds.y0 + ye};
+        if ((r = p->io.rows_read(ctx, rr, b.y0, b.y1, band))) break;
         float *dst = nprfx_image_at(&p->im, b.x0, b.y0);
-        for (size_t k = 0; k < (size_t)(y1 - y) * (size_t)w; k++)
+        for (size_t k = 0; k < (size_t)(ye - y) * (size_t)w; k++)
             memcpy(dst + k * (size_t)nn, band + k * (size_t)nc, (size_t)nc * sizeof(float));
         if (nn > nc) internal_graph_extra_fill(&p->x, band, nc, dst, nn, b, p->shape.display);
     }
     free(band);
+    return r;
+}
+
+void internal_graph_pooled_fill(pooled_read *p, nprfx_context *ctx)
+{
+    nprfx_result r = fill_rows(p, p->rr, ctx, 0, nprfx_rect_height(p->shape.bounds));
     /* the note as the rows left it (uint ids above 2^24 are known once read) */
     if (!r) r = p->io.rows_note(ctx, p->rr, &p->note, &p->warning);
     p->io.rows_close(p->rr);
+    p->rr = NULL;
+    p->r = r;
+}
+
+/* A plate the frame waits for (nothing decoded it ahead: the first frame, a frame out of order)
+ * is decoded by every worker of the executor, a band of rows each through a reader of its own,
+ * instead of by one core while the others wait. Bands start at multiples of 64 rows, whole
+ * chunks of every EXR compression, so no chunk is decoded twice. */
+typedef struct band_fill {
+    pooled_read *p;
+    nprfx_row_reader **rr;
+    nprfx_context *ctx;
+    int rows; /* per band */
+    nprfx_result r[64];
+} band_fill;
+
+static void fill_band(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    band_fill *bf = user;
+    const int h = nprfx_rect_height(bf->p->shape.bounds);
+    for (int i = begin; i < end; i++) {
+        int y0 = i * bf->rows, y1 = y0 + bf->rows < h ? y0 + bf->rows : h;
+        bf->r[i] = y0 < h ? fill_rows(bf->p, bf->rr[i], bf->ctx, y0, y1) : NPRFX_OK;
+    }
+}
+
+static void pooled_fill_now(nprfx_graph *g, pooled_read *p)
+{
+    gnode *n = &g->nodes[p->node];
+    const nprfx_executor *ex = nprfx_context_executor(g->ctx);
+    const int h = nprfx_rect_height(p->shape.bounds);
+    int bands = nprfx_executor_workers(ex);
+    if (bands > 64) bands = 64;
+    int rows = ((h + bands - 1) / bands + 63) / 64 * 64;
+    bands = rows > 0 ? (h + rows - 1) / rows : 1;
+    if (bands < 2) {
+        internal_graph_pooled_fill(p, n->ctx);
+        return;
+    }
+    band_fill bf;
+    memset(&bf, 0, sizeof bf);
+    nprfx_row_reader *rr[64] = {p->rr};
+    bf.p = p;
+    bf.rr = rr;
+    bf.ctx = n->ctx;
+    bf.rows = rows;
+    nprfx_result r = NPRFX_OK;
+    /* the other bands' readers, opened here: opening one names the channels in --stats */
+    for (int i = 1; !r && i < bands; i++) {
+        read_pick rp = {g, p->node};
+        nprfx_read_options ro = read_options_of(n, &rp);
+        nprfx_plate shape;
+        memset(&shape, 0, sizeof shape);
+        r = g->io.rows_open(n->ctx, p->file, &ro, &shape, &rr[i]);
+        if (!r && shape.nchannels != p->nc)
+            r = nprfx_error(n->ctx, NPRFX_ERR_IO, "'%s' changed while it was read", p->file);
+        nprfx_plate_free(&shape);
+    }
+    if (!r) nprfx_parallel_for(ex, bands, 1, fill_band, &bf);
+    for (int i = 0; !r && i < bands; i++)
+        r = bf.r[i];
+    /* the note of the band that warns (a uint id above 2^24), else the first's */
+    for (int i = 0; !r && i < bands; i++) {
+        char *note = NULL;
+        int warning = 0;
+        if ((r = p->io.rows_note(n->ctx, rr[i], &note, &warning))) break;
+        if (!p->note || (warning && !p->warning)) {
+            free(p->note);
+            p->note = note;
+            p->warning = warning;
+        } else {
+            free(note);
+        }
+    }
+    for (int i = 0; i < bands; i++)
+        if (rr[i]) p->io.rows_close(rr[i]);
     p->rr = NULL;
     p->r = r;
 }
@@ -363,7 +449,7 @@ nprfx_result internal_graph_read_plate(nprfx_graph *g, int node, int frame, nprf
         int ok = 0;
         if (!(r = internal_graph_prefetched(g, node, frame, &p, &ok)) && !ok &&
             !(r = internal_graph_pooled_open(g, node, frame, 0, &p, &ok)) && ok)
-            internal_graph_pooled_fill(&p, n->ctx);
+            pooled_fill_now(g, &p);
         if (!r && ok) r = internal_graph_pooled_finish(g, &p, im, names, meta);
         /* the next frame's plate decodes while this one computes */
         if (!r) internal_graph_prefetch_next(g, node, frame);

@@ -22,6 +22,7 @@
 #include "graph_plan.h"
 #include "graph_resolve.h"
 #include "graph_strips.h"
+#include "graph_write_jobs.h"
 #include "nprfx/channels.h"
 #include "nprfx/exec.h"
 #include "nprfx/io.h"
@@ -32,7 +33,7 @@
 
 /* Index list of the channels a preview shows: R,G,B,A when present, else the first <= 4. */
 static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **names,
-                                 nprfx_image *view, float **scratch)
+                                 nprfx_image *view)
 {
     int idx[4];
     int k = nprfx_channels_from_hint((const char *const *)names, im->channels,
@@ -51,36 +52,7 @@ static nprfx_result preview_view(nprfx_graph *g, const nprfx_image *im, char **n
             for (int c = 0; c < k; c++)
                 d[c] = s[idx[c]];
         }
-    *scratch = view->data;
     return NPRFX_OK;
-}
-
-/* A write node's files at one frame: the EXR (item 0) and its preview (item 1). */
-typedef struct write_files {
-    nprfx_graph *g;
-    gnode *n;
-    const char *path, *preview;
-    const nprfx_image *view, *pv;
-    const char *const *names;
-    nprfx_write_options wo;
-    const nprfx_rect *display;
-    nprfx_result r[2];
-} write_files;
-
-static void write_file(void *user, int begin, int end, int worker)
-{
-    (void)worker;
-    write_files *wf = user;
-    const gnode *n = wf->n;
-    for (int i = begin; i < end; i++) {
-        if (i == 0) {
-            wf->r[0] = wf->g->io.write(n->ctx, wf->path, wf->view, wf->names, wf->display, &wf->wo);
-        } else {
-            nprfx_preview_options po = {sizeof po,  wf->g->ocio, n->colorspace,
-                                        n->display, n->view,     n->raw};
-            wf->r[1] = wf->g->io.write_preview(n->ctx, wf->preview, wf->pv, &po);
-        }
-    }
 }
 
 /* Write node `node` at frame; files == 0 only evaluates its input (bench-graph's compute time
@@ -95,80 +67,63 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
         internal_graph_consumed(g, e);
         return NPRFX_OK;
     }
-    double t0 = engine_now(); /* --stats: the write's own time, not its input's */
+    write_job *j = calloc(1, sizeof *j);
+    if (!j) return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    j->started = engine_now(); /* --stats: the write's own time, not its input's */
+    j->node = node;
+    j->frame = frame;
+    j->e = e;
     e->pins++;
-    nprfx_image view, scratch;
-    memset(&scratch, 0, sizeof scratch);
-    r = internal_graph_select_input(g, n, 0, e, &view, &scratch);
-    char **names = e->names;
-    char **sel_names = NULL;
+    r = internal_graph_select_input(g, n, 0, e, &j->view, &j->scratch);
+    j->names = (const char *const *)e->names;
     if (!r && n->inputs[0].sel) {
         /* names of the selected channels, in selection order */
         int idx[256], amb;
         char bad[64];
         int k = nprfx_channels_select((const char *const *)e->names, e->im.channels,
                                       n->inputs[0].sel, idx, 256, bad, sizeof bad, &amb);
-        sel_names = calloc((size_t)(k > 0 ? k : 1), sizeof *sel_names);
-        for (int c = 0; sel_names && c < k; c++)
-            sel_names[c] = e->names[idx[c]];
-        names = sel_names;
+        j->sel_names = calloc((size_t)(k > 0 ? k : 1), sizeof *j->sel_names);
+        for (int c = 0; j->sel_names && c < k; c++)
+            j->sel_names[c] = e->names[idx[c]];
+        j->names = (const char *const *)j->sel_names;
     }
-    char path[4096];
     if (!r) {
-        internal_graph_resolve_path(g, g->out_dir, n->path, frame, path, sizeof path);
-        r = internal_graph_check_not_input(g, n, path, frame);
+        internal_graph_resolve_path(g, g->out_dir, n->path, frame, j->path, sizeof j->path);
+        r = internal_graph_check_not_input(g, n, j->path, frame);
     }
     /* A plate as read keeps each channel's file type (uint ids stay uint, half stays half); a
      * node's result is float, or half with "half". Windows and pixel aspect go back as read. */
-    unsigned char types[256];
-    int have_types = 0;
+    j->wo = (nprfx_write_options){sizeof j->wo, n->compression ? n->compression : "zip", n->half};
     if (!r && e->meta.types) {
         int idx[256], count = 0;
         r = internal_graph_input_channels(g, n, 0, (const char *const *)e->names, e->im.channels,
                                           idx, &count);
         for (int c = 0; !r && c < count && c < 256; c++)
-            types[c] = e->meta.types[idx[c]];
-        have_types = !r;
+            j->types[c] = e->meta.types[idx[c]];
+        if (!r) j->wo.types = j->types;
     }
-    /* The EXR and its preview are written side by side, each on a worker of the run's executor:
-     * both spend their time compressing (zlib), each on one core. */
-    write_files wf;
-    memset(&wf, 0, sizeof wf);
-    nprfx_image pv;
-    memset(&pv, 0, sizeof pv);
-    float *pscratch = NULL;
-    char ppath[4096];
-    if (!r) {
-        wf.g = g;
-        wf.n = n;
-        wf.path = path;
-        wf.view = &view;
-        wf.names = (const char *const *)names;
-        wf.wo =
-            (nprfx_write_options){sizeof wf.wo, n->compression ? n->compression : "zip", n->half};
-        wf.wo.types = have_types ? types : NULL;
-        wf.wo.pixel_aspect = e->meta.pixel_aspect;
-        wf.display = nprfx_rect_empty(e->meta.display) ? NULL : &e->meta.display;
-    }
+    j->wo.pixel_aspect = e->meta.pixel_aspect;
+    j->display = e->meta.display;
+    j->has_display = !nprfx_rect_empty(e->meta.display);
     if (!r && n->preview) {
-        internal_graph_resolve_path(g, g->out_dir, n->preview, frame, ppath, sizeof ppath);
-        r = internal_graph_check_not_input(g, n, ppath, frame);
-        if (!r) r = preview_view(g, &view, names, &pv, &pscratch);
-        wf.preview = ppath;
-        wf.pv = &pv;
+        internal_graph_resolve_path(g, g->out_dir, n->preview, frame, j->ppath, sizeof j->ppath);
+        r = internal_graph_check_not_input(g, n, j->ppath, frame);
+        if (!r) r = preview_view(g, &j->view, (char **)j->names, &j->pv);
+        j->preview = !r;
     }
+    double el = engine_now() - j->started;
     if (!r) {
-        nprfx_parallel_for(nprfx_context_executor(g->ctx), n->preview ? 2 : 1, 1, write_file, &wf);
-        r = wf.r[0] ? wf.r[0] : wf.r[1];
+        internal_graph_consumed(g, e);
+        /* The EXR and its preview are written side by side, each on a core: both spend their
+         * time compressing (zlib). */
+        r = internal_graph_write_job_start(g, j);
+    } else {
+        internal_graph_frame_release(g, &j->scratch);
+        free(j->pv.data);
+        free(j->sel_names);
+        e->pins--;
+        free(j);
     }
-    free(pscratch);
-    free(sel_names);
-    internal_graph_frame_release(g, &scratch);
-    e->pins--;
-    if (!r) internal_graph_consumed(g, e);
-    double el = engine_now() - t0;
-    g->stats[node].seconds += el;
-    g->stats[node].calls++;
     g->child_seconds += el;
     return r;
 }

@@ -100,6 +100,11 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "                      without it still excludes them all\n"
         "%s"
         "  --no-previews       write no preview (PNG) of any write node\n"
+        "  --serial            read, compute and write each frame before the next starts\n"
+        "                      (default: the next frame's plates decode while a frame\n"
+        "                      computes and, with 4 or more --threads, a frame's files are\n"
+        "                      written while the next computes, progress then showing a\n"
+        "                      frame once its files are written); less memory, same pixels\n"
         "  --quiet             no progress output\n"
         "  --check             check the graphs (JSON, nodes, params, references, cycles,\n"
         "                      frames, sizes, the memory plan against --mem-limit) and list\n"
@@ -119,6 +124,7 @@ static void usage(FILE *f, const char *prog, const cli_run_extension *ext)
         "  zip (the default, lossless) ~370 ms, piz ~500 ms, dwaa (lossy) ~260 ms, none\n"
         "  ~50 ms (4x the disk); \"half\": true stores half floats (half the file, ~40%%\n"
         "  less time); a preview ~150 ms more, written beside the EXR on a second core.\n"
+        "  With 4 or more --threads both are written while the next frame computes.\n"
         "  Set them in the graph or per run: --set out.compression=none, --set out.half=true,\n"
         "  --set out.preview= (none), or --no-previews for every write node.\n"
         "Node names are unique; a graph has at most 1,000,000 nodes, in any depth, and no\n"
@@ -141,6 +147,7 @@ typedef struct run_opts {
     const char *design_width; /* --design-width */
     const char *analysis;     /* --analysis: PATH, "off", or NULL (the graph's own, if any) */
     int no_previews;          /* --no-previews */
+    int serial;               /* --serial */
     int analyze;              /* `nprfx analyze`: measure and store, render nothing */
 } run_opts;
 
@@ -394,6 +401,7 @@ static int run_graph(cli_env *envp, const nprfx_graph_options *optp, const char 
     }
     run_progress rp = {prog, env.ctx, isatty(STDERR_FILENO) && !quiet, quiet, 0};
     nprfx_graph_run_options runo = {sizeof runo, keep_going, show_progress, NULL, &rp};
+    runo.serial = ro->serial;
     nprfx_graph_run_summary sum;
     nprfx_graph_run(g, &fl, &runo, &sum);
     int tty = rp.tty, failed = sum.failed, files = sum.files;
@@ -442,7 +450,7 @@ static int run_main(int argc, char **argv, const cli_run_extension *ext, int ana
     int ngraphs = 0;
     const char *sets[256];
     int nsets = 0, threads = 0, tile = 0, keep_going = 0, quiet = 0, wait = 0, stats = 0;
-    int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0, no_previews = 0;
+    int no_pool = 0, check = 0, shared_lock = 0, strip_rows = 0, no_previews = 0, serial = 0;
     const char *mem_limit = NULL, *aovs = NULL, *design_width = NULL, *analysis = NULL;
     char aovs_path[8192];
     long cache_mb = 2048;
@@ -495,6 +503,8 @@ static int run_main(int argc, char **argv, const cli_run_extension *ext, int ana
             stats = 1;
         else if (!strcmp(a, "--no-previews"))
             no_previews = 1;
+        else if (!strcmp(a, "--serial"))
+            serial = 1;
         else if (!strcmp(a, "--no-pool"))
             no_pool = 1;
         else if (!strcmp(a, "--keep-going"))
@@ -548,7 +558,7 @@ static int run_main(int argc, char **argv, const cli_run_extension *ext, int ana
     int status = 0;
     run_opts ro = {label, frames,       shot,     sets,        nsets,  keep_going,
                    quiet, ngraphs > 1,  wait,     stats,       check,  shared_lock,
-                   aovs,  design_width, analysis, no_previews, analyze};
+                   aovs,  design_width, analysis, no_previews, serial, analyze};
     opt.notice = graph_notice;
     opt.notice_user = &ro;
     if (ext && ext->open && ext->open(ext->user, env.ctx, quiet, &opt.hook)) {

@@ -339,6 +339,11 @@ typedef struct nprfx_graph_run_options {
     /* At the end of the run: every node's costs since the graph loaded (NULL: none). */
     void (*stats)(void *user, const nprfx_graph_node_stats *stats, int count);
     void *user;
+    /* 0: the next frame's plates decode while a frame computes and, when the context's
+     * executor has 4 or more workers, a frame's files are written while the next computes
+     * (progress then comes once a frame's files are written, a frame behind); non-zero: each
+     * frame read, computed and written before the next starts (less memory, the same pixels) */
+    int serial;
 } nprfx_graph_run_options;
 
 /* What a run did. */

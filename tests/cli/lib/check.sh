@@ -14,3 +14,9 @@ expect_rc() {
 # has FILE TEXT / lacks FILE TEXT: whether the file holds the text (fixed string).
 has() { grep -qF -- "$2" "$1" || { cat "$1" >&2; fail "$1 lacks: $2"; }; }
 lacks() { ! grep -qF -- "$2" "$1" || { cat "$1" >&2; fail "$1 has: $2"; }; }
+# work_in DIR: a test's own empty working directory, entered.
+work_in() {
+    rm -rf "$1"
+    mkdir -p "$1"
+    cd "$1"
+}
