@@ -146,24 +146,62 @@ static void wobble_rows(void *user, int begin, int end, int worker)
         }
 }
 
-/* Step 2, the edge blur's horizontal pass: rb's columns, a's rows. */
+/* acc[e] = sum over k of w[k] * src[e + k * step], k ascending from 0 and the sum in double: per
+ * element the clamped loops' operations in their order, so the pixels are theirs bit for bit,
+ * but over a run of pixels whose taps all lie inside the frame, a loop the compiler vectorises. */
+static void conv_run(const double *w, int taps, const float *src, ptrdiff_t step, int n,
+                     double *acc, float *dst)
+{
+    for (int e = 0; e < n; e++)
+        acc[e] = 0.0;
+    for (int k = 0; k < taps; k++) {
+        const double wk = w[k];
+        const float *s = src + (ptrdiff_t)k * step;
+        for (int e = 0; e < n; e++)
+            acc[e] += wk * s[e];
+    }
+    for (int e = 0; e < n; e++)
+        dst[e] = (float)acc[e];
+}
+
+/* The edge blur at one pixel of a pass, its taps clamped to the frame. */
+static void blur_px(const wc_job *j, const nprfx_image *src, int vertical, int x, int y, float *o)
+{
+    const nprfx_rect f = j->frame;
+    double acc[NPRFX_MAX_CHANNELS] = {0};
+    for (int k = -j->re; k <= j->re; k++) {
+        const float *q = vertical ? nprfx_image_at(src, x, clampi(y + k, f.y0, f.y1 - 1))
+                                  : nprfx_image_at(src, clampi(x + k, f.x0, f.x1 - 1), y);
+        for (int ch = 0; ch < j->ncol; ch++)
+            acc[ch] += j->w[k + j->re] * q[ch];
+    }
+    for (int ch = 0; ch < j->ncol; ch++)
+        o[ch] = (float)acc[ch];
+}
+
+/* Step 2, the edge blur's horizontal pass: rb's columns, a's rows (q and hq are packed). */
 static void hblur_rows(void *user, int begin, int end, int worker)
 {
     (void)worker;
     const wc_job *j = user;
     const nprfx_rect f = j->frame;
-    for (int y = j->a.y0 + begin; y < j->a.y0 + end; y++)
+    const int C = j->ncol, re = j->re;
+    /* the columns whose taps are all inside the frame */
+    const int x0 = j->rb.x0 > f.x0 + re ? j->rb.x0 : f.x0 + re;
+    const int x1 = j->rb.x1 < f.x1 - re ? j->rb.x1 : f.x1 - re;
+    double *acc = x1 > x0 ? malloc(sizeof(double) * (size_t)(x1 - x0) * (size_t)C) : NULL;
+    for (int y = j->a.y0 + begin; y < j->a.y0 + end; y++) {
         for (int x = j->rb.x0; x < j->rb.x1; x++) {
-            double acc[NPRFX_MAX_CHANNELS] = {0};
-            for (int k = -j->re; k <= j->re; k++) {
-                const float *q = nprfx_image_at(&j->q, clampi(x + k, f.x0, f.x1 - 1), y);
-                for (int ch = 0; ch < j->ncol; ch++)
-                    acc[ch] += j->w[k + j->re] * q[ch];
+            if (acc && x == x0) {
+                conv_run(j->w, 2 * re + 1, nprfx_image_at(&j->q, x0 - re, y), C, (x1 - x0) * C, acc,
+                         nprfx_image_at(&j->hq, x0, y));
+                x = x1 - 1;
+                continue;
             }
-            float *h = nprfx_image_at(&j->hq, x, y);
-            for (int ch = 0; ch < j->ncol; ch++)
-                h[ch] = (float)acc[ch];
+            blur_px(j, &j->q, 0, x, y, nprfx_image_at(&j->hq, x, y));
         }
+    }
+    free(acc);
 }
 
 /* ... and its vertical pass, over rb. */
@@ -172,18 +210,18 @@ static void vblur_rows(void *user, int begin, int end, int worker)
     (void)worker;
     const wc_job *j = user;
     const nprfx_rect f = j->frame;
-    for (int y = j->rb.y0 + begin; y < j->rb.y0 + end; y++)
-        for (int x = j->rb.x0; x < j->rb.x1; x++) {
-            double acc[NPRFX_MAX_CHANNELS] = {0};
-            for (int k = -j->re; k <= j->re; k++) {
-                const float *h = nprfx_image_at(&j->hq, x, clampi(y + k, f.y0, f.y1 - 1));
-                for (int ch = 0; ch < j->ncol; ch++)
-                    acc[ch] += j->w[k + j->re] * h[ch];
-            }
-            float *b = nprfx_image_at(&j->b, x, y);
-            for (int ch = 0; ch < j->ncol; ch++)
-                b[ch] = (float)acc[ch];
+    const int C = j->ncol, re = j->re, n = nprfx_rect_width(j->rb) * C;
+    double *acc = malloc(sizeof(double) * (size_t)n);
+    for (int y = j->rb.y0 + begin; y < j->rb.y0 + end; y++) {
+        if (acc && y - re >= f.y0 && y + re < f.y1) {
+            conv_run(j->w, 2 * re + 1, nprfx_image_at(&j->hq, j->rb.x0, y - re), j->hq.row_stride,
+                     n, acc, nprfx_image_at(&j->b, j->rb.x0, y));
+            continue;
         }
+        for (int x = j->rb.x0; x < j->rb.x1; x++)
+            blur_px(j, &j->hq, 1, x, y, nprfx_image_at(&j->b, x, y));
+    }
+    free(acc);
 }
 
 /* Step 2's density: d = 1 + edge_darkening * g, g the normalised colour gradient (pigment()

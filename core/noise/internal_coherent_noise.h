@@ -118,8 +118,9 @@ static inline int internal_is_bandpass(const nprfx_cn_params *p)
 }
 
 typedef struct internal_kernel {
-    int radius; /* taps -radius..radius */
-    double *w;  /* 2*radius+1 weights, sum 1 */
+    int radius;  /* taps -radius..radius */
+    double *w;   /* 2*radius+1 weights, sum 1 */
+    float *half; /* w[radius..2*radius] as floats: the symmetric kernel folded (band-pass) */
 } internal_kernel;
 
 typedef struct internal_taps {
