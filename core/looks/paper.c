@@ -420,6 +420,44 @@ static void height_rows(void *user, int begin, int end, int worker)
     }
 }
 
+/* Rows of j->hb over j->win from the one tile in j->out (bounds [0, tile)^2). */
+static void tile_rows(void *user, int begin, int end, int worker)
+{
+    (void)worker;
+    const paper_job *j = user;
+    const int T = j->s->tile;
+    for (int y = j->win.y0 + begin; y < j->win.y0 + end; y++) {
+        const float *src = nprfx_image_at(j->out, 0, wrap_index(y, T));
+        for (int x = j->win.x0; x < j->win.x1; x++)
+            nprfx_image_at(j->hb, x, y)[0] =
+                src[(ptrdiff_t)wrap_index(x, T) * j->out->pixel_stride];
+    }
+}
+
+/* The heights over win into dst. A periodic texture repeats every tile pixels, and height_at
+ * sees only wrapped coordinates: over a window of more pixels than a tile, one tile is made
+ * and the window copied from it, the same values for a fraction of the work (a 1920x1080
+ * frame holds eight 512-pixel tiles). */
+static nprfx_result fill_heights(nprfx_context *ctx, const paper_setup *s, nprfx_rect win,
+                                 nprfx_image *dst)
+{
+    const nprfx_executor *ex = nprfx_context_executor(ctx);
+    const int T = s->tile;
+    if (T <= 0 || (double)nprfx_rect_width(win) * nprfx_rect_height(win) <= (double)T * T) {
+        paper_job j = {s, dst, NULL, win};
+        nprfx_parallel_for(ex, nprfx_rect_height(win), 8, height_rows, &j);
+        return NPRFX_OK;
+    }
+    nprfx_image tile;
+    nprfx_result r = nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, T, T), 1, &tile);
+    if (r) return r;
+    paper_job jt = {s, &tile, NULL, tile.bounds}, jc = {s, dst, &tile, win};
+    nprfx_parallel_for(ex, T, 8, height_rows, &jt);
+    nprfx_parallel_for(ex, nprfx_rect_height(win), 8, tile_rows, &jc);
+    nprfx_image_free(&tile);
+    return NPRFX_OK;
+}
+
 /* Pass 2: the colour over win from hb, which covers win grown by one pixel when relief > 0 (the
  * texture is defined beyond the frame, so no edge clamps: tiles agree). */
 static void color_rows(void *user, int begin, int end, int worker)
@@ -520,18 +558,16 @@ nprfx_result nprfx_paper_texture(nprfx_context *ctx, const nprfx_paper_params *p
 
     const nprfx_executor *ex = nprfx_context_executor(ctx);
     if (p->output == NPRFX_PAPER_HEIGHT) {
-        paper_job j = {&s, out, out, window};
-        nprfx_parallel_for(ex, nprfx_rect_height(window), 8, height_rows, &j);
-        return NPRFX_OK;
+        return fill_heights(ctx, &s, window, out);
     }
     int g = p->relief > 0.0 ? 1 : 0;
     nprfx_rect grown = nprfx_rect_make(window.x0 - g, window.y0 - g, window.x1 + g, window.y1 + g);
     nprfx_image hb;
     nprfx_result r = nprfx_image_alloc(ctx, grown, 1, &hb);
     if (r) return r;
-    paper_job jh = {&s, &hb, out, grown}, jc = {&s, &hb, out, window};
-    nprfx_parallel_for(ex, nprfx_rect_height(grown), 8, height_rows, &jh);
-    nprfx_parallel_for(ex, nprfx_rect_height(window), 8, color_rows, &jc);
+    paper_job jc = {&s, &hb, out, window};
+    r = fill_heights(ctx, &s, grown, &hb);
+    if (!r) nprfx_parallel_for(ex, nprfx_rect_height(window), 8, color_rows, &jc);
     nprfx_image_free(&hb);
-    return NPRFX_OK;
+    return r;
 }

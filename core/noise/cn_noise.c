@@ -313,16 +313,25 @@ static void internal_fold(const float *h, int R, const float *c, ptrdiff_t step,
 {
     int e = 0;
 #if INTERNAL_VEC
+    /* Two 8-lane sums, not one 16-lane: without AVX-512 GCC splits a 16-lane vector through the
+     * stack, and the store-to-load stalls made this loop five times slower on AVX2 machines. */
     for (; e + 16 <= n; e += 16) {
-        internal_v16f s, u, v;
-        memcpy(&u, c + e, sizeof u);
-        s = h[0] * u;
+        internal_v8f s0, s1, u0, u1, v0, v1;
+        memcpy(&u0, c + e, sizeof u0);
+        memcpy(&u1, c + e + 8, sizeof u1);
+        s0 = h[0] * u0;
+        s1 = h[0] * u1;
         for (int j = 1; j <= R; j++) {
-            memcpy(&u, c + e - (ptrdiff_t)j * step, sizeof u);
-            memcpy(&v, c + e + (ptrdiff_t)j * step, sizeof v);
-            s += h[j] * (u + v);
+            const float *a = c + e - (ptrdiff_t)j * step, *b = c + e + (ptrdiff_t)j * step;
+            memcpy(&u0, a, sizeof u0);
+            memcpy(&u1, a + 8, sizeof u1);
+            memcpy(&v0, b, sizeof v0);
+            memcpy(&v1, b + 8, sizeof v1);
+            s0 += h[j] * (u0 + v0);
+            s1 += h[j] * (u1 + v1);
         }
-        memcpy(dst + e, &s, sizeof s);
+        memcpy(dst + e, &s0, sizeof s0);
+        memcpy(dst + e + 8, &s1, sizeof s1);
     }
 #endif
     for (; e < n; e++) {
@@ -352,6 +361,8 @@ static void internal_bp_hrows(void *user, int begin, int end, int worker)
 
 /* The vertical pass: (lo sum - hi sum) * gain into the output channel, a row at a time through
  * the worker's scratch. */
+#define INTERNAL_VSTRIP 128
+
 static void internal_bp_vrows(void *user, int begin, int end, int worker)
 {
     internal_noise_job *j = user;
@@ -359,15 +370,20 @@ static void internal_bp_vrows(void *user, int begin, int end, int worker)
     const int W = nprfx_rect_width(o->bounds), R = j->R;
     const float gain = (float)j->gain;
     float *lo = j->scratch + (size_t)worker * (size_t)j->scratch_len, *hi = lo + W;
-    for (int r = begin; r < end; r++) {
-        float *dst = nprfx_image_at(o, o->bounds.x0, o->bounds.y0 + r) + j->channel;
-        internal_fold(j->lo->half, j->lo->radius, j->tmp_lo + (size_t)(r + R) * (size_t)W,
-                      (ptrdiff_t)W, W, lo);
-        if (j->tmp_hi)
-            internal_fold(j->hi->half, j->hi->radius, j->tmp_hi + (size_t)(r + R) * (size_t)W,
-                          (ptrdiff_t)W, W, hi);
-        for (int x = 0; x < W; x++)
-            dst[(ptrdiff_t)x * o->pixel_stride] = (j->tmp_hi ? lo[x] - hi[x] : lo[x]) * gain;
+    /* Strips of columns, all the rows of one before the next: a column sum reads 2R + 1 rows,
+     * and a strip's rows (193 of 512 bytes at sigma 24) stay in the core's cache between output
+     * rows, where whole rows (7.5 KiB each at 1920) went back to memory; twice as fast. */
+    for (int x0 = 0; x0 < W; x0 += INTERNAL_VSTRIP) {
+        const int n = W - x0 < INTERNAL_VSTRIP ? W - x0 : INTERNAL_VSTRIP;
+        for (int r = begin; r < end; r++) {
+            float *dst = nprfx_image_at(o, o->bounds.x0 + x0, o->bounds.y0 + r) + j->channel;
+            const size_t at = (size_t)(r + R) * (size_t)W + (size_t)x0;
+            internal_fold(j->lo->half, j->lo->radius, j->tmp_lo + at, (ptrdiff_t)W, n, lo);
+            if (j->tmp_hi)
+                internal_fold(j->hi->half, j->hi->radius, j->tmp_hi + at, (ptrdiff_t)W, n, hi);
+            for (int x = 0; x < n; x++)
+                dst[(ptrdiff_t)x * o->pixel_stride] = (j->tmp_hi ? lo[x] - hi[x] : lo[x]) * gain;
+        }
     }
 }
 
