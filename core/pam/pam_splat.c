@@ -245,17 +245,30 @@ static void splat_setup(const pam_job *P, const gpoint *pt, splat *s)
     s->v0 = j * S * nprfx_u01(nprfx_mix64(h)) - P->shift;
 }
 
+/* i mod S in [0, S). Maps are mostly a power of two in size, where a mask gives the same value
+ * as the remainder without its division (two per texel, a sixth of the node's time). */
+static inline int wrap_texel(int i, int S)
+{
+    if ((S & (S - 1)) == 0) return i & (S - 1);
+    int r = i % S;
+    return r < 0 ? r + S : r;
+}
+
+#if defined(__GNUC__)
+#define TEXEL_INLINE static inline __attribute__((always_inline))
+#else
+#define TEXEL_INLINE static inline
+#endif
+
 /* Bilinear, wrapped (the maps tile), at (u, v) in map pixels of map m: adds f * texel to acc. */
-static inline void texel_add(const pam_prep *pp, int m, double u, double v, double f, double acc[3])
+TEXEL_INLINE void texel_add(const pam_prep *pp, int m, double u, double v, double f, double acc[3])
 {
     int S = pp->info.size;
     double fu = u - 0.5, fv = v - 0.5;
     double cu = floor(fu), cv = floor(fv);
     double tu = fu - cu, tv = fv - cv;
     /* |u|, |v| stay far below 2^31 (a map offset plus a splat's reach, plus the flow) */
-    int x0 = (int)cu % S, y0 = (int)cv % S;
-    if (x0 < 0) x0 += S;
-    if (y0 < 0) y0 += S;
+    int x0 = wrap_texel((int)cu, S), y0 = wrap_texel((int)cv, S);
     int x1 = x0 + 1 == S ? 0 : x0 + 1, y1 = y0 + 1 == S ? 0 : y0 + 1;
     const float *base = pp->dev + (size_t)m * S * S * 3;
     const float *a = base + ((size_t)y0 * S + x0) * 3, *b = base + ((size_t)y0 * S + x1) * 3;
