@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include "frame_pool.h"
 #include "nprfx/graph.h"
+#include "nprfx/seq.h"
 #include "graph_frames.h"
 #include "graph_model.h"
 
@@ -97,4 +98,12 @@ int nprfx_graph_stats(const nprfx_graph *g, const nprfx_graph_node_stats **stats
 size_t nprfx_graph_mem_peak(const nprfx_graph *g)
 {
     return g->mem_peak;
+}
+
+nprfx_result internal_graph_frame_ok(nprfx_graph *g, int frame)
+{
+    if (frame >= NPRFX_FRAME_MIN && frame <= NPRFX_FRAME_MAX) return NPRFX_OK;
+    return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_RANGE,
+                       "frame %d is outside the frames nprfx renders (%d to %d)", frame,
+                       NPRFX_FRAME_MIN, NPRFX_FRAME_MAX);
 }

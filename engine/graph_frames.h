@@ -1,5 +1,5 @@
-/* nprfx graph engine — the frames a graph holds, counted against the memory limit, and the temporal window
- * (graph_frames.c). Never installed. */
+/* nprfx graph engine — the frames a graph holds, counted against the memory limit, and the temporal
+ * window (graph_frames.c). Never installed. */
 #ifndef NPRFX_CLI_GRAPH_FRAMES_H
 #define NPRFX_CLI_GRAPH_FRAMES_H
 
@@ -28,6 +28,9 @@ void internal_graph_frame_adopt(nprfx_graph *g, int node, const nprfx_image *im)
 
 /* Give a frame from internal_graph_frame_alloc (or adopted) back to the pool. */
 void internal_graph_frame_release(nprfx_graph *g, nprfx_image *im);
+
+/* NPRFX_OK when frame is one nprfx renders (NPRFX_FRAME_MIN..MAX), else an error on g's context. */
+nprfx_result internal_graph_frame_ok(nprfx_graph *g, int frame);
 
 /* Begin evaluating frame (after the previous frame's sweep). */
 void internal_graph_frame_begin(nprfx_graph *g, int frame);

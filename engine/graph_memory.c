@@ -118,15 +118,16 @@ void internal_graph_frame_sweep(nprfx_graph *g)
     /* In order, a recursion over frames reads the frame before and this one: after frame f it
      * needs f (and f+1, not made yet), not f-1. Out of order nothing is kept that the same
      * offsets from the next frame would not read; a wrong guess costs a render, never a pixel. */
-    int step = g->have_prev ? g->cur_frame - g->prev_frame : 1;
-    int next = g->cur_frame + step;
+    /* 64 bits: frames a whole int apart (a caller's own frame order) have a step beyond int. */
+    int64_t step = g->have_prev ? (int64_t)g->cur_frame - g->prev_frame : 1;
+    int64_t next = (int64_t)g->cur_frame + step;
     /* This frame's own results always stay: at the first frame a recursion has read nothing
      * else yet, and will read this one next. */
-    int lo = g->have_win && g->win_lo < -step ? g->win_lo : -step;
-    int hi = g->have_win && g->win_hi > -step ? g->win_hi : -step;
+    int64_t lo = g->have_win && g->win_lo < -step ? g->win_lo : -step;
+    int64_t hi = g->have_win && g->win_hi > -step ? g->win_hi : -step;
     for (centry *e = g->tail, *prev; e; e = prev) {
         prev = e->prev;
-        int off = e->frame - next;
+        int64_t off = (int64_t)e->frame - next;
         if (e->pins || (g->plan_temporal[e->node] && off >= lo && off <= hi)) continue;
         internal_graph_cache_drop(g, e);
     }

@@ -131,7 +131,8 @@ static nprfx_result write_node(nprfx_graph *g, int node, int frame, int files)
 static nprfx_result render_frame(nprfx_graph *g, int frame, int files, int *written)
 {
     *written = 0;
-    nprfx_result r = internal_graph_prepare(g, frame);
+    nprfx_result r = internal_graph_frame_ok(g, frame);
+    if (!r) r = internal_graph_prepare(g, frame);
     if (!r) r = internal_graph_plan_build(g);
     internal_graph_frame_begin(g, frame);
     int *group = NULL;
@@ -234,7 +235,8 @@ nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int frame, nprfx
         return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "the graph has no node '%s' to evaluate",
                            name);
     /* The previous call's view is no longer promised: sweep as after a frame, then begin one. */
-    nprfx_result r = internal_graph_prepare(g, frame);
+    nprfx_result r = internal_graph_frame_ok(g, frame);
+    if (!r) r = internal_graph_prepare(g, frame);
     if (!r) r = internal_graph_plan_build(g);
     if (r) return r;
     internal_graph_frame_sweep(g);

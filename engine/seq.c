@@ -74,6 +74,14 @@ nprfx_result nprfx_seq_parse_frames(nprfx_context *ctx, const char *spec, nprfx_
         while (*p == ' ')
             p++;
         if (*p != ',' && *p != '\0') goto bad;
+        if (a < NPRFX_FRAME_MIN || a > NPRFX_FRAME_MAX || b < NPRFX_FRAME_MIN ||
+            b > NPRFX_FRAME_MAX) {
+            nprfx_seq_frames_free(out);
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_RANGE,
+                               "frame %ld in '%s' is outside the frames nprfx renders (%d to %d)",
+                               a < NPRFX_FRAME_MIN || a > NPRFX_FRAME_MAX ? a : b, spec,
+                               NPRFX_FRAME_MIN, NPRFX_FRAME_MAX);
+        }
         long n = (a <= b ? b - a : a - b) / step + 1;
         if (n > SEQ_MAX_FRAMES - out->count) {
             nprfx_seq_frames_free(out);

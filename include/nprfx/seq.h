@@ -20,6 +20,12 @@
 extern "C" {
 #endif
 
+/* The frames nprfx renders: nine digits either way, so that a frame plus any offset a node
+ * reaches back or ahead (time-offset's 100000 at most, a shot's warm-up) stays inside an int.
+ * Frame lists and the graph's render calls refuse frames outside it with a message. */
+#define NPRFX_FRAME_MAX 999999999
+#define NPRFX_FRAME_MIN (-NPRFX_FRAME_MAX)
+
 typedef struct nprfx_frame_list {
     int *frames; /* in the order given; for nprfx_seq_list: ascending */
     int count;

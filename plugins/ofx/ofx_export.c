@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "ofx_export.h"
+#include "ofx_fetch.h"
 #include "nprfx/seq.h"
 
 /* FNV-1a over what the export is made of. */
@@ -85,7 +86,7 @@ nprfx_result ofx_export(ofx_instance *inst, const nprfx_render_args *a)
         const char *pattern = a->params[i].s;
         if (!(d->params[i].flags & NPRFX_PARAM_EXPORT) || !pattern || !pattern[0]) continue;
         char path[4096];
-        int frame = (int)floor(a->time + 0.5);
+        int frame = ofx_round_frame(a->time);
         if ((r = nprfx_seq_expand(a->ctx, pattern, frame, path, sizeof path))) break;
         unsigned long long key = export_key(a, path);
         pthread_mutex_lock(&inst->lock);

@@ -8,6 +8,7 @@
 #include <pthread.h>
 
 #include "nprfx/nprfx.h"
+#include "nprfx/seq.h"
 #include "ofx_derive.h"
 #include "ofx_image.h"
 #include "ofx_instance.h"
@@ -63,7 +64,12 @@ typedef struct ofx_render_call {
 /* The frame a host time falls on. */
 static inline int ofx_round_frame(double t)
 {
-    return (int)floor(t + 0.5);
+    /* A host's time beyond the frames nprfx renders (or NaN) is held at their ends, where the
+     * int conversion and a node's reach back or ahead stay defined. */
+    double r = floor(t + 0.5);
+    if (!(r >= NPRFX_FRAME_MIN)) return NPRFX_FRAME_MIN;
+    if (r > NPRFX_FRAME_MAX) return NPRFX_FRAME_MAX;
+    return (int)r;
 }
 
 /* Give back a fetched image and free its scratch copy. */

@@ -61,6 +61,24 @@ expect 2 "the graph has no node 'nob'" -- "$NPRFX" run ok.json --set nob.opacity
 expect 2 "frame 9 is outside the graph's frames 1-3" -- "$NPRFX" run ok.json --frames 9
 expect 2 "cannot open graph file 'absent.json'" -- "$NPRFX" run absent.json
 
+# Frames at the ends of int are refused with the range nprfx renders; its own ends render, a
+# temporal node reaching back and a time offset reaching ahead of them included (run under
+# UBSan, an overflow in the frame arithmetic stops the process).
+edge() { # edge NAME FRAMES OFFSET
+  printf '{"frames": "%s", "nodes": {"plate": {"node": "synth", "scene": "orbit", "size": "32x24"}, "n": {"node": "coherent-noise", "inputs": {"depth": "plate", "motion_prev": "plate"}}, "t": {"node": "time-offset", "inputs": {"image": "n"}, "params": {"offset": %s}}, "w": {"node": "write", "inputs": {"image": "t"}, "path": "o/%s.#.exr"}}}\n' "$2" "$3" "$1" > "$1.json"
+}
+edge top 2147483647 0
+expect 2 "frame 2147483647 in '2147483647' is outside the frames nprfx renders (-999999999 to 999999999)" -- "$NPRFX" run top.json
+edge bottom -2147483648 0
+expect 2 "frame -2147483648 in '-2147483648' is outside the frames nprfx renders" -- "$NPRFX" run bottom.json
+edge hi 999999998-999999999 100000
+expect 0 "" -- "$NPRFX" run hi.json
+[ -f o/hi.999999999.exr ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: no o/hi.999999999.exr"; }
+edge lo -999999999--999999998 -100000
+expect 0 "" -- "$NPRFX" run lo.json
+[ -f o/lo.-999999998.exr ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: no o/lo.-999999998.exr"; }
+expect 2 "outside the frames nprfx renders" -- "$NPRFX" run hi.json --frames 1000000000
+
 graph unconnected '"b": {"node": "blend", "inputs": {"base": "plate"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}'
 expect 2 "node 'b': required input 'layer' is not connected" -- "$NPRFX" run unconnected.json
 
