@@ -321,6 +321,12 @@ static nprfx_result walk_tiles(walk *w)
         for (int lx = 0; lx < nlx; lx++) {
             /* Mipmaps have only the diagonal levels; ripmaps every pair. */
             if (mode != EXR_TILE_RIPMAP_LEVELS && lx != ly) continue;
+            /* A rip-map's levels lie row by row (ly, then lx), but OpenEXR 3.1's core library
+             * indexes a level above the first row as if the rows below held only the levels
+             * left of lx, and so looks for its tiles in other levels' chunks (it refused every
+             * valid rip-map). A read takes level 0 alone, whose chunks are checked with the
+             * first row's; the levels above it are never decoded. */
+            if (mode == EXR_TILE_RIPMAP_LEVELS && ly > 0) continue;
             int32_t lw = 0, lh = 0;
             exr_message[0] = 0;
             rv = exr_get_level_sizes(w->f, w->part, lx, ly, &lw, &lh);

@@ -1,8 +1,9 @@
 # Valid layouts read faithfully: tests/data/make_valid.sh writes a corpus (windows with negative
 # origins, overscan and crops, 1x1, pixel aspect 2, half, tiles, MIP maps, multi-part files,
 # stereo as parts and as one part in OpenEXR's and Nuke's naming, exact uint ids beside half and
-# float), every file goes through a read->write graph, and OpenImageIO, an independent reader,
-# checks the copy against the part or view read: windows, channel names and types, pixel aspect,
+# float, RIPMAP and MIPMAP levels rounded down and up), every file goes through a read->write
+# graph, and OpenImageIO, an independent reader, checks the copy against the part or view read
+# (a tiled file's level 0): windows, channel names and types, pixel aspect,
 # values (idiff) and, where the types are the file's own, the pixel data's hash (which sees uint
 # ids exactly). Then the refusals and warnings: deep data, a missing part or view, uint ids beyond
 # float's exact range, inputs at different origins.
@@ -41,6 +42,9 @@ one one.exr - - -
 overscan overscan.exr - - -
 tiled tiled.exr - - -
 tiled_mip tiled_mip.exr - - -
+rip_down rip_down.exr - - -
+rip_up rip_up.exr - - -
+mip_up mip_up.exr - - -
 uint_mixed uint_mixed.exr - - -
 uint_big uint_big.exr - - -
 uint_sub uint_mixed.exr - - B,id
@@ -77,6 +81,8 @@ cp last.err copy.err
 # The references, as OIIO reads the part or view: a MIP map's level 0, parts, renamed views.
 mkdir -p ref
 oiiotool in/tiled_mip.exr --unmip -o ref/tiled_mip.exr \
+    in/rip_down.exr --unmip -o ref/rip_down.exr in/rip_up.exr --unmip -o ref/rip_up.exr \
+    in/mip_up.exr --unmip -o ref/mip_up.exr \
     in/multipart.exr --subimage 0 in/multipart.exr --subimage 1 --chappend -o ref/mp_default.exr \
     in/multipart.exr --subimage 2 -o ref/mp_depth.exr \
     in/multipart.exr --subimage 3 -o ref/mp_proxy.exr \
@@ -89,8 +95,8 @@ for f in scan_float half neg_origin crop aspect2 one overscan tiled uint_mixed u
 done
 ln -s mp_depth.exr ref/mp_2.exr
 ln -s mp_depth.exr ref/mp_want.exr
-same_layout="scan_float half neg_origin crop aspect2 one overscan tiled tiled_mip uint_mixed
-    mp_default mp_depth mp_2 mp_proxy mp_want mvp_default mvp_right"
+same_layout="scan_float half neg_origin crop aspect2 one overscan tiled tiled_mip rip_down rip_up
+    mip_up uint_mixed mp_default mp_depth mp_2 mp_proxy mp_want mvp_default mvp_right"
 
 # What must survive, as iinfo -v prints it: size, channel count and types, channel names (with
 # per-channel types when mixed), data origin, display window, pixel aspect; one line per file.
@@ -130,6 +136,13 @@ esac
 case "$(field layouts.txt out/node.exr)" in *"origin: x=8, y=4 | full/display size: 64 x 48"*) ;;
 *) fail "a node's output lost the data or display window: $(field layouts.txt out/node.exr)" ;; esac
 iinfo -v out/tiled_mip.exr | grep -q MIP && fail "a copy of a MIP map should be level 0 alone"
+# The rip and MIP maps are what they say (levels; rounded up), and their copies level 0 alone:
+# each level adds 0.125 (lx + 2 ly) to level 0's values, so another level would fail the hashes.
+for f in rip_down rip_up mip_up; do
+    iinfo -v "in/$f.exr" | grep -q 'MIP-map levels' || fail "in/$f.exr has no levels"
+    iinfo -v "out/$f.exr" | grep -q MIP && fail "a copy of $f.exr should be level 0 alone"
+done
+iinfo -v in/rip_up.exr | grep -q 'roundingmode: 1' || fail "in/rip_up.exr does not round up"
 
 # Stereo in one part: the other view's channels, named by OpenEXR's rule (diffuse.right.R) or
 # Nuke's (right.diffuse.R), come out under the default view's names, with their own types.

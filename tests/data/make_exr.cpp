@@ -4,6 +4,10 @@
  *   uint_big.exr     uint ids above 2^24, which float pixels cannot all hold
  *   mv_exr.exr       single-part stereo (multiView left, right), OpenEXR names: diffuse.right.R
  *   mv_nuke.exr      the same with Nuke's names: right.diffuse.R
+ *   rip_down.exr     600x400 half RGBA tiled 64x64 with RIPMAP levels rounded down (as
+ *                    exrmaketiled -r writes it)
+ *   rip_up.exr       37x23 tiled 8x8, RIPMAP levels rounded up (odd sizes, where rounding counts)
+ *   mip_up.exr       37x23 tiled 8x8, MIPMAP levels rounded up
  * oiiotool scales the values it writes into uint channels and cannot write the multiView
  * attribute (OIIO 2.4), hence this program. The values are simple functions of (x, y, channel)
  * so a test can say what a reader must find. */
@@ -13,6 +17,7 @@
 #include <OpenEXR/ImfMultiView.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
+#include <OpenEXR/ImfTiledOutputFile.h>
 
 #include <Imath/half.h>
 
@@ -75,6 +80,38 @@ void write_file(const std::string &path, int x0, int y0, int w, int h, int dw, i
     out.writePixels(h);
 }
 
+/* A tiled half RGBA file of w x h at the origin with every level of its mode: level (lx, ly)
+ * holds value(x, y, c) + 0.125 (lx + 2 ly), so a reader that takes another level than (0, 0)
+ * shows it. */
+void write_tiled(const std::string &path, int w, int h, int tile, Imf::LevelMode mode,
+                 Imf::LevelRoundingMode round)
+{
+    Imf::Header header(w, h);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    const char *names[4] = {"R", "G", "B", "A"};
+    for (const char *n : names)
+        header.channels().insert(n, Imf::Channel(Imf::HALF));
+    header.setTileDescription(Imf::TileDescription(tile, tile, mode, round));
+    Imf::TiledOutputFile out(path.c_str(), header);
+    for (int ly = 0; ly < out.numYLevels(); ly++)
+        for (int lx = 0; lx < out.numXLevels(); lx++) {
+            if (mode != Imf::RIPMAP_LEVELS && lx != ly) continue;
+            const int lw = out.levelWidth(lx), lh = out.levelHeight(ly);
+            std::vector<half> px((size_t)lw * lh * 4);
+            for (int y = 0; y < lh; y++)
+                for (int x = 0; x < lw; x++)
+                    for (int c = 0; c < 4; c++)
+                        px[((size_t)y * lw + x) * 4 + c] =
+                            half((float)(0.001 * (x + 10.0 * y) + 0.1 * c + 0.125 * (lx + 2 * ly)));
+            Imf::FrameBuffer fb;
+            for (int c = 0; c < 4; c++)
+                fb.insert(names[c], Imf::Slice(Imf::HALF, (char *)&px[c], 4 * sizeof(half),
+                                               4 * sizeof(half) * (size_t)lw));
+            out.setFrameBuffer(fb);
+            out.writeTiles(0, out.numXTiles(lx) - 1, 0, out.numYTiles(ly) - 1, lx, ly);
+        }
+}
+
 } // namespace
 
 int main(int argc, char **argv)
@@ -117,6 +154,9 @@ int main(int argc, char **argv)
                     {"right.B", Imf::FLOAT, 0.02, 1.3},
                     {"right.diffuse.R", Imf::HALF, 0.02, 1.4}},
                    {"left", "right"});
+        write_tiled(dir + "/rip_down.exr", 600, 400, 64, Imf::RIPMAP_LEVELS, Imf::ROUND_DOWN);
+        write_tiled(dir + "/rip_up.exr", 37, 23, 8, Imf::RIPMAP_LEVELS, Imf::ROUND_UP);
+        write_tiled(dir + "/mip_up.exr", 37, 23, 8, Imf::MIPMAP_LEVELS, Imf::ROUND_UP);
     } catch (const std::exception &e) {
         std::fprintf(stderr, "nprfx-make-exr: %s\n", e.what());
         return 1;

@@ -4,8 +4,9 @@
 # multi-part files with parts of other windows, stereo as parts with "view" attributes, deep
 # data (which nprfx refuses with advice), and, through the small OpenEXR program
 # nprfx-make-exr (tests/data/make_exr.cpp, built with the tests), what oiiotool cannot write:
-# exact uint ids beside half and float channels, and single-part stereo with the multiView
-# attribute in OpenEXR's and Nuke's channel naming.
+# exact uint ids beside half and float channels, single-part stereo with the multiView
+# attribute in OpenEXR's and Nuke's channel naming, and tiled RIPMAP and MIPMAP levels rounded
+# down and up.
 # usage: make_valid.sh OUTDIR [NPRFX_MAKE_EXR]   (or $NPRFX_MAKE_EXR; without it those files
 # are not made and the script says so)
 set -eu
