@@ -1,7 +1,7 @@
-/* nprfx I/O (libnprfx-io) — the guard every reader calls first (io_guard.h): EXRs through the OpenEXRCore
- * checks of io_validate.c, other formats by their header's size through OpenImageIO, and the
- * per-thread read deadline. C++ only because OpenImageIO is; like the readers and writers, every
- * entry point is extern "C" and catches every exception. */
+/* nprfx I/O (libnprfx-io) — the guard every reader calls first (io_guard.h): EXRs through the
+ * OpenEXRCore checks of io_validate.c, other formats by their header's size through OpenImageIO,
+ * and the per-thread read deadline. C++ only because OpenImageIO is; like the readers and writers,
+ * every entry point is extern "C" and catches every exception. */
 #include "io_guard.h"
 #include "io_validate.h"
 #include "io_timeout.h"
@@ -82,6 +82,7 @@ extern "C" nprfx_result internal_io_guard(nprfx_context *ctx, const char *path, 
         set_oiio_limits(limit);
         double now = internal_io_now();
         read_deadline = timeout > 0 ? now + timeout : 0;
+        internal_io_broken_reset();
         if (internal_io_is_exr(path))
             return internal_io_validate_exr(ctx, path, mode, read_deadline);
         /* Other formats decode every channel whatever a read keeps: all of them count. */

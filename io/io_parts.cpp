@@ -1,7 +1,8 @@
-/* nprfx I/O (libnprfx-io) — what a file holds and what a read takes of it (OpenImageIO): its parts, views and
- * windows, the channels a group of parts delivers under plate-unique names, and the choice of
- * parts and view (docs/design.md §2.3). */
+/* nprfx I/O (libnprfx-io) — what a file holds and what a read takes of it (OpenImageIO): its parts,
+ * views and windows, the channels a group of parts delivers under plate-unique names, and the
+ * choice of parts and view (docs/design.md §2.3). */
 #include "io_parts.h"
+#include "io_validate.h"
 
 extern "C" {
 #include "nprfx/channels.h"
@@ -225,6 +226,7 @@ static bool holds_all(const std::vector<chan> &chans, const nprfx_read_options &
 
 static failure refuse_part(const char *path, const part &p)
 {
+    if (const char *why = internal_io_broken_part(p.index)) return {NPRFX_ERR_IO, why};
     if (p.spec.deep)
         return {NPRFX_ERR_UNSUPPORTED,
                 "'" + std::string(path) + "' " + part_label(p) +
@@ -297,8 +299,13 @@ failure choose(const char *path, const header &h, const nprfx_read_options &o, c
         const part *refused = nullptr;
         for (const part &p : h.parts) {
             if (!p.view.empty() && p.view != ch.view) continue;
+            /* A broken part is left out of its group, unless it is the first part a read
+             * would take: then the read is refused, never moved to parts the caller did not
+             * mean (a file damaged at its first chunk must not read as its second part). */
+            bool broken = internal_io_broken_part(p.index) != nullptr;
+            if (broken && groups.empty()) return refuse_part(path, p);
             if (refuse_part(path, p).code) {
-                if (!refused) refused = &p;
+                if (!refused && !broken) refused = &p;
                 continue;
             }
             bool placed = false;
@@ -333,7 +340,9 @@ failure choose(const char *path, const header &h, const nprfx_read_options &o, c
         for (const part &p : h.parts) {
             if (std::find(ch.group.begin(), ch.group.end(), &p) != ch.group.end()) continue;
             std::string why;
-            if (!p.view.empty() && p.view != ch.view)
+            if (internal_io_broken_part(p.index))
+                why = "unfinished or damaged: its pixels are missing";
+            else if (!p.view.empty() && p.view != ch.view)
                 why = "view '" + p.view + "'";
             else if (p.spec.deep)
                 why = "deep";
@@ -344,6 +353,7 @@ failure choose(const char *path, const header &h, const nprfx_read_options &o, c
                       rect_text(display_rect(p.spec));
             /* Parts of other views, or left out by the caller's own choice, are no surprise. */
             if (why.compare(0, 5, "view ") && !(o.part && *o.part)) ch.warn = true;
+            if (internal_io_broken_part(p.index)) ch.warn = true; /* always worth a word */
             unused += (unused.empty() ? "" : ", ") + part_label(p) + " (" + why + ")";
         }
         ch.note = file + ": read " + used;

@@ -516,6 +516,7 @@ extern "C" nprfx_result nprfx_io_info(nprfx_context *ctx, const char *path, nprf
             pi.miplevels = p.miplevels;
             pi.pixel_aspect = p.spec.get_float_attribute("PixelAspectRatio", 1.0f);
             pi.used = std::find(ch.group.begin(), ch.group.end(), &p) != ch.group.end();
+            pi.broken = internal_io_broken_part(p.index) ? 1 : 0;
             std::vector<std::string> pn, pt;
             for (int c = 0; c < p.spec.nchannels; c++) {
                 pn.push_back(c < (int)p.spec.channelnames.size() ? p.spec.channelnames[c]

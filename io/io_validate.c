@@ -25,6 +25,27 @@ enum { MAX_NAME_BYTES = 255 };
 
 static _Thread_local char exr_message[256];
 
+/* The broken parts of the last file checked on this thread (internal_io_broken_part). More than
+ * MAX_BROKEN of them and the file is refused whole, as one damaged beyond reading. */
+enum { MAX_BROKEN = 16 };
+static _Thread_local struct {
+    int count;
+    int part[MAX_BROKEN];
+    char why[MAX_BROKEN][400];
+} broken;
+
+const char *internal_io_broken_part(int part)
+{
+    for (int i = 0; i < broken.count; i++)
+        if (broken.part[i] == part) return broken.why[i];
+    return NULL;
+}
+
+void internal_io_broken_reset(void)
+{
+    broken.count = 0;
+}
+
 static void on_exr_error(exr_const_context_t c, exr_result_t code, const char *msg)
 {
     (void)c;
@@ -256,6 +277,7 @@ typedef struct walk {
     double deadline;  /* 0: none */
     double timeout;   /* for the message */
     uint64_t visited; /* chunks checked so far, for the deadline's stride */
+    int timed_out;    /* the walk stopped at the deadline, not at a damaged chunk */
 } walk;
 
 static nprfx_result chunk_ok(walk *w, exr_result_t rv, const exr_chunk_info_t *ci, const char *at)
@@ -277,11 +299,13 @@ static nprfx_result chunk_ok(walk *w, exr_result_t rv, const exr_chunk_info_t *c
                            "the %llu bytes its pixels need with this compression",
                            w->path, w->part, at, (unsigned long long)ci->packed_size,
                            (unsigned long long)ci->unpacked_size);
-    if ((++w->visited & 63) == 0 && w->deadline > 0 && internal_io_now() > w->deadline)
+    if ((++w->visited & 63) == 0 && w->deadline > 0 && internal_io_now() > w->deadline) {
+        w->timed_out = 1;
         return nprfx_error(w->ctx, NPRFX_ERR_IO,
                            "'%s': reading took longer than %g s while checking its %llu-th chunk "
                            "(NPRFX_READ_TIMEOUT)",
                            w->path, w->timeout, (unsigned long long)w->visited);
+    }
     return NPRFX_OK;
 }
 
@@ -523,7 +547,14 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
                                          scratch > 1.8e19 ? UINT64_MAX : (uint64_t)scratch)))
             return r;
     }
-    walk wk = {ctx, path, f, 0, file_size, 0.0, deadline, timeout, 0};
+    /* The chunks are walked on a context of their own: a broken part is a finding to keep, not
+     * an error to raise through the caller's (whose handler may print it at once). */
+    nprfx_context *wctx = NULL;
+    nprfx_context_init wi = NPRFX_CONTEXT_INIT_DEFAULT;
+    if (nprfx_context_create(&wi, &wctx))
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "'%s': out of memory", path);
+    walk wk = {wctx, path, f, 0, file_size, 0.0, deadline, timeout, 0, 0};
+    int whole = 0; /* pixel parts whose chunks are all in place */
     for (int p = 0; p < nparts; p++) {
         exr_storage_t st;
         exr_compression_t comp = EXR_COMPRESSION_NONE;
@@ -531,15 +562,33 @@ static nprfx_result validate_open(nprfx_context *ctx, const char *path, int mode
         exr_message[0] = 0;
         if ((rv = exr_get_storage(f, p, &st)) != EXR_ERR_SUCCESS ||
             (rv = exr_get_compression(f, p, &comp)) != EXR_ERR_SUCCESS ||
-            (rv = exr_get_data_window(f, p, &dw)) != EXR_ERR_SUCCESS)
+            (rv = exr_get_data_window(f, p, &dw)) != EXR_ERR_SUCCESS) {
+            nprfx_context_destroy(wctx);
             return nprfx_error(ctx, NPRFX_ERR_IO, "'%s' is damaged: part %d: %s", path, p,
                                exr_why(rv));
+        }
         if (st == EXR_STORAGE_DEEP_SCANLINE || st == EXR_STORAGE_DEEP_TILED) continue;
         wk.part = p;
         wk.ratio = mode != NPRFX_GUARD_HEADER ? max_ratio(comp) : 0.0;
         r = st == EXR_STORAGE_TILED ? walk_tiles(&wk) : walk_scanlines(&wk, &dw);
-        if (r) return r;
+        if (r && !wk.timed_out && broken.count < MAX_BROKEN) {
+            /* A part's chunks are its own: the others may still be whole (checked on). */
+            broken.part[broken.count] = p;
+            nprfx_context_last_error(wctx, broken.why[broken.count], sizeof broken.why[0]);
+            broken.count++;
+            continue;
+        }
+        if (r) {
+            char why[600];
+            nprfx_context_last_error(wctx, why, sizeof why);
+            nprfx_context_destroy(wctx);
+            return nprfx_error(ctx, r, "%s", why);
+        }
+        whole++;
     }
+    nprfx_context_destroy(wctx);
+    if (broken.count && !whole) /* nothing to read: the first part's reason */
+        return nprfx_error(ctx, NPRFX_ERR_IO, "%s", broken.why[0]);
     if (deadline > 0 && internal_io_now() > deadline)
         return nprfx_error(ctx, NPRFX_ERR_IO,
                            "'%s': reading took longer than %g s while checking its %llu chunks "
@@ -557,6 +606,7 @@ nprfx_result internal_io_validate_exr(nprfx_context *ctx, const char *path, int 
     double timeout = 0;
     nprfx_result r = internal_io_read_timeout(ctx, &timeout);
     if (r || (r = prescan(ctx, path, (uint64_t)sb.st_size))) return r;
+    broken.count = 0;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;
     /* A damaged offset table is refused, never rebuilt by scanning the whole file (what made

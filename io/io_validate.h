@@ -33,6 +33,14 @@ typedef enum nprfx_io_guard_mode {
 nprfx_result internal_io_validate_exr(nprfx_context *ctx, const char *path, int mode,
                                       double deadline);
 
+/* Why part `part` of the file the last internal_io_validate_exr on this thread checked is
+ * broken, or NULL when it is whole. A part whose chunks are missing or damaged while its header
+ * is whole (a render killed before it wrote its later parts) does not fail the check when
+ * another part is whole: the reader leaves it out with a warning and refuses a read that asks
+ * for it. internal_io_broken_reset forgets them (the guard, before any file). */
+const char *internal_io_broken_part(int part);
+void internal_io_broken_reset(void);
+
 /* 1 when the file begins with the EXR magic number. */
 int internal_io_is_exr(const char *path);
 

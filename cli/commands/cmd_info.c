@@ -132,7 +132,8 @@ static void print_parts(const nprfx_file_info *fi)
         print_rect(": data window", p->bounds);
         print_rect(", display window", p->display);
         print_layout(p, ", ");
-        printf(", %s\n", p->used ? "read by default"
+        printf(", %s\n", p->broken ? "unfinished or damaged (its pixels are missing): not read"
+                         : p->used ? "read by default"
                          : p->view[0] && fi->nviews && strcmp(p->view, fi->views[0])
                              ? "read with \"view\" or \"part\""
                              : "read with \"part\"");

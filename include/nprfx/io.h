@@ -78,6 +78,8 @@ typedef struct nprfx_part_info {
     int miplevels;      /* 1: no MIP map */
     float pixel_aspect; /* PixelAspectRatio */
     int used;           /* 1: a read without "part" or "view" takes it */
+    int broken;         /* 1: its pixels are missing or damaged (an unfinished render): reads
+                           leave it out, and refuse to take it by "part" */
 } nprfx_part_info;
 
 /* Header facts for `nprfx info`. */

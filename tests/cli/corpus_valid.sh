@@ -1,7 +1,8 @@
 # Valid layouts read faithfully: tests/data/make_valid.sh writes a corpus (windows with negative
 # origins, overscan and crops, 1x1, pixel aspect 2, half, tiles, MIP maps, multi-part files,
 # stereo as parts and as one part in OpenEXR's and Nuke's naming, exact uint ids beside half and
-# float, RIPMAP and MIPMAP levels rounded down and up), every file goes through a read->write
+# float, RIPMAP and MIPMAP levels rounded down and up, a multi-part file whose later parts were
+# never written), every file goes through a read->write
 # graph, and OpenImageIO, an independent reader, checks the copy against the part or view read
 # (a tiled file's level 0): windows, channel names and types, pixel aspect,
 # values (idiff) and, where the types are the file's own, the pixel data's hash (which sees uint
@@ -45,6 +46,8 @@ tiled_mip tiled_mip.exr - - -
 rip_down rip_down.exr - - -
 rip_up rip_up.exr - - -
 mip_up mip_up.exr - - -
+unf_default unfinished.exr - - -
+unf_aov unfinished.exr aov - -
 uint_mixed uint_mixed.exr - - -
 uint_big uint_big.exr - - -
 uint_sub uint_mixed.exr - - B,id
@@ -83,6 +86,8 @@ mkdir -p ref
 oiiotool in/tiled_mip.exr --unmip -o ref/tiled_mip.exr \
     in/rip_down.exr --unmip -o ref/rip_down.exr in/rip_up.exr --unmip -o ref/rip_up.exr \
     in/mip_up.exr --unmip -o ref/mip_up.exr \
+    in/unfinished.exr --subimage 0 in/unfinished.exr --subimage 1 --chappend -o ref/unf_default.exr \
+    in/unfinished.exr --subimage 1 -o ref/unf_aov.exr \
     in/multipart.exr --subimage 0 in/multipart.exr --subimage 1 --chappend -o ref/mp_default.exr \
     in/multipart.exr --subimage 2 -o ref/mp_depth.exr \
     in/multipart.exr --subimage 3 -o ref/mp_proxy.exr \
@@ -96,7 +101,7 @@ done
 ln -s mp_depth.exr ref/mp_2.exr
 ln -s mp_depth.exr ref/mp_want.exr
 same_layout="scan_float half neg_origin crop aspect2 one overscan tiled tiled_mip rip_down rip_up
-    mip_up uint_mixed mp_default mp_depth mp_2 mp_proxy mp_want mvp_default mvp_right"
+    mip_up unf_default unf_aov uint_mixed mp_default mp_depth mp_2 mp_proxy mp_want mvp_default mvp_right"
 
 # What must survive, as iinfo -v prints it: size, channel count and types, channel names (with
 # per-channel types when mixed), data origin, display window, pixel aspect; one line per file.
@@ -168,6 +173,15 @@ has_err r_mp_depth "note: read 'r_mp_depth': 'in/multipart.exr': read part 2 'de
 has_err r_mp_want "read part 2 'depth'"
 has_err r_mvp_right "read part 1 'rgba.right', view 'right'"
 has_err r_mve_right "view 'right'"
+# An unfinished multi-part file (parts 2 and 3 never written) reads its whole parts, naming the
+# others; `info` marks them; a read that asks for one is refused (below).
+has_err r_unf_default "warning: read 'r_unf_default': 'in/unfinished.exr': read part 0 'beauty', part 1 'aov'"
+has_err r_unf_default "part 2 'depth' (unfinished or damaged: its pixels are missing), part 3 'extra' (unfinished"
+has_err r_unf_aov "read part 1 'aov'"
+"$NPRFX" info in/unfinished.exr >info_unf.txt 2>&1 || fail "info of an unfinished file failed"
+grep -q "part 3 'extra': .*unfinished or damaged (its pixels are missing): not read" info_unf.txt ||
+    { cat info_unf.txt >&2; fail "info does not mark the unfinished parts"; }
+grep -q "damaged" <(grep -v "^    part" info_unf.txt) && { cat info_unf.txt >&2; fail "info reports the file as an error"; }
 has_err r_uint_big "warning: read 'r_uint_big'"
 has_err r_uint_big "'id' (up to 16777283) hold integers above 2^24 = 16777216"
 [ "$(field hashes.txt ref/uint_big.exr)" != "$(field hashes.txt out/uint_big.exr)" ] ||
@@ -189,6 +203,7 @@ err_graph e_view mv_parts.exr - centre
 err_graph e_view1 mv_exr.exr - centre
 err_graph e_flat scan_float.exr - left
 err_graph e_both mv_parts.exr rgba.right left
+err_graph e_unf unfinished.exr depth -
 # Inputs of one size at different origins: the error names the windows.
 cat >e_origin.json <<'JSON'
 {"frames": "1", "nodes": {
@@ -199,7 +214,7 @@ cat >e_origin.json <<'JSON'
 JSON
 rc=0
 "$NPRFX" run e_deep.json e_part.json e_index.json e_view.json e_view1.json e_flat.json e_both.json \
-    e_origin.json >last.out 2>last.err || rc=$?
+    e_origin.json e_unf.json >last.out 2>last.err || rc=$?
 [ "$rc" -ne 0 ] || fail "the graphs that must fail did not"
 [ ! -e out/x.exr ] || fail "a refused read wrote a file"
 says() { # GRAPH TEXT: the failure of GRAPH says TEXT
@@ -211,6 +226,7 @@ says e_part "'in/multipart.exr' has no part 'nope' (parts, by index and name: 0 
 says e_index "has no part '7'"
 says e_view "'in/mv_parts.exr' has no view 'centre' (views: left, right)"
 says e_view1 "'in/mv_exr.exr' has no view 'centre' (views: left, right)"
+says e_unf "'in/unfinished.exr' is damaged: part 2, chunk at scanline 0"
 says e_flat "'in/scan_float.exr' has no view 'left': it is not a multi-view file"
 says e_both "part 1 'rgba.right' is view 'right', not view 'left'"
 says e_origin "input 'layer' has data window 64x48-10-20 but input 'base' has 64x48+0+0"

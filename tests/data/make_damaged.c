@@ -239,8 +239,10 @@ typedef struct attr {
 typedef struct layout {
     attr attrs[256];
     int nattrs;
-    size_t header_end; /* first byte after the header(s): the offset table */
-    size_t table_end;  /* first chunk */
+    size_t header_end;    /* first byte after the header(s): the offset table */
+    size_t table_end;     /* first chunk */
+    size_t part0_end;     /* first byte after part 0's chunks (the file's size when single-part) */
+    size_t part0_entries; /* part 0's entries in the offset table */
 } layout;
 
 static uint32_t rd32(const unsigned char *p)
@@ -267,6 +269,8 @@ static uint64_t rd64(const unsigned char *p)
         v = v << 8 | p[i];
     return v;
 }
+
+static const attr *find_attr(const layout *L, int part, const char *name);
 
 static void parse_layout(const unsigned char *d, size_t n, layout *L)
 {
@@ -311,6 +315,22 @@ static void parse_layout(const unsigned char *d, size_t n, layout *L)
         if (v > o && v < first) first = v;
     }
     L->table_end = (size_t)first;
+    /* Part 0's chunks: those its offsets name (its entries lead the table), each a leader (part
+     * number; y, or tile x, y and levels; packed size) and its packed bytes. */
+    L->part0_end = n;
+    L->part0_entries = (L->table_end - L->header_end) / 8;
+    const attr *cc = find_attr(L, 0, "chunkCount");
+    if (multipart && cc && cc->size == 4) {
+        size_t count = rd32(d + cc->value), lead = find_attr(L, 0, "tiles") ? 20 : 8, end = 0;
+        for (size_t e = 0; e < count && o + 8 * e + 8 <= n; e++) {
+            uint64_t v = rd64(d + o + 8 * e);
+            if (v + lead + 4 > n) continue;
+            size_t stop = (size_t)v + lead + 4 + rd32(d + v + lead);
+            if (stop > end) end = stop;
+        }
+        if (end > 0 && end <= n) L->part0_end = end;
+        L->part0_entries = count;
+    }
 }
 
 static const attr *find_attr(const layout *L, int part, const char *name)
@@ -372,7 +392,9 @@ static void damage_truncate(const char *base, const unsigned char *d, size_t n, 
         if (dup) continue;
         char what[64];
         snprintf(what, sizeof what, "truncated-at-%zu", cuts[i]);
-        emit("must", base, what, d, cuts[i]);
+        /* Cut after part 0's chunks, a multi-part file is unfinished in its later parts: part 0
+         * still reads (with a warning naming the others), or the file is refused. */
+        emit(cuts[i] >= L->part0_end ? "any" : "must", base, what, d, cuts[i]);
     }
 }
 
@@ -483,9 +505,11 @@ static void damage_table(const char *base, const unsigned char *d, size_t n, con
             wr64(c + t0, rd64(d + t0) + 4);
             break;
         }
-        /* Reversed offsets of a one-chunk part are the same table. */
+        /* Reversed offsets of a one-chunk part are the same table. The last entry of a
+         * multi-part file belongs to its last part: part 0 still reads, or the file is refused. */
         int same = memcmp(c, d, n) == 0;
-        if (!same) emit("must", base, edits[i].what, c, n);
+        int later = (edits[i].mode == 1 || edits[i].mode == 2) && entries > L->part0_entries;
+        if (!same) emit(later ? "any" : "must", base, edits[i].what, c, n);
         free(c);
     }
     /* A chunk leader claiming a huge packed size, and one claiming the wrong scanline. */

@@ -8,13 +8,18 @@
  *                    exrmaketiled -r writes it)
  *   rip_up.exr       37x23 tiled 8x8, RIPMAP levels rounded up (odd sizes, where rounding counts)
  *   mip_up.exr       37x23 tiled 8x8, MIPMAP levels rounded up
+ *   unfinished.exr   4 scanline parts of which only parts 0 and 1 were written, as a render
+ *                    killed mid-way leaves the file (the offsets of parts 2 and 3 stay 0)
  * oiiotool scales the values it writes into uint channels and cannot write the multiView
  * attribute (OIIO 2.4), hence this program. The values are simple functions of (x, y, channel)
  * so a test can say what a reader must find. */
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfMultiPartOutputFile.h>
 #include <OpenEXR/ImfMultiView.h>
+#include <OpenEXR/ImfOutputPart.h>
+#include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfTiledOutputFile.h>
@@ -112,6 +117,39 @@ void write_tiled(const std::string &path, int w, int h, int tile, Imf::LevelMode
         }
 }
 
+/* Four 16x8 float parts (beauty: R,G,B; aov: N.X; depth: Z; extra: Y), only the first two of
+ * which get their pixels before the file is closed. */
+void write_unfinished(const std::string &path)
+{
+    const char *names[4] = {"beauty", "aov", "depth", "extra"};
+    const std::vector<std::vector<std::string>> chans = {{"R", "G", "B"}, {"N.X"}, {"Z"}, {"Y"}};
+    const int w = 16, h = 8;
+    std::vector<Imf::Header> headers;
+    for (int p = 0; p < 4; p++) {
+        Imf::Header hd(w, h);
+        hd.compression() = Imf::ZIP_COMPRESSION;
+        hd.setName(names[p]);
+        hd.setType(Imf::SCANLINEIMAGE);
+        for (const std::string &c : chans[p])
+            hd.channels().insert(c, Imf::Channel(Imf::FLOAT));
+        headers.push_back(hd);
+    }
+    Imf::MultiPartOutputFile out(path.c_str(), headers.data(), (int)headers.size());
+    for (int p = 0; p < 2; p++) {
+        const size_t nc = chans[p].size();
+        std::vector<float> px((size_t)w * h * nc);
+        for (size_t i = 0; i < px.size(); i++)
+            px[i] = (float)(0.01 * (double)i + p);
+        Imf::FrameBuffer fb;
+        for (size_t c = 0; c < nc; c++)
+            fb.insert(chans[p][c], Imf::Slice(Imf::FLOAT, (char *)&px[c], nc * sizeof(float),
+                                              nc * sizeof(float) * (size_t)w));
+        Imf::OutputPart part(out, p);
+        part.setFrameBuffer(fb);
+        part.writePixels(h);
+    }
+}
+
 } // namespace
 
 int main(int argc, char **argv)
@@ -157,6 +195,7 @@ int main(int argc, char **argv)
         write_tiled(dir + "/rip_down.exr", 600, 400, 64, Imf::RIPMAP_LEVELS, Imf::ROUND_DOWN);
         write_tiled(dir + "/rip_up.exr", 37, 23, 8, Imf::RIPMAP_LEVELS, Imf::ROUND_UP);
         write_tiled(dir + "/mip_up.exr", 37, 23, 8, Imf::MIPMAP_LEVELS, Imf::ROUND_UP);
+        write_unfinished(dir + "/unfinished.exr");
     } catch (const std::exception &e) {
         std::fprintf(stderr, "nprfx-make-exr: %s\n", e.what());
         return 1;

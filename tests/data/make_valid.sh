@@ -5,8 +5,8 @@
 # data (which nprfx refuses with advice), and, through the small OpenEXR program
 # nprfx-make-exr (tests/data/make_exr.cpp, built with the tests), what oiiotool cannot write:
 # exact uint ids beside half and float channels, single-part stereo with the multiView
-# attribute in OpenEXR's and Nuke's channel naming, and tiled RIPMAP and MIPMAP levels rounded
-# down and up.
+# attribute in OpenEXR's and Nuke's channel naming, tiled RIPMAP and MIPMAP levels rounded
+# down and up, and a multi-part file whose later parts were never written.
 # usage: make_valid.sh OUTDIR [NPRFX_MAKE_EXR]   (or $NPRFX_MAKE_EXR; without it those files
 # are not made and the script says so)
 set -eu
