@@ -1,8 +1,10 @@
 /* nprfx host-project --natron-script: the graph as a Natron 2 Python script that builds the
  * project in the running Natron (Natron -t SCRIPT, or the Script Editor). Natron runs scripts
  * without __file__, so the script finds its folder from __file__ when there is one, else from
- * $NPRFX_SAMPLES or the current folder, by looking for the first plate. Params are set by
- * script name with the graph's values; inputs are connected by clip label. */
+ * $NPRFX_SAMPLES or the current folder, by looking for the script file itself (a plate path may
+ * be absolute, and then says nothing of where the script is). Params are set by script name with
+ * the graph's values; inputs are connected by clip label. Every node's variable is n_ and its
+ * name, so that no node (a "base", a "folder") takes the name of the script's own variables. */
 #include <string.h>
 
 #include "host_natron_py.h"
@@ -52,19 +54,23 @@ static const char prelude[] =
     "    tries += [os.path.join(os.getcwd(), SAMPLES_DIR, SCRIPT_DIR),\n"
     "              os.path.join(os.getcwd(), SCRIPT_DIR), os.getcwd()]\n"
     "    for t in tries:\n"
-    "        if os.path.exists(os.path.join(t, FIRST_PLATE)):\n"
+    "        if os.path.exists(os.path.join(t, SCRIPT_FILE)):\n"
     "            return t\n"
-    "    print(\"nprfx: %s not found from %s; set NPRFX_SAMPLES\" % (FIRST_PLATE, tries))\n"
+    "    print(\"nprfx: %s not found in %s; paths are taken from the current folder (set \"\n"
+    "          \"NPRFX_SAMPLES to the folder above the script's)\" % (SCRIPT_FILE, tries))\n"
     "    return os.getcwd()\n\n\n"
-    "def choose(param, label):\n"
-    "    \"\"\"Set a choice param to the option called label (or ending with it).\"\"\"\n"
+    "def choose(param, *labels):\n"
+    "    \"\"\"Set a choice param to the first option called one of labels (or ending with\n"
+    "    it).\"\"\"\n"
     "    options = [param.getOption(i) for i in range(param.getNumOptions())]\n"
-    "    for i, o in enumerate(options):\n"
-    "        if o == label or o.endswith(\".\" + label):\n"
-    "            param.setValue(i)\n"
-    "            return\n"
-    "    print(\"nprfx: %s has no option %s among %s\" % (param.getScriptName(), label, "
-    "options))\n\n\n"
+    "    for label in labels:\n"
+    "        for i, o in enumerate(options):\n"
+    "            if o == label or o.endswith(\".\" + label):\n"
+    "                param.setValue(i)\n"
+    "                return\n"
+    "    print(\"nprfx: %s has no option %s among %s\" % (param.getScriptName(), \" or "
+    "\".join(labels),\n"
+    "                                                 options))\n\n\n"
     "def connect(node, label, src):\n"
     "    \"\"\"Connect src to the input whose label is label (the clip's).\"\"\"\n"
     "    for i in range(node.getMaxInputCount()):\n"
@@ -88,25 +94,26 @@ static void param_line(FILE *f, const nprfx_graph_node_info *n, const char *var,
         /* a float literal for a double param, also for whole numbers */
         host_double(v->v[0], a, sizeof a);
         if (!strpbrk(a, ".eni")) strcat(a, ".0");
-        fprintf(f, "%s.getParam(\"%s\").setValue(%s)\n", var, p->name, a);
+        fprintf(f, "n_%s.getParam(\"%s\").setValue(%s)\n", var, p->name, a);
         break;
     case NPRFX_PARAM_INT:
-        fprintf(f, "%s.getParam(\"%s\").setValue(%d)\n", var, p->name, (int)v->v[0]);
+        fprintf(f, "n_%s.getParam(\"%s\").setValue(%d)\n", var, p->name, (int)v->v[0]);
         break;
     case NPRFX_PARAM_BOOL:
-        fprintf(f, "%s.getParam(\"%s\").setValue(%s)\n", var, p->name,
+        fprintf(f, "n_%s.getParam(\"%s\").setValue(%s)\n", var, p->name,
                 v->v[0] != 0 ? "True" : "False");
         break;
     case NPRFX_PARAM_CHOICE:
-        fprintf(f, "choose(%s.getParam(\"%s\"), \"%s\")\n", var, p->name, p->choices[(int)v->v[0]]);
+        fprintf(f, "choose(n_%s.getParam(\"%s\"), \"%s\")\n", var, p->name,
+                p->choices[(int)v->v[0]]);
         break;
     case NPRFX_PARAM_COLOR:
-        fprintf(f, "%s.getParam(\"%s\").set(%s, %s, %s, %s)\n", var, p->name,
+        fprintf(f, "n_%s.getParam(\"%s\").set(%s, %s, %s, %s)\n", var, p->name,
                 host_double(v->v[0], a, sizeof a), host_double(v->v[1], b, sizeof b),
                 host_double(v->v[2], c, sizeof c), host_double(v->v[3], d, sizeof d));
         break;
     case NPRFX_PARAM_STRING:
-        fprintf(f, "%s.getParam(\"%s\").setValue(", var, p->name);
+        fprintf(f, "n_%s.getParam(\"%s\").setValue(", var, p->name);
         py_string(f, v->s ? v->s : "");
         fprintf(f, ")\n");
         break;
@@ -115,8 +122,9 @@ static void param_line(FILE *f, const nprfx_graph_node_info *n, const char *var,
 
 nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *out_file)
 {
-    char parent[4096], dir[4096], first[4096];
+    char parent[4096], dir[4096];
     folder_names(out_file, parent, dir, sizeof dir);
+    const char *script_file = strrchr(out_file, '/') ? strrchr(out_file, '/') + 1 : out_file;
     fprintf(f, "# Generated by `nprfx host-project %s` from the graph: do not edit, regenerate.\n",
             hp->graph_path);
     fprintf(f,
@@ -129,31 +137,30 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
     py_string(f, parent);
     fprintf(f, "\nSCRIPT_DIR = ");
     py_string(f, dir);
-    nprfx_seq_expand(NULL, hp->reads[0].path, hp->first_frame, first, sizeof first);
-    fprintf(f, "\nFIRST_PLATE = ");
-    py_string(f, first);
+    fprintf(f, "\nSCRIPT_FILE = ");
+    py_string(f, script_file);
     fprintf(f, "\n\n%s", prelude);
-    fprintf(f, "def build(app):\n    base = here()\n");
+    fprintf(f, "def build(app):\n    folder = here()\n");
     fprintf(f, "    app.getProjectParam(\"frameRange\").set(%d, %d)\n", hp->first_frame,
             hp->last_frame);
     fprintf(f, "    app.addFormat(\"%s %dx%d 1\")\n", hp->format_name, hp->width, hp->height);
     fprintf(f, "    choose(app.getProjectParam(\"outputFormat\"), \"%s\")\n", hp->format_name);
     for (int i = 0; i < hp->nreads; i++) {
-        fprintf(f, "    %s = app.createReader(os.path.join(base, ", hp->reads[i].name);
+        fprintf(f, "    n_%s = app.createReader(os.path.join(folder, ", hp->reads[i].name);
         py_string(f, hp->reads[i].path);
-        fprintf(f, "))\n    %s.setScriptName(\"%s\")\n", hp->reads[i].name, hp->reads[i].name);
+        fprintf(f, "))\n    n_%s.setScriptName(\"%s\")\n", hp->reads[i].name, hp->reads[i].name);
     }
     for (int i = 0; i < hp->nsets; i++) {
         const host_chanset *cs = &hp->sets[i];
         const char *rname = NULL;
         for (int r = 0; r < hp->nreads; r++)
             if (hp->reads[r].n == &hp->info[cs->read]) rname = hp->reads[r].name;
-        fprintf(f, "    %s = create(app, \"net.sf.openfx.ShufflePlugin\", \"%s\")\n", cs->shuffle,
+        fprintf(f, "    n_%s = create(app, \"net.sf.openfx.ShufflePlugin\", \"%s\")\n", cs->shuffle,
                 cs->shuffle);
-        fprintf(f, "    %s.connectInput(0, %s)\n", cs->shuffle, rname);
+        fprintf(f, "    n_%s.connectInput(0, n_%s)\n", cs->shuffle, rname);
         static const char *const outs[4] = {"outputR", "outputG", "outputB", "outputA"};
         for (int c = 0; c < cs->count; c++)
-            fprintf(f, "    choose(%s.getParam(\"%s\"), \"%s\")\n", cs->shuffle, outs[c],
+            fprintf(f, "    choose(n_%s.getParam(\"%s\"), \"%s\")\n", cs->shuffle, outs[c],
                     cs->chan[c]);
         if (!cs->has_sign) continue;
         char s[4][64];
@@ -162,28 +169,28 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
         fprintf(f, "    # the runner's vectors convention: ");
         for (int c = 0; c < cs->count; c++)
             fprintf(f, "%s%s = %s * %s", c ? ", " : "", cs->want[c], s[c], cs->chan[c]);
-        fprintf(f, "\n    %s = create(app, \"net.sf.openfx.MultiplyPlugin\", \"%s\")\n",
+        fprintf(f, "\n    n_%s = create(app, \"net.sf.openfx.MultiplyPlugin\", \"%s\")\n",
                 cs->multiply, cs->multiply);
-        fprintf(f, "    %s.connectInput(0, %s)\n", cs->multiply, cs->shuffle);
-        fprintf(f, "    %s.getParam(\"value\").set(%s, %s, %s, %s)\n", cs->multiply, s[0], s[1],
+        fprintf(f, "    n_%s.connectInput(0, n_%s)\n", cs->multiply, cs->shuffle);
+        fprintf(f, "    n_%s.getParam(\"value\").set(%s, %s, %s, %s)\n", cs->multiply, s[0], s[1],
                 s[2], s[3]);
         if (cs->count > 3 && cs->sign[3] != 1)
-            fprintf(f, "    %s.getParam(\"a\").setValue(True)\n", cs->multiply);
+            fprintf(f, "    n_%s.getParam(\"a\").setValue(True)\n", cs->multiply);
     }
     for (int i = 0; i < hp->nnodes; i++) {
         const host_node *hn = &hp->nodes[i];
         const nprfx_graph_node_info *n = hn->n;
         const nprfx_node_desc *d = n->desc;
-        fprintf(f, "    %s = create(app, \"%s\", \"%s\")\n", hn->name, hn->plugin_id, hn->name);
+        fprintf(f, "    n_%s = create(app, \"%s\", \"%s\")\n", hn->name, hn->plugin_id, hn->name);
         for (int c = 0; c < hn->nclips; c++) {
             int k = hn->clips[c];
             if (!hn->links[k].src) continue;
             char clip[NPRFX_OFX_NAME_MAX], sel[NPRFX_OFX_NAME_MAX];
             ofx_names_clip_name(d, k, clip, sizeof clip);
             ofx_names_selector_name(d, k, sel, sizeof sel);
-            fprintf(f, "    connect(%s, \"%s\", %s)\n", hn->name,
+            fprintf(f, "    connect(n_%s, \"%s\", n_%s)\n", hn->name,
                     d->inputs[k].label ? d->inputs[k].label : clip, hn->links[k].src);
-            fprintf(f, "    choose(%s.getParam(\"%s\"), \"%s\")\n", hn->name, sel,
+            fprintf(f, "    choose(n_%s.getParam(\"%s\"), \"%s\")\n", hn->name, sel,
                     hn->links[k].label);
         }
         for (int p = 0; p < d->num_params; p++)
@@ -191,23 +198,26 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
         if (host_design_width(hp, d) > 0) {
             char name[NPRFX_OFX_NAME_MAX];
             ofx_names_extra_param(d, "designWidth", name, sizeof name);
-            fprintf(f, "    %s.getParam(\"%s\").setValue(%d)\n", hn->name, name,
+            fprintf(f, "    n_%s.getParam(\"%s\").setValue(%d)\n", hn->name, name,
                     host_design_width(hp, d));
         }
     }
     for (int i = 0; i < hp->nwrites; i++) {
         const host_write *w = &hp->writes[i];
-        fprintf(f, "    %s = app.createWriter(", w->name);
+        fprintf(f, "    n_%s = app.createWriter(", w->name);
         if (w->path[0] == '/')
             py_string(f, w->path);
         else {
-            fprintf(f, "os.path.join(base, ");
+            fprintf(f, "os.path.join(folder, ");
             py_string(f, w->path);
             fprintf(f, ")");
         }
-        fprintf(f, ")\n    %s.setScriptName(\"%s\")\n", w->name, w->name);
-        fprintf(f, "    %s.connectInput(0, %s)\n", w->name, w->src);
-        fprintf(f, "    choose(%s.getParam(\"formatType\"), \"Input Stream Format\")\n", w->name);
+        fprintf(f, ")\n    n_%s.setScriptName(\"%s\")\n", w->name, w->name);
+        fprintf(f, "    n_%s.connectInput(0, n_%s)\n", w->name, w->src);
+        /* Natron 2.5 names the option "input", earlier versions by its label */
+        fprintf(f,
+                "    choose(n_%s.getParam(\"formatType\"), \"input\", \"Input Stream Format\")\n",
+                w->name);
     }
     fprintf(f, "    # PNG previews are left to the runner (nprfx run): they go through its display "
                "transform\n\n\n");

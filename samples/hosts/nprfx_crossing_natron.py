@@ -6,7 +6,7 @@
 
 SAMPLES_DIR = "samples"
 SCRIPT_DIR = "hosts"
-FIRST_PLATE = "../plates/crossing/crossing.0001.exr"
+SCRIPT_FILE = "nprfx_crossing_natron.py"
 
 import os
 
@@ -25,20 +25,24 @@ def here():
     tries += [os.path.join(os.getcwd(), SAMPLES_DIR, SCRIPT_DIR),
               os.path.join(os.getcwd(), SCRIPT_DIR), os.getcwd()]
     for t in tries:
-        if os.path.exists(os.path.join(t, FIRST_PLATE)):
+        if os.path.exists(os.path.join(t, SCRIPT_FILE)):
             return t
-    print("nprfx: %s not found from %s; set NPRFX_SAMPLES" % (FIRST_PLATE, tries))
+    print("nprfx: %s not found in %s; paths are taken from the current folder (set "
+          "NPRFX_SAMPLES to the folder above the script's)" % (SCRIPT_FILE, tries))
     return os.getcwd()
 
 
-def choose(param, label):
-    """Set a choice param to the option called label (or ending with it)."""
+def choose(param, *labels):
+    """Set a choice param to the first option called one of labels (or ending with
+    it)."""
     options = [param.getOption(i) for i in range(param.getNumOptions())]
-    for i, o in enumerate(options):
-        if o == label or o.endswith("." + label):
-            param.setValue(i)
-            return
-    print("nprfx: %s has no option %s among %s" % (param.getScriptName(), label, options))
+    for label in labels:
+        for i, o in enumerate(options):
+            if o == label or o.endswith("." + label):
+                param.setValue(i)
+                return
+    print("nprfx: %s has no option %s among %s" % (param.getScriptName(), " or ".join(labels),
+                                                 options))
 
 
 def connect(node, label, src):
@@ -57,89 +61,89 @@ def create(app, plugin, name):
 
 
 def build(app):
-    base = here()
+    folder = here()
     app.getProjectParam("frameRange").set(1, 24)
     app.addFormat("nprfx_crossing_natron 320x180 1")
     choose(app.getProjectParam("outputFormat"), "nprfx_crossing_natron")
-    plate = app.createReader(os.path.join(base, "../plates/crossing/crossing.####.exr"))
-    plate.setScriptName("plate")
-    plate_Depth_Z = create(app, "net.sf.openfx.ShufflePlugin", "plate_Depth_Z")
-    plate_Depth_Z.connectInput(0, plate)
-    choose(plate_Depth_Z.getParam("outputR"), "ViewLayer.Depth.Z")
-    plate_IndexOB_X = create(app, "net.sf.openfx.ShufflePlugin", "plate_IndexOB_X")
-    plate_IndexOB_X.connectInput(0, plate)
-    choose(plate_IndexOB_X.getParam("outputR"), "ViewLayer.IndexOB.X")
-    plate_Combined_RGB = create(app, "net.sf.openfx.ShufflePlugin", "plate_Combined_RGB")
-    plate_Combined_RGB.connectInput(0, plate)
-    choose(plate_Combined_RGB.getParam("outputR"), "ViewLayer.Combined.R")
-    choose(plate_Combined_RGB.getParam("outputG"), "ViewLayer.Combined.G")
-    choose(plate_Combined_RGB.getParam("outputB"), "ViewLayer.Combined.B")
-    plate_DiffCol_RGB = create(app, "net.sf.openfx.ShufflePlugin", "plate_DiffCol_RGB")
-    plate_DiffCol_RGB.connectInput(0, plate)
-    choose(plate_DiffCol_RGB.getParam("outputR"), "ViewLayer.DiffCol.R")
-    choose(plate_DiffCol_RGB.getParam("outputG"), "ViewLayer.DiffCol.G")
-    choose(plate_DiffCol_RGB.getParam("outputB"), "ViewLayer.DiffCol.B")
-    plate_motion_prev_XY_plate = create(app, "net.sf.openfx.ShufflePlugin", "plate_motion_prev_XY_plate")
-    plate_motion_prev_XY_plate.connectInput(0, plate)
-    choose(plate_motion_prev_XY_plate.getParam("outputR"), "ViewLayer.Vector.X")
-    choose(plate_motion_prev_XY_plate.getParam("outputG"), "ViewLayer.Vector.Y")
+    n_plate = app.createReader(os.path.join(folder, "../plates/crossing/crossing.####.exr"))
+    n_plate.setScriptName("plate")
+    n_plate_Depth_Z = create(app, "net.sf.openfx.ShufflePlugin", "plate_Depth_Z")
+    n_plate_Depth_Z.connectInput(0, n_plate)
+    choose(n_plate_Depth_Z.getParam("outputR"), "ViewLayer.Depth.Z")
+    n_plate_IndexOB_X = create(app, "net.sf.openfx.ShufflePlugin", "plate_IndexOB_X")
+    n_plate_IndexOB_X.connectInput(0, n_plate)
+    choose(n_plate_IndexOB_X.getParam("outputR"), "ViewLayer.IndexOB.X")
+    n_plate_Combined_RGB = create(app, "net.sf.openfx.ShufflePlugin", "plate_Combined_RGB")
+    n_plate_Combined_RGB.connectInput(0, n_plate)
+    choose(n_plate_Combined_RGB.getParam("outputR"), "ViewLayer.Combined.R")
+    choose(n_plate_Combined_RGB.getParam("outputG"), "ViewLayer.Combined.G")
+    choose(n_plate_Combined_RGB.getParam("outputB"), "ViewLayer.Combined.B")
+    n_plate_DiffCol_RGB = create(app, "net.sf.openfx.ShufflePlugin", "plate_DiffCol_RGB")
+    n_plate_DiffCol_RGB.connectInput(0, n_plate)
+    choose(n_plate_DiffCol_RGB.getParam("outputR"), "ViewLayer.DiffCol.R")
+    choose(n_plate_DiffCol_RGB.getParam("outputG"), "ViewLayer.DiffCol.G")
+    choose(n_plate_DiffCol_RGB.getParam("outputB"), "ViewLayer.DiffCol.B")
+    n_plate_motion_prev_XY_plate = create(app, "net.sf.openfx.ShufflePlugin", "plate_motion_prev_XY_plate")
+    n_plate_motion_prev_XY_plate.connectInput(0, n_plate)
+    choose(n_plate_motion_prev_XY_plate.getParam("outputR"), "ViewLayer.Vector.X")
+    choose(n_plate_motion_prev_XY_plate.getParam("outputG"), "ViewLayer.Vector.Y")
     # the runner's vectors convention: motion_prev.X = 1 * ViewLayer.Vector.X, motion_prev.Y = -1 * ViewLayer.Vector.Y
-    plate_motion_prev_XY = create(app, "net.sf.openfx.MultiplyPlugin", "plate_motion_prev_XY")
-    plate_motion_prev_XY.connectInput(0, plate_motion_prev_XY_plate)
-    plate_motion_prev_XY.getParam("value").set(1, -1, 1, 1)
-    matte = create(app, "org.nprfx.Matte", "matte")
-    connect(matte, "Depth", plate_Depth_Z)
-    choose(matte.getParam("depthChannels"), "R")
-    connect(matte, "Object ID", plate_IndexOB_X)
-    choose(matte.getParam("idChannels"), "R")
-    matte.getParam("designWidth").setValue(1280)
-    light = create(app, "org.nprfx.Tone", "light")
-    connect(light, "Tone", plate_Combined_RGB)
-    choose(light.getParam("toneChannels"), "RGB")
-    connect(light, "Albedo", plate_DiffCol_RGB)
-    choose(light.getParam("albedoChannels"), "RGB")
-    connect(light, "Coverage", matte)
-    choose(light.getParam("coverageChannels"), "R")
-    light.getParam("out_low").setValue(0.2)
-    light.getParam("out_high").setValue(0.6)
-    noise = create(app, "org.nprfx.CoherentNoise", "noise")
-    connect(noise, "Depth", plate_Depth_Z)
-    choose(noise.getParam("depthChannels"), "R")
-    connect(noise, "Motion Prev", plate_motion_prev_XY)
-    choose(noise.getParam("motionPrevChannels"), "RG")
-    choose(noise.getParam("noise"), "bandpass")
-    noise.getParam("sigma_hi").setValue(2.5)
-    choose(noise.getParam("output"), "unit01")
-    noise.getParam("contrast").setValue(0.2)
-    noise.getParam("designWidth").setValue(1280)
-    strokes = create(app, "org.nprfx.ThresholdMap", "strokes")
-    connect(strokes, "Pattern", noise)
-    choose(strokes.getParam("patternChannels"), "R")
-    connect(strokes, "Tone", light)
-    choose(strokes.getParam("toneChannels"), "R")
-    choose(strokes.getParam("mode"), "builtin")
-    strokes.getParam("sigma").setValue(10.0)
-    strokes.getParam("invert").setValue(True)
-    paper = create(app, "org.nprfx.Paper", "paper")
-    connect(paper, "Image", plate_Combined_RGB)
-    choose(paper.getParam("imageChannels"), "RGB")
-    paper.getParam("designWidth").setValue(1280)
-    look = create(app, "org.nprfx.Blend", "look")
-    connect(look, "Base", paper)
-    choose(look.getParam("baseChannels"), "RGBA")
-    connect(look, "Layer", plate_Combined_RGB)
-    choose(look.getParam("layerChannels"), "RGB")
-    connect(look, "Alpha", strokes)
-    choose(look.getParam("alphaChannels"), "R")
-    look.getParam("gain_layer").setValue(0.85)
-    w_pencil = app.createWriter(os.path.join(base, "out/main/pencil.####.exr"))
-    w_pencil.setScriptName("w_pencil")
-    w_pencil.connectInput(0, look)
-    choose(w_pencil.getParam("formatType"), "Input Stream Format")
-    w_noise = app.createWriter(os.path.join(base, "out/main/noise.####.exr"))
-    w_noise.setScriptName("w_noise")
-    w_noise.connectInput(0, noise)
-    choose(w_noise.getParam("formatType"), "Input Stream Format")
+    n_plate_motion_prev_XY = create(app, "net.sf.openfx.MultiplyPlugin", "plate_motion_prev_XY")
+    n_plate_motion_prev_XY.connectInput(0, n_plate_motion_prev_XY_plate)
+    n_plate_motion_prev_XY.getParam("value").set(1, -1, 1, 1)
+    n_matte = create(app, "org.nprfx.Matte", "matte")
+    connect(n_matte, "Depth", n_plate_Depth_Z)
+    choose(n_matte.getParam("depthChannels"), "R")
+    connect(n_matte, "Object ID", n_plate_IndexOB_X)
+    choose(n_matte.getParam("idChannels"), "R")
+    n_matte.getParam("designWidth").setValue(1280)
+    n_light = create(app, "org.nprfx.Tone", "light")
+    connect(n_light, "Tone", n_plate_Combined_RGB)
+    choose(n_light.getParam("toneChannels"), "RGB")
+    connect(n_light, "Albedo", n_plate_DiffCol_RGB)
+    choose(n_light.getParam("albedoChannels"), "RGB")
+    connect(n_light, "Coverage", n_matte)
+    choose(n_light.getParam("coverageChannels"), "R")
+    n_light.getParam("out_low").setValue(0.2)
+    n_light.getParam("out_high").setValue(0.6)
+    n_noise = create(app, "org.nprfx.CoherentNoise", "noise")
+    connect(n_noise, "Depth", n_plate_Depth_Z)
+    choose(n_noise.getParam("depthChannels"), "R")
+    connect(n_noise, "Motion Prev", n_plate_motion_prev_XY)
+    choose(n_noise.getParam("motionPrevChannels"), "RG")
+    choose(n_noise.getParam("noise"), "bandpass")
+    n_noise.getParam("sigma_hi").setValue(2.5)
+    choose(n_noise.getParam("output"), "unit01")
+    n_noise.getParam("contrast").setValue(0.2)
+    n_noise.getParam("designWidth").setValue(1280)
+    n_strokes = create(app, "org.nprfx.ThresholdMap", "strokes")
+    connect(n_strokes, "Pattern", n_noise)
+    choose(n_strokes.getParam("patternChannels"), "R")
+    connect(n_strokes, "Tone", n_light)
+    choose(n_strokes.getParam("toneChannels"), "R")
+    choose(n_strokes.getParam("mode"), "builtin")
+    n_strokes.getParam("sigma").setValue(10.0)
+    n_strokes.getParam("invert").setValue(True)
+    n_paper = create(app, "org.nprfx.Paper", "paper")
+    connect(n_paper, "Image", n_plate_Combined_RGB)
+    choose(n_paper.getParam("imageChannels"), "RGB")
+    n_paper.getParam("designWidth").setValue(1280)
+    n_look = create(app, "org.nprfx.Blend", "look")
+    connect(n_look, "Base", n_paper)
+    choose(n_look.getParam("baseChannels"), "RGBA")
+    connect(n_look, "Layer", n_plate_Combined_RGB)
+    choose(n_look.getParam("layerChannels"), "RGB")
+    connect(n_look, "Alpha", n_strokes)
+    choose(n_look.getParam("alphaChannels"), "R")
+    n_look.getParam("gain_layer").setValue(0.85)
+    n_w_pencil = app.createWriter(os.path.join(folder, "out/main/pencil.####.exr"))
+    n_w_pencil.setScriptName("w_pencil")
+    n_w_pencil.connectInput(0, n_look)
+    choose(n_w_pencil.getParam("formatType"), "input", "Input Stream Format")
+    n_w_noise = app.createWriter(os.path.join(folder, "out/main/noise.####.exr"))
+    n_w_noise.setScriptName("w_noise")
+    n_w_noise.connectInput(0, n_noise)
+    choose(n_w_noise.getParam("formatType"), "input", "Input Stream Format")
     # PNG previews are left to the runner (nprfx run): they go through its display transform
 
 

@@ -78,9 +78,10 @@ for p in "noise sigma_lo" "noise alpha"; do
     grep -q "^param $p " ntp.txt && fail "$NTP sets $p, which main.json leaves at its default"
 done
 
-# (3) the script: the same params by script name, and no __file__ outside the try
-grep -o '^    [a-z_]*\.getParam("[a-zA-Z_]*")\.setValue([^)]*)' "$PY" |
-    sed 's/^ *\([a-z_]*\)\.getParam("\([a-zA-Z_]*\)")\.setValue(\(.*\))/param \1 \2 \3/; s/True$/1/' |
+# (3) the script: the same params by script name (node variables are n_NAME), and no __file__
+# outside the try
+grep -o '^    n_[a-z_]*\.getParam("[a-zA-Z_]*")\.setValue([^)]*)' "$PY" |
+    sed 's/^ *n_\([a-z_]*\)\.getParam("\([a-zA-Z_]*\)")\.setValue(\(.*\))/param \1 \2 \3/; s/True$/1/' |
     awk '{ print $1, $2, $3, $4 + 0 }' | sort > py.txt
 grep '^param' want.txt > want_py.txt
 diff want_py.txt py.txt > py.diff || { fail "$PY: params differ from the graph's:"; cat py.diff; }
@@ -88,7 +89,34 @@ grep -n '__file__' "$PY" | grep -v -e 'abspath(__file__)' -e 'without __file__' 
     { fail "$PY uses __file__ outside the NameError guard:"; cat file.txt; }
 grep -q 'except NameError' "$PY" || fail "$PY has no NameError guard around __file__"
 
-# (4) graphs hosts cannot express
+# (4) the scripts run as Natron 2.5 runs them (tests/cli/lib/natron_stub.py: no __file__, the
+# current folder the user's): the sample from the folder above samples/ writes beside the
+# script's folder; a graph with a node named "base" (painterly's) builds; with an absolute plate
+# path the script finds its folder by its own file, and from an unrelated folder it says so
+# instead of writing below a folder that does not exist; no choice is left unset.
+stub() { # DIR SCRIPT: run SCRIPT from DIR, output in stub.out
+    (cd "$1" && python3 "$SRC/tests/cli/lib/natron_stub.py" "$2") > stub.out 2>&1 ||
+        { fail "$2 failed under the Natron stand-in:"; cat stub.out; }
+}
+stub . "$PY"
+grep -q "^writer $PWD/samples/hosts/out/main/pencil.####.exr$" stub.out ||
+    { fail "$PY writes elsewhere than beside its folder:"; cat stub.out; }
+grep -q 'has no option' stub.out && { fail "$PY leaves a choice unset:"; cat stub.out; }
+mkdir -p abs/hosts elsewhere
+cp "$SRC/samples/graphs/painterly.json" samples/graphs/
+"$NPRFX" host-project samples/graphs/painterly.json --natron-script abs/hosts/painterly.py \
+    --set "plate.path=$PWD/samples/plates/crossing/crossing.####.exr" 2>err.txt ||
+    { fail "host-project of painterly.json failed:"; cat err.txt; }
+stub . abs/hosts/painterly.py
+grep -q "^writer $PWD/abs/hosts/out/painterly/painterly.####.exr$" stub.out ||
+    { fail "abs/hosts/painterly.py (absolute plate) writes elsewhere than beside its folder:"; cat stub.out; }
+grep -q "^reader $PWD/samples/plates/crossing/crossing.####.exr$" stub.out ||
+    { fail "abs/hosts/painterly.py reads another plate:"; cat stub.out; }
+stub elsewhere "$PWD/abs/hosts/painterly.py"
+grep -q "painterly.py not found in" stub.out ||
+    { fail "run from an unrelated folder, the script does not say it cannot find its folder:"; cat stub.out; }
+
+# (5) graphs hosts cannot express
 printf '{"frames": "1-2", "nodes": {"s": {"node": "synth", "scene": "orbit", "size": "32x24"}, "b": {"node": "blend", "inputs": {"base": "s", "layer": "s"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}}}\n' > synth.json
 "$NPRFX" host-project synth.json --natron bad.ntp 2> err.txt && fail "a synth graph was accepted"
 grep -q "synth.json.*node 's'" err.txt || { fail "the synth error names no file and node:"; cat err.txt; }
