@@ -408,11 +408,12 @@ nprfx_result host_write_natron(const host_project *hp, FILE *f)
         node_begin(&w, cs->shuffle, "net.sf.openfx.ShufflePlugin", 2, 0, cs->count);
         static const char *const outs[4] = {"outputR", "outputG", "outputB", "outputA"};
         for (int c = 0; c < cs->count; c++) {
-            /* Options: the 10 of the A and B inputs' RGBA and the constants, then the plate's
-             * channels layer by layer, labelled "A.<channel>" */
+            /* Options: the 10 of the A and B inputs' RGBA ("A.r" first) and the constants,
+             * then the plate's layered channels layer by layer, labelled "A.<channel>" */
             char label[160];
-            snprintf(label, sizeof label, "A.%s", cs->chan[c]);
-            knob_int(&w, outs[c], "Choice", 0, 10 + cs->rank[c], c, label);
+            int rgba = host_color_component(cs->chan[c]);
+            host_natron_option(cs->chan[c], label, sizeof label);
+            knob_int(&w, outs[c], "Choice", 0, rgba >= 0 ? rgba : 10 + cs->rank[c], c, label);
         }
         const char *a = "A";
         node_end(&w, cs->shuffle, &a, &rname, 1, cs->count, 1);

@@ -159,9 +159,13 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
                 cs->shuffle);
         fprintf(f, "    n_%s.connectInput(0, n_%s)\n", cs->shuffle, rname);
         static const char *const outs[4] = {"outputR", "outputG", "outputB", "outputA"};
-        for (int c = 0; c < cs->count; c++)
-            fprintf(f, "    choose(n_%s.getParam(\"%s\"), \"%s\")\n", cs->shuffle, outs[c],
-                    cs->chan[c]);
+        for (int c = 0; c < cs->count; c++) {
+            char option[160];
+            host_natron_option(cs->chan[c], option, sizeof option);
+            /* the A input's option by its full name ("A.r" is not "B.r"), else by suffix */
+            fprintf(f, "    choose(n_%s.getParam(\"%s\"), \"%s\", \"%s\")\n", cs->shuffle, outs[c],
+                    option, cs->chan[c]);
+        }
         if (!cs->has_sign) continue;
         char s[4][64];
         for (int c = 0; c < 4; c++)

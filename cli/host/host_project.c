@@ -108,12 +108,33 @@ static int plate_before(const char *x, const char *y)
     return rx != ry ? rx < ry : strcmp(x, y) < 0;
 }
 
+int host_color_component(const char *channel)
+{
+    static const char *const rgba[4] = {"R", "G", "B", "A"};
+    for (int c = 0; c < 4; c++)
+        if (!strcmp(channel, rgba[c])) return c;
+    return -1;
+}
+
+void host_natron_option(const char *channel, char *out, size_t n)
+{
+    static const char *const rgba[4] = {"A.r", "A.g", "A.b", "A.a"};
+    int c = host_color_component(channel);
+    if (c >= 0)
+        snprintf(out, n, "%s", rgba[c]);
+    else
+        snprintf(out, n, "A.%s", channel);
+}
+
+/* Each channel's place among the plate's layered channels (the colour plane's R, G, B, A are
+ * the host's own RGBA, listed apart, so they take no place). */
 static void plate_ranks(char **names, int nc, int *rank)
 {
     for (int i = 0; i < nc; i++) {
         rank[i] = 0;
         for (int j = 0; j < nc; j++)
-            rank[i] += j != i && plate_before(names[j], names[i]);
+            rank[i] +=
+                j != i && host_color_component(names[j]) < 0 && plate_before(names[j], names[i]);
     }
 }
 

@@ -90,4 +90,13 @@ int host_param_changed(const nprfx_graph_node_info *n, int i);
 /* A double in the fewest digits that read back as the same value (0.05, not 0.0500...03). */
 char *host_double(double v, char *buf, size_t n);
 
+/* A plate channel of the colour plane (plain "R", "G", "B", "A", no layer): its component 0-3,
+ * which hosts offer as their own RGBA of the input (Natron's Shuffle: "A.r" .. "A.a"), apart
+ * from the layers; -1 for any other channel. */
+int host_color_component(const char *channel);
+
+/* Natron's Shuffle option for plate channel `channel` on its A input: "A.r" .. "A.a" for the
+ * colour plane, "A.<channel>" for a layer's. */
+void host_natron_option(const char *channel, char *out, size_t n);
+
 #endif

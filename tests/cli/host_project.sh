@@ -115,6 +115,24 @@ grep -q "^reader $PWD/samples/plates/crossing/crossing.####.exr$" stub.out ||
 stub elsewhere "$PWD/abs/hosts/painterly.py"
 grep -q "painterly.py not found in" stub.out ||
     { fail "run from an unrelated folder, the script does not say it cannot find its folder:"; cat stub.out; }
+# A plate of plain R, G, B (footage): the Shuffles take the A input's own RGBA ("A.r", the
+# options' first four), in the project and the script, never a label Natron cannot resolve.
+mkdir -p samples/footage/dolly plain/hosts
+cp "$SRC/samples/footage/dolly/dolly.0001.png" samples/footage/dolly/
+cp "$SRC/samples/graphs/footage_pencil.json" samples/graphs/
+"$NPRFX" host-project samples/graphs/footage_pencil.json --natron plain/hosts/plain.ntp \
+    --natron-script plain/hosts/plain.py 2>err.txt || { fail "host-project of footage_pencil.json failed:"; cat err.txt; }
+stub . plain/hosts/plain.py
+for c in "outputR A.r" "outputG A.g" "outputB A.b"; do
+    grep -q "^choice plate_RGB $c$" stub.out || { fail "plain/hosts/plain.py: plate_RGB $c not chosen:"; cat stub.out; }
+done
+# the project's Shuffle: each output's value (the option's index) and its label
+awk '/<Name>output[RGB]</ { k = $0; gsub(/.*<Name>|<\/Name>.*/, "", k) }
+     k && /<Value>/ { v = $0; gsub(/.*<Value>|<\/Value>.*/, "", v) }
+     k && /<ChoiceLabel>/ { l = $0; gsub(/.*<ChoiceLabel>|<\/ChoiceLabel>.*/, "", l); print k, v, l; k = "" }' \
+    plain/hosts/plain.ntp | head -3 > plain.txt
+printf 'outputR 0 A.r\noutputG 1 A.g\noutputB 2 A.b\n' | diff - plain.txt > plain.diff ||
+    { fail "plain/hosts/plain.ntp: the Shuffle's options are not the A input's RGB:"; cat plain.diff; }
 
 # (5) graphs hosts cannot express
 printf '{"frames": "1-2", "nodes": {"s": {"node": "synth", "scene": "orbit", "size": "32x24"}, "b": {"node": "blend", "inputs": {"base": "s", "layer": "s"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}}}\n' > synth.json

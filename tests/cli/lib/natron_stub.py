@@ -3,7 +3,9 @@ current folder wherever the user is) against a stand-in for Natron's Python API,
 the script asked of it: "reader PATH", "writer PATH", "node PLUGIN NAME", and every line the script
 printed itself. A wrong call fails as Natron's would: connecting a non-node raises TypeError.
 Choice params offer Natron 2.5's options for a Write node's formatType (input, project, fixed) and
-take any other label asked for.
+for a Shuffle's outputR..outputA (A.r .. A.a, 0, 1, B.r .. B.a, then the plate's layers, which the
+stand-in does not know: any other label), and take any label asked for elsewhere; a Shuffle's
+choice prints "choice NODE PARAM OPTION" ("*" for a layer).
 usage: python3 natron_stub.py SCRIPT.py"""
 import sys
 import types
@@ -22,10 +24,18 @@ class AnyText(str):
         return True
 
 
+SHUFFLE = ["A.r", "A.g", "A.b", "A.a", "0", "1", "B.r", "B.g", "B.b", "B.a"]
+
+
 class Param:
-    def __init__(self, name):
+    def __init__(self, name, node=None):
         self.name = name
-        self.options = ["input", "project", "fixed"] if name == "formatType" else [AnyText("*")]
+        self.node = node
+        self.options = [AnyText("*")]
+        if name == "formatType":
+            self.options = ["input", "project", "fixed"]
+        elif name in ("outputR", "outputG", "outputB", "outputA"):
+            self.options = SHUFFLE + [AnyText("*")]
 
     def getScriptName(self):
         return self.name
@@ -37,7 +47,9 @@ class Param:
         return self.options[i]
 
     def setValue(self, *v):
-        pass
+        if self.name.startswith("output") and len(self.options) > 1:
+            print("choice %s %s %s" % (self.node.getScriptName(), self.name,
+                                       str.__str__(self.options[v[0]])))
 
     def set(self, *v):
         pass
@@ -55,7 +67,7 @@ class Node:
         return getattr(self, "name", "?")
 
     def getParam(self, name):
-        return self.params.setdefault(name, Param(name))
+        return self.params.setdefault(name, Param(name, self))
 
     def getMaxInputCount(self):
         return 1
