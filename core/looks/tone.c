@@ -405,6 +405,13 @@ nprfx_result nprfx_tone_render(const nprfx_render_args *args, const nprfx_tone_p
     if (nprfx_rect_empty(window)) return NPRFX_OK;
 
     double lo = p->black, hi = p->white;
+    /* Measuring this frame alone instead would be a silent per-frame answer: a range that
+     * changes at every frame (a host without temporal clip access says nothing of the shot). */
+    if (p->range == NPRFX_TONE_RANGE_SHOT && args->last_frame < args->first_frame)
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
+                           "tone: range 'shot' measures every frame of the shot, and which frames "
+                           "make it is not known here (a host without temporal clip access gives "
+                           "a plug-in only the frame it renders): use range 'frame' or 'manual'");
     if (p->range != NPRFX_TONE_RANGE_MANUAL) {
         int first, last;
         tone_shot((int)time, args->first_frame, args->last_frame, &first, &last);

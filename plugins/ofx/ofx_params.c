@@ -117,10 +117,17 @@ OfxStatus ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod)
 
 void ofx_shot_range(const ofx_instance *inst, double *first, double *last)
 {
-    double r[2] = {0, 0};
+    /* Unknown (last < first) where the host says nothing; and where it gives no temporal clip
+     * access, whatever it says (MLT reports no range, or the frame rendered): there the shot's
+     * other frames cannot be had, and a node that needs them must say so, not measure this frame
+     * alone. Footage nodes keep their previous frames themselves (ofx_footage.c). */
+    double r[2] = {0, -1};
     OfxPropertySetHandle p = ofx_clip_props(inst->output);
-    if (!p || ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropFrameRange, 2, r) != kOfxStatOK)
-        r[0] = r[1] = 0;
+    if (!p || ofx_g.prop->propGetDoubleN(p, kOfxImageEffectPropFrameRange, 2, r) != kOfxStatOK ||
+        (!ofx_g.temporal && !inst->derive)) {
+        r[0] = 0;
+        r[1] = -1;
+    }
     *first = r[0];
     *last = r[1];
 }

@@ -24,7 +24,8 @@ void ofx_input_channels(const ofx_instance *inst, OfxTime time, int current, int
  * the first connected input's bounds), else the project. */
 OfxStatus ofx_frame_rod(const ofx_instance *inst, OfxTime time, OfxRectD *rod);
 
-/* The shot's first and last frame: the output clip's frame range. */
+/* The shot's first and last frame: the output clip's frame range; last < first when unknown
+ * (the host gives none, or no temporal clip access). */
 void ofx_shot_range(const ofx_instance *inst, double *first, double *last);
 
 #endif

@@ -7,7 +7,8 @@
 #     getFramesNeeded declared.
 #  2. strict, natron and mlt: a render-time error of a node (tone's percentiles the wrong way
 #     round) reaches the runner's error in the node's own words, and under mlt (no temporal clip
-#     access) a tone measuring another frame fails with words that say which frame.
+#     access) a tone measuring another frame, or the shot, fails with words that say which frame
+#     or why.
 #  3. mlt and mlt16 (Filter context only, 8- or 16-bit images, no temporal clip access): every
 #     plug-in either renders a one-node graph on its Source clip or is reported unavailable with
 #     a reason; time-offset is refused for the missing temporal access, and so are coherent-noise
@@ -97,6 +98,16 @@ elif grep -q "the plug-in's error message is empty" "$log"; then
   fail "mlt: the plug-in's error message is empty: $(grep 'failed' "$log" | head -n 1)"
 elif grep -q "org.nprfx.Tone.*frame 2" "$log"; then pass
 else fail "mlt: the error does not name frame 2: $(grep 'failed' "$log" | head -n 1)"
+fi
+# Nor can it give the shot: tone's default range (the shot), even over a one-frame shot as this
+# host reports it, fails saying why, instead of measuring each frame on its own.
+sed 's/"frames": "1-2"/"frames": "1"/' "$W/error.json" > "$W/one_frame.json"
+log="$W/error/mlt_shot.log"
+if ofx "$W/one_frame.json" --profile mlt --output-dir "$W/error/mlt_shot" \
+     --set t.range=shot --set t.low=1 --set t.high=99 > "$log" 2>&1; then
+  fail "mlt: tone with range 'shot' rendered a frame measured on its own"
+elif grep -q "org.nprfx.Tone.*which frames make it is not known here" "$log"; then pass
+else fail "mlt: tone's range 'shot' fails without its reason: $(grep 'failed' "$log" | head -n 1)"
 fi
 
 # --- 3. mlt and mlt16: every plug-in renders through Filter or is unavailable with a reason ---
