@@ -227,6 +227,25 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
     return r;
 }
 
+void internal_graph_read_rows_done(nprfx_graph *g, int node, nprfx_row_reader *rr)
+{
+    gnode *n = &g->nodes[node];
+    char *note = NULL;
+    int warning = 0;
+    if (!rr || g->io.rows_note(n->ctx, rr, &note, &warning) || !warning || !note ||
+        n->warned_rows) {
+        free(note);
+        return;
+    }
+    n->warned_rows = 1;
+    if (g->notice) {
+        char msg[4600];
+        snprintf(msg, sizeof msg, "warning: read '%s': %s", n->name, note);
+        g->notice(g->notice_user, msg);
+    }
+    free(note);
+}
+
 /* An EXR plate read straight into a frame of the pool, a band of rows at a time through a small
  * scratch, each band copied beside the channels the read appends while it is in the cache. A
  * whole read into memory of its own cost a fresh mapping of the plate every frame (100+ MB at

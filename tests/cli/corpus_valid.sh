@@ -184,6 +184,12 @@ grep -q "part 3 'extra': .*unfinished or damaged (its pixels are missing): not r
 grep -q "damaged" <(grep -v "^    part" info_unf.txt) && { cat info_unf.txt >&2; fail "info reports the file as an error"; }
 has_err r_uint_big "warning: read 'r_uint_big'"
 has_err r_uint_big "'id' (up to 16777283) hold integers above 2^24 = 16777216"
+# Rendered by strips, the read says the same once its rows are read.
+printf '{"frames": "1", "nodes": {"r": {"node": "read", "path": "in/uint_big.exr"}, "b": {"node": "blend", "inputs": {"base": "r:R", "layer": "r:id"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "out/strips.exr"}}}\n' >strips.json
+"$NPRFX" run strips.json --strip-rows 2 --stats >strips.out 2>strips.err || { cat strips.err >&2; fail "the strips read failed"; }
+grep -q "rendered by strips of 2 rows" strips.out || fail "strips.json was not rendered by strips"
+grep -qF "warning: read 'r': 'in/uint_big.exr': uint channels 'id' (up to 16777283) hold integers above 2^24" strips.err ||
+    { cat strips.err >&2; fail "a read by strips does not warn about ids above 2^24"; }
 [ "$(field hashes.txt ref/uint_big.exr)" != "$(field hashes.txt out/uint_big.exr)" ] ||
     fail "ids above 2^24 came through float pixels unchanged: the hash check cannot see uint"
 
