@@ -124,14 +124,19 @@ static int pick_channels(void *user, const char *const *names, int n, int *pick)
     return m;
 }
 
+/* A read's note or warning, through the graph's notices. */
+static void read_notice(nprfx_graph *g, const gnode *n, const char *note, int warning)
+{
+    if (!note || !g->notice) return;
+    char msg[4600];
+    snprintf(msg, sizeof msg, "%s: read '%s': %s", warning ? "warning" : "note", n->name, note);
+    g->notice(g->notice_user, msg);
+}
+
 /* The read's note on parts and views, once per node. */
 static void plate_note(nprfx_graph *g, gnode *n, const char *note, int warning)
 {
-    if (note && !n->noted && g->notice) {
-        char msg[4600];
-        snprintf(msg, sizeof msg, "%s: read '%s': %s", warning ? "warning" : "note", n->name, note);
-        g->notice(g->notice_user, msg);
-    }
+    if (!n->noted) read_notice(g, n, note, warning);
     n->noted = 1;
 }
 
@@ -238,11 +243,7 @@ void internal_graph_read_rows_done(nprfx_graph *g, int node, nprfx_row_reader *r
         return;
     }
     n->warned_rows = 1;
-    if (g->notice) {
-        char msg[4600];
-        snprintf(msg, sizeof msg, "warning: read '%s': %s", n->name, note);
-        g->notice(g->notice_user, msg);
-    }
+    read_notice(g, n, note, 1);
     free(note);
 }
 

@@ -340,7 +340,8 @@ failure choose(const char *path, const header &h, const nprfx_read_options &o, c
         for (const part &p : h.parts) {
             if (std::find(ch.group.begin(), ch.group.end(), &p) != ch.group.end()) continue;
             std::string why;
-            if (internal_io_broken_part(p.index))
+            const bool broken = internal_io_broken_part(p.index) != nullptr;
+            if (broken)
                 why = "unfinished or damaged: its pixels are missing";
             else if (!p.view.empty() && p.view != ch.view)
                 why = "view '" + p.view + "'";
@@ -351,9 +352,9 @@ failure choose(const char *path, const header &h, const nprfx_read_options &o, c
             else
                 why = "data window " + rect_text(data_rect(p.spec)) + ", display window " +
                       rect_text(display_rect(p.spec));
-            /* Parts of other views, or left out by the caller's own choice, are no surprise. */
-            if (why.compare(0, 5, "view ") && !(o.part && *o.part)) ch.warn = true;
-            if (internal_io_broken_part(p.index)) ch.warn = true; /* always worth a word */
+            /* Parts of other views, or left out by the caller's own choice, are no surprise;
+             * a broken part always is. */
+            if (broken || (why.compare(0, 5, "view ") && !(o.part && *o.part))) ch.warn = true;
             unused += (unused.empty() ? "" : ", ") + part_label(p) + " (" + why + ")";
         }
         ch.note = file + ": read " + used;

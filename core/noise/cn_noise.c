@@ -359,10 +359,10 @@ static void internal_bp_hrows(void *user, int begin, int end, int worker)
     }
 }
 
-/* The vertical pass: (lo sum - hi sum) * gain into the output channel, a row at a time through
- * the worker's scratch. */
-#define INTERNAL_VSTRIP 128
+#define INTERNAL_VSTRIP 128 /* columns a strip of the vertical pass takes */
 
+/* The vertical pass: (lo sum - hi sum) * gain into the output channel, the sums of a strip's
+ * row at a time in the worker's scratch. */
 static void internal_bp_vrows(void *user, int begin, int end, int worker)
 {
     internal_noise_job *j = user;
