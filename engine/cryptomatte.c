@@ -107,10 +107,9 @@ float nprfx_cryptomatte_object_id(float stored, float coverage)
     /* ±0 is the specification's "no object in the sample" and never a clamped hash (its exponent
      * is 0), so it stays "nothing" whatever coverage a writer left beside it. */
     if ((bits & 0x7fffffffu) == 0) return 0.0f;
-    uint32_t v = bits & 0xffffffu;
-    /* 24 bits: every value is an integer a float holds exactly; 2^24 keeps an object whose low
-     * bits are 0 apart from the empty pixel. */
-    return v ? (float)v : 16777216.0f;
+    /* The stored float itself: an id of its own for every hash (nprfx/objectid.h), compared by
+     * its bits. */
+    return stored;
 }
 
 static void hex8(uint32_t v, char out[8])

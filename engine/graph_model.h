@@ -41,8 +41,7 @@ typedef struct gnode {
     char *part, *read_view; /* read: the file's part and view ("view" of a write is OCIO's) */
     char *aovs;             /* read: its renderer profile (nprfx/aov.h); NULL or "auto": detected */
     int half, raw, width, height;
-    int noted;       /* read: its note on parts and views was given (once per run) */
-    int warned_rows; /* read by strips: its warning on what the rows showed was given */
+    int noted; /* read: its note on parts and views was given (once per run) */
     /* read: the channels its last read took ("a,b,c"; graph_read.c) of the file's count */
     char *read_channels;
     int file_channels;

@@ -232,21 +232,6 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
     return r;
 }
 
-void internal_graph_read_rows_done(nprfx_graph *g, int node, nprfx_row_reader *rr)
-{
-    gnode *n = &g->nodes[node];
-    char *note = NULL;
-    int warning = 0;
-    if (!rr || g->io.rows_note(n->ctx, rr, &note, &warning) || !warning || !note ||
-        n->warned_rows) {
-        free(note);
-        return;
-    }
-    n->warned_rows = 1;
-    read_notice(g, n, note, 1);
-    free(note);
-}
-
 /* An EXR plate read straight into a frame of the pool, a band of rows at a time through a small
  * scratch, each band copied beside the channels the read appends while it is in the cache. A
  * whole read into memory of its own cost a fresh mapping of the plate every frame (100+ MB at
@@ -318,7 +303,7 @@ static nprfx_result fill_rows(pooled_read *p, nprfx_row_reader *rr, nprfx_contex
 void internal_graph_pooled_fill(pooled_read *p, nprfx_context *ctx)
 {
     nprfx_result r = fill_rows(p, p->rr, ctx, 0, nprfx_rect_height(p->shape.bounds));
-    /* the note as the rows left it (uint ids above 2^24 are known once read) */
+    /* the read's note on parts and views */
     if (!r) r = p->io.rows_note(ctx, p->rr, &p->note, &p->warning);
     p->io.rows_close(p->rr);
     p->rr = NULL;
@@ -383,19 +368,8 @@ static void pooled_fill_now(nprfx_graph *g, pooled_read *p)
     if (!r) nprfx_parallel_for(ex, bands, 1, fill_band, &bf);
     for (int i = 0; !r && i < bands; i++)
         r = bf.r[i];
-    /* the note of the band that warns (a uint id above 2^24), else the first's */
-    for (int i = 0; !r && i < bands; i++) {
-        char *note = NULL;
-        int warning = 0;
-        if ((r = p->io.rows_note(n->ctx, rr[i], &note, &warning))) break;
-        if (!p->note || (warning && !p->warning)) {
-            free(p->note);
-            p->note = note;
-            p->warning = warning;
-        } else {
-            free(note);
-        }
-    }
+    /* the read's note on parts and views (every band's is the same) */
+    if (!r) r = p->io.rows_note(n->ctx, rr[0], &p->note, &p->warning);
     for (int i = 0; i < bands; i++)
         if (rr[i]) p->io.rows_close(rr[i]);
     p->rr = NULL;

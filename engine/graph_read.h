@@ -69,9 +69,4 @@ nprfx_result internal_graph_read_rows(nprfx_graph *g, int node, const char *file
                                       nprfx_row_reader *rr, const nprfx_plate *shape, int y0,
                                       int y1, nprfx_plate *out);
 
-/* After the rows of rr were read: its warning about what only the rows showed (uint ids above
- * 2^24, which float pixels round), through the graph's notices; the first strip gave the note
- * on parts and views. */
-void internal_graph_read_rows_done(nprfx_graph *g, int node, nprfx_row_reader *rr);
-
 #endif

@@ -169,7 +169,6 @@ static void strips_free(strips *st)
             free(s->names[c]);
         free(s->names);
         free(s->types);
-        internal_graph_read_rows_done(st->g, s->node, s->rr);
         st->g->io.rows_close(s->rr);
         nprfx_plate_free(&s->shape);
         if (s->own) {

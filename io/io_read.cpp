@@ -6,7 +6,7 @@
 #include "io_guard.h"
 #include "nprfx/io.h"
 #include "io_parts.h"
-#include "nprfx/io.h"
+#include "nprfx/objectid.h"
 
 #include <algorithm>
 #include <atomic>
@@ -51,9 +51,6 @@ static nprfx_read_options read_options(const nprfx_read_options *opt)
     return o;
 }
 
-/* The largest integer float32 holds exactly, with every integer below it. */
-const uint32_t float_exact_max = 1u << 24;
-
 /* Rows an EXR part stores per chunk (a tile's height when tiled): reads in blocks of whole chunks
  * decode each chunk once. From the compression, as OpenEXR defines it. */
 static int chunk_rows(const part &p)
@@ -86,7 +83,6 @@ struct reading {
      * span between a part's first and last delivered channel, so no more than the delivered
      * channels and one block is ever held; any rows can be read (strip renders). */
     bool blocks = false;
-    std::vector<uint32_t> umax; /* per delivered uint channel: the largest value read */
     std::vector<float> fbuf;
     std::vector<uint32_t> ubuf;
     std::vector<Imath::half> hbuf;
@@ -198,7 +194,6 @@ static nprfx_result open_reading(nprfx_context *ctx, const char *path, const npr
                                                (int64_t)nch, scratch)))
             return r;
     }
-    rd.umax.assign(nch, 0);
     return NPRFX_OK;
 }
 
@@ -232,8 +227,8 @@ static nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1,
                  * and widened here: asked for a type, or for a subset of the channels, OIIO
                  * converts through a buffer of its own, tens of megabytes allocated (and their
                  * pages faulted in) at every call. A span of mixed types is converted by OIIO.
-                 * EXR uint channels (object ids) are read as integers and cast, since a float
-                 * read would normalise them to [0,1]. */
+                 * EXR uint channels (object ids) are read as integers and turned into ids
+                 * (nprfx/objectid.h), since a float read would normalise them to [0,1]. */
                 const TypeDesc want = as_uint ? TypeDesc::UINT : TypeDesc::FLOAT;
                 const TypeDesc stored = p->spec.channelformat(lo);
                 bool uniform = true;
@@ -272,17 +267,13 @@ static nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1,
                 for (size_t k = 0; k < nsel; k++) {
                     const chan &c = rd.sel[k];
                     if (c.p != p || (c.type == NPRFX_PIXEL_UINT) != (as_uint != 0)) continue;
-                    uint32_t most = rd.umax[k];
                     for (int y = r0; y < r1; y++) {
                         const size_t src = ((size_t)(y - by) * w) * (size_t)n + (size_t)(c.c - lo);
                         float *d = dst + (size_t)(y - y0) * w * nsel + k;
                         if (as_uint) {
                             const uint32_t *s = rd.ubuf.data() + src;
-                            for (size_t x = 0; x < w; x++) {
-                                uint32_t v = s[x * (size_t)n];
-                                d[x * nsel] = (float)v;
-                                if (v > most) most = v;
-                            }
+                            for (size_t x = 0; x < w; x++)
+                                d[x * nsel] = nprfx_id_from_uint(s[x * (size_t)n]);
                         } else if (half) {
                             const Imath::half *s = rd.hbuf.data() + src;
                             for (size_t x = 0; x < w; x++)
@@ -293,7 +284,6 @@ static nprfx_result read_blocks(nprfx_context *ctx, reading &rd, int y0, int y1,
                                 d[x * nsel] = s[x * (size_t)n];
                         }
                     }
-                    rd.umax[k] = most;
                 }
             }
         }
@@ -329,11 +319,8 @@ static nprfx_result read_runs(nprfx_context *ctx, reading &rd, float *dst)
                                    OIIO::AutoStride, OIIO::AutoStride, OIIO::AutoStride,
                                    internal_io_read_progress, nullptr);
             for (size_t i = 0; ok && i < npix; i++)
-                for (int j = 0; j < n; j++) {
-                    uint32_t v = rd.ubuf[i * n + j];
-                    d[i * nch + j] = (float)v;
-                    if (v > rd.umax[k0 + j]) rd.umax[k0 + j] = v;
-                }
+                for (int j = 0; j < n; j++)
+                    d[i * nch + j] = nprfx_id_from_uint(rd.ubuf[i * n + j]);
         }
         if (internal_io_deadline_passed()) {
             oiio_error(rd.in.get());
@@ -372,18 +359,8 @@ static nprfx_result describe(nprfx_context *ctx, const reading &rd, nprfx_plate 
 
 static nprfx_result set_note(nprfx_context *ctx, const reading &rd, nprfx_plate *out)
 {
-    std::string note = rd.ch.note, rounded;
-    bool warn = rd.ch.warn;
-    for (size_t k = 0; k < rd.sel.size(); k++)
-        if (rd.umax[k] > float_exact_max)
-            rounded += (rounded.empty() ? "" : ", ") + std::string("'") + rd.sel[k].name +
-                       "' (up to " + std::to_string(rd.umax[k]) + ")";
-    if (!rounded.empty()) {
-        note += (note.empty() ? "'" + rd.path + "': " : "; ") + "uint channels " + rounded +
-                " hold integers above 2^24 = 16777216, which float pixels cannot all hold: "
-                "they are rounded to the nearest float (distinct ids may merge)";
-        warn = true;
-    }
+    const std::string &note = rd.ch.note;
+    const bool warn = rd.ch.warn;
     std::free(out->note);
     out->note = nullptr;
     if (!note.empty()) {

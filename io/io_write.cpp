@@ -1,9 +1,10 @@
-/* nprfx I/O (libnprfx-io) — writing image files (OpenImageIO): whole images and a strip of rows at a time in
- * the channels' own types, and text files; always through a temporary name beside the target
- * and a rename. Every entry point is extern "C", catches every exception and reports through
+/* nprfx I/O (libnprfx-io) — writing image files (OpenImageIO): whole images and a strip of rows at
+ * a time in the channels' own types, and text files; always through a temporary name beside the
+ * target and a rename. Every entry point is extern "C", catches every exception and reports through
  * nprfx_error. */
 #include "io_write.h"
 #include "io_parts.h"
+#include "nprfx/objectid.h"
 
 #include <algorithm>
 #include <atomic>
@@ -231,8 +232,8 @@ static nprfx_result write_spec(nprfx_context *ctx, const char *path, nprfx_rect 
     return NPRFX_OK;
 }
 
-/* im's pixels in the channels' native types (formats), packed: uint takes the float's integer
- * value; anything else in a uint channel is rounded. */
+/* im's pixels in the channels' native types (formats), packed: a uint channel holds ids, written
+ * back as the uints they were read from (nprfx_id_to_uint). */
 static void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &formats,
                         std::vector<unsigned char> &buf)
 {
@@ -248,9 +249,7 @@ static void pack_native(const nprfx_image *im, const std::vector<TypeDesc> &form
             for (int c = 0; c < im->channels; c++) {
                 float v = p[c];
                 if (formats[c] == TypeDesc::UINT) {
-                    uint32_t u = !(v > 0.0f)          ? 0u
-                                 : v >= 4294967295.0f ? 4294967295u
-                                                      : (uint32_t)std::lrint(v);
+                    uint32_t u = nprfx_id_to_uint(v);
                     std::memcpy(q, &u, 4);
                     q += 4;
                 } else if (formats[c] == TypeDesc::HALF) {

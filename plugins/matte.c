@@ -29,8 +29,8 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .flags = NPRFX_INPUT_OPTIONAL | NPRFX_INPUT_MAIN},
     {.name = "id",
      .label = "Object ID",
-     .help = "Object index: background where it rounds to background_id (Blender's IndexOB is 0 "
-             "where no object was hit).",
+     .help = "Object index: background where it is background_id (Blender's IndexOB is 0 "
+             "where no object was hit). Ids are compared exactly, uint ids with all 32 bits.",
      .aov = "id",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL},

@@ -64,8 +64,9 @@ static const nprfx_input_desc inputs[IN_COUNT] = {
      .flags = NPRFX_INPUT_OPTIONAL},
     {.name = "id",
      .label = "Object ID",
-     .help = "Object index (1 channel, rounded). Derivatives never cross an id edge, and each "
-             "object gets its own part of the sequence. Not connected: one object.",
+     .help =
+         "Object index (1 channel, compared exactly). Derivatives never cross an id edge, and each "
+         "object gets its own part of the sequence. Not connected: one object.",
      .aov = "id",
      .channels = 1,
      .flags = NPRFX_INPUT_OPTIONAL},

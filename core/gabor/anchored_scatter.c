@@ -36,7 +36,7 @@ static void window_rows(const gjob *J, const gstrip *T, int y0, int y1)
     const gsrc *S = &J->G->S;
     nprfx_rect w = J->window, reg = S->region;
     int ww = nprfx_rect_width(w);
-    const float nan = nanf("");
+    const float none = id_none();
     if (y0 < w.y0) y0 = w.y0;
     if (y1 > w.y1) y1 = w.y1;
     /* the window's columns inside the inputs */
@@ -47,14 +47,14 @@ static void window_rows(const gjob *J, const gstrip *T, int y0, int y1)
         int in = y >= reg.y0 && y < reg.y1 && xa < xb;
         for (int x = w.x0; x < w.x1; x++) {
             zr[x] = 0.0f;
-            ir[x] = nan;
+            ir[x] = none;
         }
         if (!in) continue;
         const float *Z = strip_plane(T, ST_Z, xa, y) - xa, *ID = strip_plane(T, ST_ID, xa, y) - xa;
         for (int x = xa; x < xb; x++) {
             double zz = Z[x];
             float ii = ID[x];
-            if (is_surface_depth(zz) && isfinite(ii)) {
+            if (is_surface_depth(zz) && nprfx_id_is_object(ii)) {
                 zr[x] = (float)zz;
                 ir[x] = ii;
             }

@@ -106,7 +106,8 @@ static splat_fn pick_splat_fn(int simd)
 #endif
 }
 
-/* ---- the render: phase 2, the splat tiles (phase 1 is core/gabor/anchored_scatter.c) --------------- */
+/* ---- the render: phase 2, the splat tiles (phase 1 is core/gabor/anchored_scatter.c)
+ * --------------- */
 
 /* A splat worker's buffers, for tiles of up to J->tile x J->tile pixels. */
 typedef struct splat_scratch {
@@ -168,7 +169,7 @@ static void splat_tile(gjob *J, int t, splat_scratch *B)
     float *acc = B->acc, *zt = B->zt, *idt = B->idt, *tab = B->tab;
     int *span = B->span;
     memset(acc, 0, sizeof(float) * npx);
-    const float nan = nanf("");
+    const float none = id_none();
     size_t ww = (size_t)nprfx_rect_width(J->window);
     for (int y = ty0; y < ty1; y++) {
         size_t wo = (size_t)(y - J->window.y0) * ww + (size_t)(tx0 - J->window.x0);
@@ -189,7 +190,7 @@ static void splat_tile(gjob *J, int t, splat_scratch *B)
     }
     for (size_t i = npx - VPAD; i < npx; i++) {
         zt[i] = 0.0f;
-        idt[i] = nan;
+        idt[i] = none;
     }
     long long kernels = 0;
     double w2sum = 0.0;

@@ -113,7 +113,7 @@ GV_INLINE void descend_vec(const gpixels *X, int q, float id, const double *a, i
               gv_wide(nb8(X->P[5], q)) * d2;
     gv8d ax = gv_absd(ux), ay = gv_absd(uy);
     gv8d dd = gv_seld(ax > ay, ax, ay);
-    gv8i ok = ((gv8i)nb8(X->emit, q) != 0) & (nb8(X->id, q) == id);
+    gv8i ok = ((gv8i)nb8(X->emit, q) != 0) & ((gv8i)nb8(X->id, q) == (int32_t)id_bits(id));
     for (int l = 0; l < 8; l++) {
         if (!ok[l]) continue;
         int n = q + offs[l];
@@ -152,7 +152,7 @@ GABOR_BODY int find_owner(const gpixels *X, int ref, const double *a, const doub
         int qj = tj < 0 ? 0 : (tj >= PW ? PW - 1 : tj);
         int nq = qj * PWS + qi;
         if (nq == q) return -1; /* beyond the ring: not this block's */
-        if (!X->emit[nq] || X->id[nq] != id) {
+        if (!X->emit[nq] || !id_eq(X->id[nq], id)) {
             /* a hole or another object on the way (or the point is not visible): continue
              * from the nearest pixel of the object around the target, if any */
             int best = -1, bd = 1 << 30;
@@ -161,7 +161,7 @@ GABOR_BODY int find_owner(const gpixels *X, int ref, const double *a, const doub
                     int i = qi + di, j = qj + dj;
                     if (i < 0 || i >= PW || j < 0 || j >= PW) continue;
                     int n = j * PWS + i, d = di * di + dj * dj;
-                    if (X->emit[n] && X->id[n] == id && d < bd) {
+                    if (X->emit[n] && id_eq(X->id[n], id) && d < bd) {
                         bd = d;
                         best = n;
                     }
@@ -190,7 +190,7 @@ GABOR_BODY int find_owner(const gpixels *X, int ref, const double *a, const doub
                     int i = qi + di, j = qj + dj;
                     if ((di == 0 && dj == 0) || i < 0 || i >= PW || j < 0 || j >= PW) continue;
                     int n = j * PWS + i;
-                    if (!X->emit[n] || X->id[n] != id) continue;
+                    if (!X->emit[n] || !id_eq(X->id[n], id)) continue;
                     double vx, vy, d = own_offset(X, n, a, &vx, &vy);
                     if (d < bd || (d == bd && n < best)) {
                         bd = d;
@@ -210,13 +210,6 @@ GABOR_BODY int find_owner(const gpixels *X, int ref, const double *a, const doub
     *ox = ux;
     *oy = uy;
     return q;
-}
-
-static uint32_t float_bits(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u;
 }
 
 /* The surface at grid position (gx, gy) (a point's screen position): anchor, unit normal and
@@ -315,7 +308,7 @@ static void patch_reach(const gconf *G, const gpixels *X, int comp, float id, co
     *mumax = 0.0;
     *reach = *turn = 0.0;
     for (int k = 0; k < PN; k++) {
-        if (!X->emit[k] || X->id[k] != id) continue;
+        if (!X->emit[k] || !id_eq(X->id[k], id)) continue;
         if (X->mu[k] < *mumin) *mumin = X->mu[k];
         if (X->mu[k] > *mumax) *mumax = X->mu[k];
         if (G->dims != 3 || !(X->comp[k] == comp || !in_block(k))) continue;
@@ -404,7 +397,7 @@ GV_INLINE void patch_reach_vec(const gconf *G, const gpixels *X, int comp, float
         int jin = j >= 1 && j <= BLOCK;
         for (int i0 = 0; i0 < PWS; i0 += 8) {
             int k = j * PWS + i0;
-            gv8i m = (gv_loadi(X->emit + k) != 0) & (gv_loadf(X->id + k) == id);
+            gv8i m = (gv_loadi(X->emit + k) != 0) & (gv_loadid(X->id + k) == (int32_t)id_bits(id));
             if (!gv_any(m)) continue;
             gv8f mu = gv_loadf(X->mu + k);
             mlo = gv_self(m & (mu < mlo), mu, mlo);
@@ -643,7 +636,7 @@ GABOR_BODY int emit_block_body(const gconf *G, int bx, int by, gblock *b, emit_s
 #endif
             ref = patch_footprint(X, comp, fmin, fmax, nmax);
         float id = X->id[ref];
-        uint32_t idbits = float_bits(id);
+        uint32_t idbits = id_bits(id);
         /* A point's level weight and slab test use the surface interpolated from up to four
          * pixels of the object around it, ring pixels included: the levels to enumerate are
          * those of the smallest and largest wanted density among them (the rule is monotone).

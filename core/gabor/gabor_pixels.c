@@ -36,14 +36,14 @@ void internal_gabor_strip_fill(const gsrc *S, gstrip *T, int x0, int x1, int y0,
         int32_t *F = (int32_t *)strip_plane(T, ST_FULL, T->x0, y);
         for (int i = 0; i < T->w; i++, a += sa, zp += sz) {
             float a0 = a[0], a1 = a[1], a2 = dims == 3 ? a[2] : 0.0f, z = *zp;
-            float id = ip ? ip[i * si] + 0.0f : 0.0f;
+            float id = ip ? nprfx_id_canonical(ip[i * si]) : 0.0f;
             A0[i] = a0;
             A1[i] = a1;
             A2[i] = a2;
             Z[i] = z;
             ID[i] = id;
             V[i] = -(is_surface_depth(z) && isfinite(a0) && isfinite(a1) && isfinite(a2) &&
-                     isfinite(id));
+                     nprfx_id_is_object(id));
             F[i] = -(cov < 0 || a[cov] >= COVERAGE_FULL);
         }
     }
@@ -99,7 +99,7 @@ static void cache_fill(const gsrc *S, const gstrip *T, gcache *C, int cx0, int c
 /* Neighbour d lies on c's surface: same object id and no depth step beyond the tolerance. */
 static int same_surface(const gsrc *S, const gcache *C, int c, int d)
 {
-    if (!C->present[d] || !C->valid[d] || C->id[d] != C->id[c]) return 0;
+    if (!C->present[d] || !C->valid[d] || !id_eq(C->id[d], C->id[c])) return 0;
     double zmin = C->z[c] < C->z[d] ? C->z[c] : C->z[d];
     return fabs((double)C->z[d] - C->z[c]) <= S->step_tol * zmin;
 }
@@ -110,8 +110,8 @@ static int same_surface(const gsrc *S, const gcache *C, int c, int d)
 static int axis_diff(const gcache *C, int c, int step, float dA[3], float *dz)
 {
     int f = c + step, b = c - step;
-    int hf = C->present[f] && C->interior[f] && C->id[f] == C->id[c];
-    int hb = C->present[b] && C->interior[b] && C->id[b] == C->id[c];
+    int hf = C->present[f] && C->interior[f] && id_eq(C->id[f], C->id[c]);
+    int hb = C->present[b] && C->interior[b] && id_eq(C->id[b], C->id[c]);
     float Df[3], Db[3];
     for (int k = 0; k < 3; k++) {
         Df[k] = C->A[k][f] - C->A[k][c];
@@ -283,7 +283,8 @@ GV_INLINE void cache_derive_vec(const gsrc *S, gcache *C, int cw, int ch)
         for (int i0 = 0; i0 < CW; i0 += 8) {
             int c = j * CW + i0;
             gv8i col = i0 + lane;
-            gv8f zc = gv_loadf(C->z + c), idc = gv_loadf(C->id + c);
+            gv8f zc = gv_loadf(C->z + c);
+            gv8i idc = gv_loadid(C->id + c);
             gv8d zcd = gv_wide(zc);
             gv8i ok = gv_loadi(C->valid + c) & gv_loadi(C->full + c) & (col >= 1) & (col < cw - 1);
             const int nb[4] = {c - 1, c + 1, c - CW, c + CW};
@@ -291,7 +292,7 @@ GV_INLINE void cache_derive_vec(const gsrc *S, gcache *C, int cw, int ch)
                 int d = nb[k];
                 gv8f zd = gv_loadf(C->z + d);
                 gv8f zmin = gv_self(zc < zd, zc, zd);
-                gv8i same = gv_loadi(C->valid + d) & (gv_loadf(C->id + d) == idc) &
+                gv8i same = gv_loadi(C->valid + d) & (gv_loadid(C->id + d) == idc) &
                             gv_mask(gv_absd(gv_wide(zd) - zcd) <= step_tol * gv_wide(zmin));
                 ok &= ~gv_loadi(C->present + d) | same;
             }
@@ -305,7 +306,8 @@ GV_INLINE void cache_derive_vec(const gsrc *S, gcache *C, int cw, int ch)
                 gv_storei(C->hasj + c, in);
                 continue;
             }
-            gv8f idc = gv_loadf(C->id + c), zc = gv_loadf(C->z + c);
+            gv8i idc = gv_loadid(C->id + c);
+            gv8f zc = gv_loadf(C->z + c);
             gv8f Ac[3];
             for (int m = 0; m < 3; m++)
                 Ac[m] = gv_loadf(C->A[m] + c);
@@ -313,9 +315,9 @@ GV_INLINE void cache_derive_vec(const gsrc *S, gcache *C, int cw, int ch)
             for (int ax = 0; ax < 2; ax++) {
                 int step = ax ? CW : 1, f = c + step, b = c - step;
                 gv8i hf = gv_loadi(C->present + f) & gv_loadi(C->interior + f) &
-                          (gv_loadf(C->id + f) == idc);
+                          (gv_loadid(C->id + f) == idc);
                 gv8i hb = gv_loadi(C->present + b) & gv_loadi(C->interior + b) &
-                          (gv_loadf(C->id + b) == idc);
+                          (gv_loadid(C->id + b) == idc);
                 gv8f Df[3], Db[3];
                 for (int m = 0; m < 3; m++) {
                     Df[m] = gv_loadf(C->A[m] + f) - Ac[m];
@@ -435,13 +437,14 @@ GV_INLINE void patch_links_vec(const gconf *G, gpixels *X)
     for (int j = 0; j <= BLOCK; j++)
         for (int i0 = 0; i0 < PWS; i0 += 8) {
             int k = j * PWS + i0;
-            gv8f za = gv_loadf(X->z + k), ida = gv_loadf(X->id + k);
+            gv8f za = gv_loadf(X->z + k);
+            gv8i ida = gv_loadid(X->id + k);
             gv8i ea = gv_loadi(X->emit + k) != 0;
             for (int dir = 0; dir < 2; dir++) {
                 int o = k + (dir ? PWS : 1);
                 gv8f zb = gv_loadf(X->z + o);
                 gv8f zmin = gv_self(za < zb, za, zb);
-                gv8i m = ea & (gv_loadi(X->emit + o) != 0) & (gv_loadf(X->id + o) == ida) &
+                gv8i m = ea & (gv_loadi(X->emit + o) != 0) & (gv_loadid(X->id + o) == ida) &
                          (gv_absf(za - zb) <= tol * zmin);
                 gv8f d2 = {0}, e2 = {0};
                 for (int c = 0; c < 3; c++) {

@@ -56,18 +56,18 @@ static void row_scalar(float *restrict acc, const float *restrict zt, const floa
     for (int j = 0; j < R->n; j++) {
         float v = R->A * cx[j] - R->B * sx[j];
         if (R->mode == NPRFX_GABOR_DEPTH_OFF) {
-            acc[j] += idt[j] == R->idk ? v : 0.0f;
+            acc[j] += id_eq(idt[j], R->idk) ? v : 0.0f;
             continue;
         }
         float zp = R->zr + R->gx * (float)(R->i0 + j);
         float dz = fabsf(zt[j] - zp);
         if (R->mode == NPRFX_GABOR_DEPTH_HARD) {
-            acc[j] += (idt[j] == R->idk && dz <= R->tol) ? v : 0.0f;
+            acc[j] += (id_eq(idt[j], R->idk) && dz <= R->tol) ? v : 0.0f;
         } else {
             float t = 2.0f - dz * R->tol;
             t = t > 0.0f ? t : 0.0f; /* as MAXPS(t, 0) */
             t = t < 1.0f ? t : 1.0f; /* as MINPS(t, 1) */
-            acc[j] += idt[j] == R->idk ? v * t : 0.0f;
+            acc[j] += id_eq(idt[j], R->idk) ? v * t : 0.0f;
         }
     }
 }
@@ -331,7 +331,7 @@ GV_INLINE void gv_row8(float *acc, const float *zt, const float *idt, const floa
     const gv8i sign = (gv8i){0} + (int32_t)0x7fffffff;
     const gv8f one = (gv8f){0} + 1.0f, two = (gv8f){0} + 2.0f, zero = {0};
     gv8f v = va * gv_loadf(cx) - vb * gv_loadf(sx);
-    m &= gv_loadf(idt) == vid;
+    m &= gv_loadid(idt) == (gv8i)vid;
     if (mode != NPRFX_GABOR_DEPTH_OFF) {
         gv8f zp = vzr + vgx * vi;
         gv8f dz = (gv8f)((gv8i)(gv_loadf(zt) - zp) & sign);
@@ -359,7 +359,7 @@ GV_INLINE void gv_rows(const gconf *G, const gslot *sl, gtile *T, const int mode
         mode == NPRFX_GABOR_DEPTH_SOFT ? (float)(tolz > 0.0 ? 1.0 / tolz : 1e30) : (float)tolz;
     gv8f zero = {0};
     gv_rowc R;
-    R.vid = p->id + zero;
+    R.vid = gv_splatid(p->id);
     R.vgx = gx + zero;
     R.vtol = tol + zero;
     long long evals = 0;
@@ -438,7 +438,8 @@ static void row_vec(float *restrict acc, const float *restrict zt, const float *
 {
     const gv4i lane = {0, 1, 2, 3}, sign = (gv4i){0} + (int32_t)0x7fffffff;
     const gv4f one = (gv4f){0} + 1.0f, two = (gv4f){0} + 2.0f, zero = {0};
-    gv4f va = R->A + zero, vb = R->B + zero, vid = R->idk + zero;
+    gv4f va = R->A + zero, vb = R->B + zero;
+    gv4i vid = (gv4i){0} + (int32_t)id_bits(R->idk);
     gv4f vzr = R->zr + zero, vgx = R->gx + zero, vtol = R->tol + zero;
     gv4f vi = (float)R->i0 + __builtin_convertvector(lane, gv4f); /* exact: small integers */
     int n = R->n;
@@ -448,7 +449,7 @@ static void row_vec(float *restrict acc, const float *restrict zt, const float *
         memcpy(&s_, sx + j, sizeof s_);
         memcpy(&d, idt + j, sizeof d);
         gv4f v = va * c - vb * s_;
-        gv4i m = (d == vid) & ((j + lane) < n);
+        gv4i m = ((gv4i)d == vid) & ((j + lane) < n);
         if (R->mode != NPRFX_GABOR_DEPTH_OFF) {
             memcpy(&z, zt + j, sizeof z);
             gv4f dz = (gv4f)((gv4i)(z - (vzr + vgx * vi)) & sign);

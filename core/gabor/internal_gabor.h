@@ -17,6 +17,30 @@
 #endif
 
 #include "nprfx/gabor.h"
+#include "nprfx/objectid.h"
+
+/* Ids in the gabor planes are canonical (nprfx_id_canonical: one bit pattern an object) and are
+ * compared by their bits: a NaN id names an object too, which float == would never match.
+ * Pixels with no surface hold NPRFX_ID_NONE, which no emitted point's id is. */
+static inline uint32_t id_bits(float id)
+{
+    uint32_t u;
+    memcpy(&u, &id, sizeof u);
+    return u;
+}
+
+static inline int id_eq(float a, float b)
+{
+    return id_bits(a) == id_bits(b);
+}
+
+static inline float id_none(void)
+{
+    const uint32_t b = NPRFX_ID_NONE;
+    float f;
+    memcpy(&f, &b, sizeof f);
+    return f;
+}
 
 /* Vector code (docs/design.md §1: output bit-identical whatever the path): GCC/Clang vector
  * extensions. On x86-64 the emission and splatting are compiled again for AVX2 and AVX-512
@@ -71,6 +95,20 @@ GV_INLINE gv8i gv_loadi(const int32_t *p)
     gv8i v;
     memcpy(&v, p, sizeof v);
     return v;
+}
+
+/* 8 ids as their bits (id_eq lane by lane is ==) */
+GV_INLINE gv8i gv_loadid(const float *p)
+{
+    gv8i v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* an id in every lane, by its bits (arithmetic would quiet a signalling-NaN id) */
+GV_INLINE gv8f gv_splatid(float id)
+{
+    return (gv8f)((gv8i){0} + (int32_t)id_bits(id));
 }
 
 /* Helpers that take vectors are macros (vector arguments are passed by pointer otherwise): no

@@ -13,6 +13,7 @@
 
 #include "nprfx/exec.h"
 #include "nprfx/lines.h"
+#include "nprfx/objectid.h"
 
 /* Depth at or beyond this is background (docs/design.md §2). */
 #define LINES_FAR_DEPTH 1e9
@@ -207,8 +208,7 @@ LINES_INLINE pair_pt edge_point(const lines_job *j, const packed_row *ra, int ia
     }
     if (p->outline) {
         if (connected(in->id)) {
-            float fa = ra->id[ia], fb = rb->id[ib];
-            edge |= fa != fb && !(isnan(fa) && isnan(fb));
+            edge |= !nprfx_id_same(ra->id[ia], rb->id[ib]);
         }
         edge |= cov_cross;
     }

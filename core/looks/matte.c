@@ -8,6 +8,7 @@
 #include "nprfx/exec.h"
 #include "nprfx/filter.h"
 #include "nprfx/matte.h"
+#include "nprfx/objectid.h"
 
 #define MATTE_MAX_SOFTEN 2.0
 
@@ -23,10 +24,8 @@ static double hard_part(const nprfx_matte_params *p, const float *depth, const f
         double z = depth[0];
         if (!(z > 0.0) || !isfinite(z) || z >= p->far) return 0.0;
     }
-    if (id && p->background_id >= 0) {
-        double v = id[0];
-        if (v == v && floor(v + 0.5) == (double)p->background_id) return 0.0;
-    }
+    if (id && p->background_id >= 0 && nprfx_id_to_uint(id[0]) == (uint32_t)p->background_id)
+        return 0.0;
     return 1.0;
 }
 

@@ -314,7 +314,7 @@ static void splat_one(const pam_job *P, const splat *s, int tx0, int ty0, int tx
         for (int x = xa; x <= xb; x++) {
             double dx = x - s->sx;
             if (dx * dx + dy * dy > P->r2) continue;
-            if (!(ir[x] == s->id)) continue; /* NaN: no surface */
+            if (!id_eq(ir[x], s->id)) continue; /* no surface holds an id no splat has */
             double zp = s->z + s->gzx * dx + s->gzy * dy;
             if (!(fabs(zr[x] - zp) <= tolz)) continue;
             double g = gy * B->gx[x - xa];

@@ -58,7 +58,7 @@ typedef struct pixdata {
  * OK_DROP: only while repair_outliers runs out of memory, a repair to be dropped. */
 enum { OK_UV = 1, OK_J = 2, OK_SEAM = 4, OK_DROP = 8 };
 #define OK_BOTH (OK_UV | OK_J)
-/* Never a read id (those are -1 or more). */
+/* Never an object's number (nprfx_id_to_uint gives 0x80000000 to no id). */
 #define NO_ID INT_MIN
 
 static inline size_t pd_at(const pixdata *d, int x, int y)

@@ -22,6 +22,7 @@
 #endif
 
 #include "internal_stipple.h"
+#include "nprfx/objectid.h"
 #include "nprfx/rng.h"
 
 /* Hash stream of the per-object sequence offsets. */
@@ -125,18 +126,12 @@ static inline const float *row_at(const rowsrc *s, int x)
     return x >= s->lo && x < s->hi ? s->p + (ptrdiff_t)(x - s->lo) * s->ps : NULL;
 }
 
-/* floor(v + 0.5) for |v| < 2e9, without a libm call. */
-static inline int round_half_up(double v)
+/* The object a pixel's id value names: its number (nprfx/objectid.h, all 32 bits) as an int,
+ * NO_OBJECT for arithmetic's NaNs. Never NO_ID: no id's number is 0x80000000. */
+#define NO_OBJECT ((int)NPRFX_ID_NONE)
+static inline int id_of(float v)
 {
-    double f = v + 0.5;
-    int i = (int)f; /* towards zero */
-    return i - (f < (double)i);
-}
-
-/* The object id a pixel's id value names: -1 (no object) for NaN or infinities. */
-static inline int id_of(double v)
-{
-    return !(v > -2e9 && v < 2e9) ? -1 : round_half_up(v);
+    return (int)nprfx_id_to_uint(v);
 }
 
 /* What fill_raw keeps from row to row: the constants, and the offsets of the last object seen
@@ -268,7 +263,7 @@ static inline void raw_pixel(rawstate *c, rowstate *st, const float *qi, const f
      * the same object; NaN never compares equal and is worked out each time) */
     if (!(qi[0] == st->prev)) st->prev = qi[0], st->pid = id_of(qi[0]);
     const double u = qu[0], v = qu[1];
-    if (!isfinite(u) || !isfinite(v) || st->pid < 0) {
+    if (!isfinite(u) || !isfinite(v) || st->pid == NO_OBJECT) {
         id[i] = NO_ID;
         ok[i] = 0;
         return;
@@ -351,7 +346,7 @@ static void raw_row(rawstate *c, pixdata *d, int y, const rowsrc *sid, const row
                 AHEAD(a, line, m, i + 4);
         const float *p = qi + i * is, *q = qu + i * us;
         const __m128 iv = _mm_setr_ps(p[0], p[is], p[2 * is], p[3 * is]);
-        if (_mm_movemask_ps(_mm_cmpeq_ps(iv, _mm_set1_ps(st.prev))) == 15 && st.pid >= 0 &&
+        if (_mm_movemask_ps(_mm_cmpeq_ps(iv, _mm_set1_ps(st.prev))) == 15 && st.pid != NO_OBJECT &&
             st.pid == st.last_id) {
             const __m128 a01 = _mm_loadh_pi(load_2f(q), (const __m64 *)(q + us));
             const __m128 a23 = _mm_loadh_pi(load_2f(q + 2 * us), (const __m64 *)(q + 3 * us));
@@ -472,7 +467,7 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
     c.inv_tile_u = sa / p->tile;
     c.inv_tile_v = 1.0 / (sa * p->tile);
     c.luma = in->tone->channels >= 3;
-    c.last_id = 0x7fffffff;
+    c.last_id = NO_ID; /* no object's number: the first sets its offsets */
     c.off_u = c.off_v = 0;
     const float *curve = p->tone_curve;
     if (curve)
@@ -519,7 +514,7 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
             d->id[k] = NO_ID;
             int id = 0; /* no id input, or outside it: object 0 */
             const float *q = row_at(&sid, x);
-            if (q) id = id_of(q[0]); /* NaN/inf: -1, no object */
+            if (q) id = id_of(q[0]);
             double u, v;
             if (in->uv) {
                 if (!(q = row_at(&suv, x))) continue;
@@ -529,7 +524,7 @@ static void fill_raw(const sjob *j, pixdata *d, nprfx_rect E)
                 u = (x - in->frame.x0) / p->plane_scale;
                 v = (y - in->frame.y0) / p->plane_scale;
             }
-            if (!isfinite(u) || !isfinite(v) || id < 0) continue;
+            if (!isfinite(u) || !isfinite(v) || id == NO_OBJECT) continue;
             if (id != c.last_id) object_offsets(&c, id);
             d->su[k] = u * c.inv_tile_u + c.off_u;
             d->sv[k] = v * c.inv_tile_v + c.off_v;

@@ -10,10 +10,9 @@
  * `/manifest` (a JSON object {"object name": "8 hex digits of the stored float's bits", ...}) or
  * `/manif_file` (a sidecar JSON file, relative to the image).
  *
- * nprfx decodes a layer's rank-0 id into an exact integer id: the low 24 bits of the stored
- * float's bits, with 0 for a pixel whose rank-0 coverage is 0 (nothing there) and 2^24 for a
- * non-empty pixel whose low bits are 0, so every id is a float an id input holds exactly. Two
- * objects whose hashes share their low 24 bits share an id (about one pair in 16.7 million). */
+ * nprfx decodes a layer's rank-0 id into an id input's float (nprfx/objectid.h): the stored
+ * float itself, all 32 bits, with 0 for a pixel whose rank-0 coverage is 0 (nothing there). Two
+ * objects share an id only when their hashes do (or differ only where the clamp flips bit 23). */
 #ifndef NPRFX_CRYPTOMATTE_H
 #define NPRFX_CRYPTOMATTE_H
 
@@ -36,9 +35,9 @@ NPRFX_API float nprfx_cryptomatte_float(uint32_t hash);
 /* The bits a stored id float has (what the manifest's hex names, after clamping). */
 NPRFX_API uint32_t nprfx_cryptomatte_bits(float stored);
 
-/* nprfx's integer id for a rank-0 (id, coverage) pair, as a float (see above): 0 when the
- * coverage is not above 0 (NaN included) or the stored id is ±0 (the specification's "no
- * object"), else the low 24 bits of its bits, 2^24 for 0. */
+/* nprfx's id for a rank-0 (id, coverage) pair (see above): 0 when the coverage is not above 0
+ * (NaN included) or the stored id is ±0 (the specification's "no object"), else the stored
+ * float, bit for bit. */
 NPRFX_API float nprfx_cryptomatte_object_id(float stored, float coverage);
 
 /* The 7 hex digits (and a NUL) naming a layer in the header: "cryptomatte/KEY/...", the first 7
@@ -50,8 +49,7 @@ NPRFX_API void nprfx_cryptomatte_key(const char *layer, char key[8]);
  * (quotes, backslashes, control characters; UTF-8 passes through), no spaces, NULL names left
  * out. Writes at most cap bytes with a NUL and returns the length the whole manifest needs,
  * without its NUL (as snprintf; buf may be NULL when cap is 0). */
-NPRFX_API size_t nprfx_cryptomatte_manifest(const char *const *names, int n, char *buf,
-                                            size_t cap);
+NPRFX_API size_t nprfx_cryptomatte_manifest(const char *const *names, int n, char *buf, size_t cap);
 
 /* One Cryptomatte layer found in a plate's channels and header. */
 typedef struct nprfx_cryptomatte_layer {
@@ -69,8 +67,7 @@ typedef struct nprfx_cryptomatte_layer {
  * attribute "cryptomatte/KEY/name" (or "exr/cryptomatte/KEY/name") naming it, with or without
  * its prefix, or "crypto" in its name (any case): the header is required by the specification,
  * and without it "Light00.R" would be a layer too. */
-NPRFX_API int nprfx_cryptomatte_find(const char *const *names, int n,
-                                     const char *const *attr_names,
+NPRFX_API int nprfx_cryptomatte_find(const char *const *names, int n, const char *const *attr_names,
                                      const char *const *attr_values, int nattr,
                                      nprfx_cryptomatte_layer *out, int max);
 

@@ -23,7 +23,7 @@ extern "C" {
 typedef enum nprfx_pixel_type {
     NPRFX_PIXEL_FLOAT = 0, /* float, or any non-EXR type (read as normalised float) */
     NPRFX_PIXEL_HALF = 1,
-    NPRFX_PIXEL_UINT = 2 /* EXR uint (object ids): read as integers, exact up to 2^24 */
+    NPRFX_PIXEL_UINT = 2 /* EXR uint (object ids): read as ids, exactly (nprfx/objectid.h) */
 } nprfx_pixel_type;
 
 /* A decoded plate: the channels of one part of an image file (or of several parts with the same
@@ -37,9 +37,9 @@ typedef struct nprfx_plate {
     unsigned char *types; /* nchannels nprfx_pixel_type */
     float pixel_aspect;   /* the PixelAspectRatio attribute (1 when absent) */
     /* What a user should know about the read (malloc'd, NULL when nothing): which parts and view
-     * were used and which parts were not, uint values beyond float's exact range. */
+     * were used and which parts were not. */
     char *note;
-    int note_is_warning; /* 1: parts were left out or values were rounded */
+    int note_is_warning; /* 1: parts were left out */
 } nprfx_plate;
 
 /* Which part and view of a file a read takes. */
@@ -207,9 +207,8 @@ typedef struct nprfx_io {
      * (NULL: $OCIO, else the built-in one). */
     nprfx_result (*convert_colorspace)(nprfx_context *ctx, nprfx_image *im, const char *from,
                                        const char *to, const char *ocio_config);
-    /* Appended (read when size covers it): the read's note as it stands after the rows read so
-     * far, which may say more than the shape's (uint values above 2^24 are known only once
-     * read); *note malloc'd, NULL when there is none. */
+    /* Appended (read when size covers it): the read's note on parts and views, as the shape
+     * has it; *note malloc'd, NULL when there is none. */
     nprfx_result (*rows_note)(nprfx_context *ctx, nprfx_row_reader *r, char **note, int *warning);
 } nprfx_io;
 

@@ -24,7 +24,7 @@ enum {
 /* The node's params (its descriptor binds each one here by offset). */
 typedef struct nprfx_matte_params {
     double far;        /* depth >= far, not finite or <= 0: background */
-    int background_id; /* id rounding to this: background; -1: every id is an object */
+    int background_id; /* an id equal to this (nprfx_id_to_uint): background; -1: none is */
     double soften;     /* Gaussian sigma in pixels over the hard depth/id matte (0: hard) */
     int invert;        /* output 1 - coverage (a background matte) */
 } nprfx_matte_params;

@@ -5,6 +5,7 @@
 #include "nprfx/exec.h"
 #include "nprfx/context.h"
 #include "nprfx/image.h"
+#include "nprfx/objectid.h"
 #include "nprfx/rng.h"
 #include "nprfx/filter.h"
 #include "nprfx/metrics.h"

@@ -125,7 +125,7 @@ NPRFX_API nprfx_result nprfx_stipple_tone_curve(nprfx_context *ctx, const nprfx_
 typedef struct nprfx_stipple_inputs {
     const nprfx_image *tone; /* required: 1 = paper white; 3-4 channels: Rec. 709 luma */
     const nprfx_image *uv;   /* optional (NULL): 2 channels */
-    const nprfx_image *id;   /* optional (NULL): object id, 1 channel, rounded */
+    const nprfx_image *id;   /* optional (NULL): object id, 1 channel (nprfx/objectid.h) */
     nprfx_rect frame;        /* the whole image domain */
 } nprfx_stipple_inputs;
 

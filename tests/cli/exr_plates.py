@@ -189,7 +189,7 @@ elif cmd == 'blender-as':
     # blender-as CHANGES DST_DIR SRC...: Blender-layout plates carrying the numbers another
     # layout's plates give the engine, as uncompressed float EXRs. CHANGES, comma separated:
     # nodiffuse (no diffuse light pass), cryptoids (IndexOB as the ids the read decodes from a
-    # Cryptomatte layer: the low 24 bits of the object name's hash, 2^24 for 0, where there is
+    # Cryptomatte layer: the stored float of the object name's hash, all 32 bits, where there is
     # coverage), prevfromnext (the vector to the previous frame as the opposite of the one to the
     # next: Vector.XY = Vector.ZW), inversedepth (depth through Nuke's 1/z and back, infinite
     # where there is nothing).
@@ -213,7 +213,7 @@ elif cmd == 'blender-as':
             if 'cryptoids' in changes:
                 a = get('Combined.A', y)
                 ids = get('IndexOB.X', y)
-                put('IndexOB.X', y, [float((object_bits(int(i)) & 0xffffff) or 1 << 24)
+                put('IndexOB.X', y, [struct.unpack('<f', struct.pack('<I', object_bits(int(i))))[0]
                                      if i > 0 and c > 0 else 0.0 for i, c in zip(ids, a)])
             if 'prevfromnext' in changes:
                 put('Vector.X', y, get('Vector.Z', y))

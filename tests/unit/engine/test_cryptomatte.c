@@ -11,6 +11,7 @@
 
 #include "check.h"
 #include "nprfx/cryptomatte.h"
+#include "nprfx/objectid.h"
 
 #define COUNT(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
@@ -120,29 +121,34 @@ static void test_float(void)
 static void test_object_id(void)
 {
     float bunny = nprfx_cryptomatte_float(0x13851a76u);
-    CHECK(nprfx_cryptomatte_object_id(bunny, 0.25f) == (float)0x851a76);
-    CHECK(nprfx_cryptomatte_object_id(bunny, 1.0f) == 8723062.0f);
+    /* the stored float, bit for bit */
+    CHECK(nprfx_cryptomatte_bits(nprfx_cryptomatte_object_id(bunny, 0.25f)) == 0x13851a76u);
+    CHECK(nprfx_cryptomatte_bits(nprfx_cryptomatte_object_id(bunny, 1.0f)) == 0x13851a76u);
     /* no coverage: nothing there, whatever the id */
     CHECK(nprfx_cryptomatte_object_id(bunny, 0.0f) == 0.0f);
     CHECK(nprfx_cryptomatte_object_id(bunny, -0.5f) == 0.0f);
     CHECK(nprfx_cryptomatte_object_id(bunny, NAN) == 0.0f);
-    /* low 24 bits 0 (0.5f is 0x3f000000): 2^24, apart from the empty pixel */
-    CHECK(nprfx_cryptomatte_object_id(0.5f, 1.0f) == 16777216.0f);
-    CHECK(nprfx_cryptomatte_object_id(float_of_bits(0xc1000000u), 0.1f) == 16777216.0f);
     /* the specification's "no object" id 0 stays nothing even with coverage beside it */
-    CHECK(nprfx_cryptomatte_object_id(0.0f, 1.0f) == 0.0f);
-    CHECK(nprfx_cryptomatte_object_id(-0.0f, 1.0f) == 0.0f);
-    /* the sign and exponent bits do not change the id: only the low 24 bits do */
-    CHECK(nprfx_cryptomatte_object_id(float_of_bits(0x93851a76u), 1.0f) == 8723062.0f);
-    /* every id an integer in [1, 2^24] held exactly, distinct low bits distinct ids */
+    CHECK(nprfx_cryptomatte_bits(nprfx_cryptomatte_object_id(0.0f, 1.0f)) == 0u);
+    CHECK(nprfx_cryptomatte_bits(nprfx_cryptomatte_object_id(-0.0f, 1.0f)) == 0u);
+    /* hashes that differ in any bit are distinct objects: the sign, the exponent, the lowest
+     * bit, and bits above the 24 a float's integers hold */
+    float ids[5] = {nprfx_cryptomatte_object_id(float_of_bits(0x13851a76u), 1.0f),
+                    nprfx_cryptomatte_object_id(float_of_bits(0x93851a76u), 1.0f),
+                    nprfx_cryptomatte_object_id(float_of_bits(0x14851a76u), 1.0f),
+                    nprfx_cryptomatte_object_id(float_of_bits(0x13851a77u), 1.0f),
+                    nprfx_cryptomatte_object_id(float_of_bits(0x23851a76u), 1.0f)};
+    for (int i = 0; i < 5; i++)
+        for (int j = 0; j < 5; j++)
+            CHECK(nprfx_id_same(ids[i], ids[j]) == (i == j));
+    /* every hash an object, none the empty pixel, distinct hashes distinct ids */
     int bad = 0;
     for (uint32_t i = 0; i < 20000; i++) {
         uint32_t h = 7 + i * 0x000f4243u;
         float stored = nprfx_cryptomatte_float(h);
         float id = nprfx_cryptomatte_object_id(stored, 0.5f);
-        uint32_t low = nprfx_cryptomatte_bits(stored) & 0xffffffu;
-        if (!(id >= 1.0f && id <= 16777216.0f) || id != floorf(id) || (float)(uint32_t)id != id ||
-            (low && (uint32_t)id != low) || (!low && id != 16777216.0f))
+        if (!nprfx_id_is_object(id) || nprfx_id_key(id) == 0 ||
+            nprfx_id_key(id) != nprfx_cryptomatte_bits(stored))
             bad++;
     }
     CHECK(bad == 0);

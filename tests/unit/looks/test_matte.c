@@ -6,6 +6,7 @@
 #include "check.h"
 #include "node_harness.h"
 #include "nprfx/matte.h"
+#include "nprfx/objectid.h"
 
 extern const nprfx_node_desc nprfx_node_matte;
 
@@ -24,8 +25,20 @@ static void test_matte(nprfx_context *ctx)
     CHECK(nprfx_matte_pixel(&p, NULL, &z_blender, NULL) == 0.0);
     CHECK(nprfx_matte_pixel(&p, NULL, &z_zero, NULL) == 0.0);
     CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id0) == 0.0);
-    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_near0) == 0.0);
+    /* ids are compared exactly: 0.2 is not 0 (a uint id 0x3e4ccccd reads as 0.2f) */
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_near0) == 1.0);
     CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id3) == 1.0);
+    /* uint ids above 2^24, however small or NaN their float, are objects; -0 is 0 */
+    float id_tiny = nprfx_id_from_uint(0x01000001u), id_nan = nprfx_id_from_uint(0x7f800001u),
+          id_neg0 = -0.0f;
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_tiny) == 1.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_nan) == 1.0);
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id_neg0) == 0.0);
+    p.background_id = 7;
+    float id7 = nprfx_id_from_uint(7u);
+    CHECK(id7 == 7.0f);
+    CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id7) == 0.0);
+    p.background_id = 0;
     CHECK(nprfx_matte_pixel(&p, &a_half, &z_obj, &id3) == 0.5);
     p.background_id = -1;
     CHECK(nprfx_matte_pixel(&p, NULL, NULL, &id0) == 1.0);
