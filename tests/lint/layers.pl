@@ -3,7 +3,8 @@
 #
 #   perl tests/lint/layers.pl SOURCE_DIR
 #
-# Every #include of a C/C++ file under include/, core/, plugins/, engine/, io/, common/ and cli/
+# Every #include of a C/C++ file under include/, core/, plugins/, engine/, io/, common/, cli/ and
+# python/
 # is resolved
 # to a file of the tree (quoted: beside the including file, then under the include roots below;
 # <nprfx/...>: under include/; other <...> are the system's and not followed). Two rules:
@@ -26,8 +27,8 @@ $root =~ s{/+$}{};
 # (core/gabor/internal_scatter.h). Node descriptors use the families and their support code. The
 # graph engine (engine/) and the image I/O library (io/) use only the public headers: the
 # engine reaches nodes through the registry and files through an nprfx_io. The front ends (the
-# runner, the OpenFX adapter) use the public API, the engine, io/ and common/, and never each
-# other. Inside the runner, lower folders never include higher ones: util, farm and host
+# runner, the OpenFX adapter, the Python module) use the public API, the engine, io/ and
+# common/, and never each other. Inside the runner, lower folders never include higher ones: util, farm and host
 # projects, commands, main.c.
 my @FAMILIES = qw(noise gabor stipple pam looks motion);
 # The runner's folders, lowest first: each includes only those before it (main.c all of them).
@@ -52,6 +53,7 @@ my %LAYERS = (
     'common'          => ['common', ['public']],
     'plugins/ofx'     => ['ofx', ['public', 'support', 'common']],
     'cli'             => ['cli', [@LIBS, @CLI]],
+    'python'          => ['python', [@LIBS]],
     'cli/util'        => ['cli/util', [@LIBS]],
     'cli/farm'        => ['cli/farm', [@LIBS, 'cli/util']],
     'cli/host'        => ['cli/host', [@LIBS, 'cli/util']],
@@ -72,7 +74,7 @@ sub layer_of {
 }
 
 my @files;
-for my $top (qw(include core plugins common engine io cli)) {
+for my $top (qw(include core plugins common engine io cli python)) {
     next unless -d "$root/$top";
     open(my $fh, '-|', 'find', "$root/$top", '-type', 'f', '(', '-name', '*.c', '-o', '-name',
          '*.h', '-o', '-name', '*.cpp', ')') or die "find: $!\n";
