@@ -18,7 +18,8 @@ typedef struct py_graph {
     PyObject *notices;  /* the engine's notes and warnings, in order */
     PyObject *progress; /* during run(): the callable, or NULL */
     PyObject *frames;   /* during run(): the per-frame records */
-    int stopped;        /* during run(): the callable raised */
+    int stopped;        /* during run(): the callable raised (or a record could not be made) */
+    PyObject *exc[3];   /* during run(): that exception, until run() raises it */
     int busy;
 } py_graph;
 
@@ -267,6 +268,7 @@ static int graph_seed(py_graph *s, const char *analysis)
 static int run_progress(void *user, const nprfx_graph_progress *p)
 {
     py_graph *s = user;
+    if (s->stopped) return 1; /* a frame written in the background reports after the stop */
     PyGILState_STATE gs = PyGILState_Ensure();
     PyObject *err = Py_None;
     Py_INCREF(err);
@@ -287,9 +289,11 @@ static int run_progress(void *user, const nprfx_graph_progress *p)
         stop = s->stopped = 1;
     } else if (s->progress) {
         PyObject *r = PyObject_CallFunctionObjArgs(s->progress, rec, NULL);
-        if (!r) stop = s->stopped = 1; /* the exception stays for run() to raise */
+        if (!r) stop = s->stopped = 1;
         Py_XDECREF(r);
     }
+    /* kept for run() to raise: this may be a writer thread's state, not the caller's */
+    if (stop && PyErr_Occurred()) PyErr_Fetch(&s->exc[0], &s->exc[1], &s->exc[2]);
     Py_XDECREF(rec);
     PyGILState_Release(gs);
     return stop;
@@ -353,7 +357,11 @@ static PyObject *graph_run(py_graph *s, PyObject *args, PyObject *kw)
     Py_END_ALLOW_THREADS;
     s->busy = 0;
     s->progress = NULL;
-    if (s->stopped && PyErr_Occurred()) goto done;
+    if (s->exc[0]) {
+        PyErr_Restore(s->exc[0], s->exc[1], s->exc[2]);
+        s->exc[0] = s->exc[1] = s->exc[2] = NULL;
+        goto done;
+    }
     if (sum.failed && !keep_going) {
         /* the first failed frame's message */
         for (Py_ssize_t i = 0; i < PyList_GET_SIZE(s->frames); i++) {

@@ -4,7 +4,6 @@
 
 #include <string.h>
 
-
 /* The frames of inputs a node remembers for its fetches (those given to earlier renders). */
 #define KEEP_FRAMES 8
 
@@ -27,6 +26,7 @@ typedef struct py_node {
     nprfx_image fetched[NPRFX_FETCH_KEEP];
     int next_fetched;
     int busy;
+    PyObject *channels; /* the last render's output channel names */
 } py_node;
 
 static void kept_clear(py_node *n, kept_frame *k)
@@ -48,6 +48,7 @@ static void node_dealloc(py_node *n)
     PyMem_Free(n->params);
     Py_XDECREF(n->keep);
     Py_XDECREF(n->fetch);
+    Py_XDECREF(n->channels);
     Py_TYPE(n)->tp_free((PyObject *)n);
 }
 
@@ -249,6 +250,19 @@ static PyObject *node_render(py_node *n, PyObject *args, PyObject *kw)
         goto done;
     }
     result = internal_py_make_array(&out);
+    PyObject *out_names = result ? PyTuple_New(oi.channels) : NULL;
+    for (int c = 0; out_names && c < oi.channels; c++) {
+        PyObject *s = PyUnicode_FromString(oi.names[c] ? oi.names[c] : "");
+        if (!s)
+            Py_CLEAR(out_names);
+        else
+            PyTuple_SET_ITEM(out_names, c, s);
+    }
+    if (!out_names) {
+        Py_CLEAR(result);
+        goto done;
+    }
+    Py_XSETREF(n->channels, out_names);
 done:
     if (cur.in) kept_clear(n, &cur);
     PyMem_Free(chans);
@@ -270,8 +284,19 @@ static PyObject *node_get_id(py_node *n, void *closure)
     return PyUnicode_FromString(n->desc->id);
 }
 
-static PyGetSetDef node_getset[] = {{"id", (getter)node_get_id, NULL, "the node's id", NULL},
-                                    {NULL, NULL, NULL, NULL, NULL}};
+static PyObject *node_get_channels(py_node *n, void *closure)
+{
+    (void)closure;
+    if (!n->channels) Py_RETURN_NONE;
+    Py_INCREF(n->channels);
+    return n->channels;
+}
+
+static PyGetSetDef node_getset[] = {
+    {"id", (getter)node_get_id, NULL, "the node's id", NULL},
+    {"channels", (getter)node_get_channels, NULL,
+     "the names of the last render's output channels (as the runner writes them), or None", NULL},
+    {NULL, NULL, NULL, NULL, NULL}};
 
 PyTypeObject internal_py_node_type = {
     PyVarObject_HEAD_INIT(NULL, 0).tp_name = "nprfx.Node",

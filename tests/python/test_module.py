@@ -1,10 +1,13 @@
-"""The Python module (python/nprfx_module.c): the node list is the runner's, from the
-descriptors; errors are nprfx.Error with the runner's words; with NumPy, a render on arrays of
-any strides gives the same pixels, and two threads render at once (the GIL is released).
-usage: python3 test_module.py NPRFX (PYTHONPATH: the build's python/ folder)"""
+"""The Python module (python/): the node list is the runner's, from the descriptors; errors are
+nprfx.Error with the runner's words; with NumPy, a render on arrays of any strides gives the
+same pixels, Python code runs while a node computes (the GIL is released), and 1,000 renders
+leak no reference and no memory.
+usage: python3 test_module.py NPRFX [WORK_DIR] (PYTHONPATH: the build's python/ folder)"""
+import os
 import subprocess
 import sys
 import threading
+import time
 
 import nprfx
 
@@ -70,18 +73,58 @@ if np is not None:
                                               'pattern': inter[:, :, 0]},
                      params={'mode': 'builtin'}, threads=1)
     check(np.array_equal(a, b), 'strides or threads change the pixels')
-    # the GIL is released: two threads render at once, each the same as alone
-    out = [None, None]
+    # the GIL is released: another thread's Python code runs while a render computes. It notes
+    # the time every 1,000 turns; with the GIL held through the render none of those times could
+    # fall inside it (10 ms from either end, clear of the switches around the call).
+    big = np.ascontiguousarray(np.tile(pattern, (8, 8)))
+    stamps = []
+    finished = threading.Event()
 
-    def work(i):
-        out[i] = nprfx.render('threshold-map', inputs={'tone': tone, 'pattern': pattern},
-                              params={'mode': 'builtin'}, threads=1)
-    ts = [threading.Thread(target=work, args=(i,)) for i in range(2)]
-    for t in ts:
-        t.start()
-    for t in ts:
-        t.join()
-    check(all(o is not None and np.array_equal(o, a) for o in out), 'threaded renders differ')
+    def count():
+        k = 0
+        while not finished.is_set():
+            k += 1
+            if k % 1000 == 0:
+                stamps.append(time.perf_counter())
+    slow = {'anchor': np.stack([big, big.T.copy().T], axis=2), 'depth': np.ones_like(big)}
+    n = nprfx.Node('gabor-splat', params={'radius': 24, 'anchor_space': 'uv'}, threads=1)
+    t = threading.Thread(target=count)
+    t.start()
+    time.sleep(0.02)
+    start = time.perf_counter()
+    n.render(1, slow)
+    end = time.perf_counter()
+    finished.set()
+    t.join()
+    inside = [x for x in stamps if start + 0.01 < x < end - 0.01]
+    check(end - start > 0.03, 'the render took %.3f s: too short to tell' % (end - start))
+    check(len(inside) > 3, 'Python ran %d times during %.3f s of render' % (len(inside),
+                                                                            end - start))
+
+    # no leak: 1,000 renders keep every reference count and the resident size
+    def rss_mb():
+        with open('/proc/self/statm') as f:
+            return int(f.read().split()[1]) * os.sysconf('SC_PAGE_SIZE') / 2**20
+    inputs = {'tone': tone, 'pattern': pattern}
+    params = {'mode': 'builtin', 'sigma': 4}
+    for _ in range(50):
+        nprfx.render('threshold-map', inputs=inputs, params=params, threads=1)
+    refs = [sys.getrefcount(o) for o in (tone, pattern, inputs, params, 'builtin')]
+    rss = rss_mb()
+    n = nprfx.Node('time-offset', params={'offset': -1}, shot=(1, 1000))
+    motion = np.zeros((h, w, 2), np.float32)
+    for i in range(1000):
+        nprfx.render('threshold-map', inputs=inputs, params=params, threads=1)
+        n.render(i + 1, {'image': motion})
+        try:
+            nprfx.render('threshold-map', inputs=inputs, params={'sigma': -1})
+        except nprfx.Error:
+            pass
+    del n
+    grown = rss_mb() - rss
+    check([sys.getrefcount(o) for o in (tone, pattern, inputs, params, 'builtin')] == refs,
+          'reference counts changed over 1,000 renders')
+    check(grown < 8, 'the resident size grew %.1f MB over 1,000 renders' % grown)
 
 if failures:
     sys.exit(1)
