@@ -17,6 +17,9 @@ int internal_py_env_init(internal_py_env *env, int threads)
     const char *data = getenv("NPRFX_DATA_DIR");
     init.data_dir = data && *data ? data : NULL;
     init.flow = flow_opencv_provider();
+    /* threads 0: $NPRFX_THREADS when it is a positive number (as the runner), else every core */
+    const char *nt = getenv("NPRFX_THREADS");
+    if (threads <= 0 && nt && atoi(nt) > 0) threads = atoi(nt);
     if (threads != 1) {
         if (nprfx_pool_create(threads, &env->pool)) {
             PyErr_SetString(internal_py_error, "cannot start worker threads");

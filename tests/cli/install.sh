@@ -141,4 +141,13 @@ done
 # ---- the installed runner ----------------------------------------------------------------------
 check "the installed runner lists threshold-map" sh -c "'$P/bin/nprfx' list | grep -q threshold-map"
 
+# ---- the Python module, where the prefix's interpreter looks (when the build has it) -----------
+PY=$(cache Python3_EXECUTABLE)
+if [ -n "$(find "$BUILD/python" -name 'nprfx*.so' 2>/dev/null)" ]; then
+  mod=$(find "$P/lib" -path '*/python3.*/*-packages/nprfx*.so' | head -n 1)
+  [ -n "$mod" ] && pass || fail "the Python module was not installed under $P/lib/python3.X"
+  [ -n "$mod" ] && check "the installed Python module imports and lists the nodes" \
+    env PYTHONPATH="$(dirname "$mod")" "$PY" -c 'import nprfx; assert "threshold-map" in nprfx.nodes()'
+fi
+
 finish
