@@ -10,15 +10,9 @@ import threading
 import time
 
 import nprfx
+from checks import check, finish
 
 runner = sys.argv[1]
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print('FAIL: ' + what)
 
 
 # The node list: every node `nprfx list` shows, with the descriptors' params and help.
@@ -126,6 +120,4 @@ if np is not None:
           'reference counts changed over 1,000 renders')
     check(grown < 8, 'the resident size grew %.1f MB over 1,000 renders' % grown)
 
-if failures:
-    sys.exit(1)
-print('python module: passed')
+finish('python module: passed')

@@ -11,9 +11,9 @@ import subprocess
 import sys
 
 import numpy as np
-import OpenImageIO as oiio
 
 import nprfx
+from checks import check, finish, read
 
 runner, work = sys.argv[1], sys.argv[2]
 os.makedirs(work, exist_ok=True)
@@ -21,16 +21,6 @@ os.chdir(work)
 FRAMES = (1, 2, 3)
 subprocess.run([runner, 'synth', 'orbit', '-o', 'plate.####.exr', '--frames', '1-3', '--size',
                 '160x90'], check=True, capture_output=True)
-
-
-def read(path):
-    inp = oiio.ImageInput.open(path)
-    if not inp:
-        sys.exit('FAIL: cannot read %s: %s' % (path, oiio.geterror()))
-    names = list(inp.spec().channelnames)
-    px = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return names, px.reshape(px.shape[0], px.shape[1], -1)
 
 
 plates = {f: read('plate.%04d.exr' % f) for f in FRAMES}
@@ -64,12 +54,10 @@ CASES = {
     'warp': ({'image': RGB, 'offset': MPREV}, {}, False),
     'watercolor': ({'image': RGB, 'coverage': ['coverage']}, {}, False),
 }
-failures = []
 
 
 def fail(what):
-    failures.append(what)
-    print('FAIL: ' + what)
+    check(False, what)
 
 
 nodes = nprfx.nodes()
@@ -96,6 +84,9 @@ def same(node, frame, got, names, how):
     """got (channels named as the Node names them) against the runner's file, whose channels
     OpenImageIO gives in the file's order"""
     have, want = read('runner/%s.%04d.exr' % (node, frame))
+    if have is None:
+        fail('%s frame %d: the runner wrote no file' % (node, frame))
+        return
     if sorted(have) != sorted(names):
         fail('%s frame %d (%s): channels %s, the runner %s' % (node, frame, how, names, have))
         return
@@ -132,6 +123,4 @@ for node, (inputs, params, past_only) in CASES.items():
             got = n.render(f, {k: channels(f, v) for k, v in inputs.items()})
             same(node, f, got, n.channels, 'Node in order')
 
-if failures:
-    sys.exit(1)
-print('python nodes: %d nodes equal to the runner' % len(CASES))
+finish('python nodes: %d nodes equal to the runner' % len(CASES))

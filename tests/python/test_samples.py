@@ -7,29 +7,14 @@ import subprocess
 import sys
 
 import numpy as np
-import OpenImageIO as oiio
+
+from checks import check, finish, pixels
 
 runner, work = sys.argv[1], sys.argv[2]
 src = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 samples = os.path.join(src, 'samples', 'python')
 os.makedirs(work, exist_ok=True)
 os.chdir(work)
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print('FAIL: ' + what)
-
-
-def pixels(path):
-    inp = oiio.ImageInput.open(path)
-    if not inp:
-        return None
-    px = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return px
 
 
 def run(*args):
@@ -53,6 +38,4 @@ for f in (1, 2):
     check(a is not None and b is not None and np.array_equal(a.view(np.uint32), b.view(np.uint32)),
           'run_graph.py frame %d differs from nprfx run' % f)
 
-if failures:
-    sys.exit(1)
-print('python samples: passed')
+finish('python samples: passed')
