@@ -1,5 +1,15 @@
-"""What the Python module's tests share: counted checks and EXR pixels through OpenImageIO."""
+"""What the Python module's tests share: counted checks and EXR pixels through OpenImageIO.
+Imported first: without NumPy or OpenImageIO's Python module a test says so and exits 77, which
+ctest counts as skipped."""
 import sys
+
+for _module, _package in (('numpy', 'python3-numpy'), ('OpenImageIO', 'python3-openimageio')):
+    try:
+        __import__(_module)
+    except ImportError:
+        print('SKIP: %s cannot import %s (Debian: %s; .ci/setup installs it)' % (
+            sys.executable, _module, _package))
+        sys.exit(77)
 
 failures = []
 

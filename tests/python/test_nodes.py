@@ -10,10 +10,11 @@ import os
 import subprocess
 import sys
 
+from checks import check, finish, read
+
 import numpy as np
 
 import nprfx
-from checks import check, finish, read
 
 runner, work = sys.argv[1], sys.argv[2]
 os.makedirs(work, exist_ok=True)

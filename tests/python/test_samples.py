@@ -6,9 +6,10 @@ import os
 import subprocess
 import sys
 
+from checks import check, finish, pixels
+
 import numpy as np
 
-from checks import check, finish, pixels
 
 runner, work = sys.argv[1], sys.argv[2]
 src = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
