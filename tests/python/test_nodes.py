@@ -1,9 +1,9 @@
 """Every node through the Python module gives the runner's pixels, bit for bit: each node of
 nprfx.nodes() is rendered by `nprfx run` (a graph reading the plates, writing float EXRs) and by
-the module on the same channels read with OpenImageIO's Python module, on synthetic plates and on
-the bundled crossing shot; temporal nodes over a
-three-frame shot, through nprfx.Node with a fetch callable and, where a node fetches only the
-past, also with no callable (the inputs given to its earlier renders). A node missing from the
+the module on the same channels read with OpenImageIO's Python module, on synthetic plates and
+on the bundled crossing shot; temporal nodes over a three-frame shot, through nprfx.Node with a
+fetch callable and, where a node fetches only the past, also with no callable (the inputs given
+to its earlier renders). A node missing from the
 table below fails the test, so a new node needs a line here.
 usage: python3 test_nodes.py NPRFX WORK_DIR (PYTHONPATH: the build's python/ folder)"""
 import json
