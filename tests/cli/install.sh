@@ -142,7 +142,8 @@ done
 check "the installed runner lists threshold-map" sh -c "'$P/bin/nprfx' list | grep -q threshold-map"
 
 # ---- the Python module, where the prefix's interpreter looks (when the build has it) -----------
-PY=$(cache Python3_EXECUTABLE)
+# the interpreter the build found (FindPython keeps it in an internal cache entry)
+PY=$(cache _Python3_EXECUTABLE); [ -n "$PY" ] || PY=$(cache Python3_EXECUTABLE); PY=${PY:-python3}
 if [ -n "$(find "$BUILD/python" -name 'nprfx*.so' 2>/dev/null)" ]; then
   mod=$(find "$P/lib" -path '*/python3.*/*-packages/nprfx*.so' | head -n 1)
   [ -n "$mod" ] && pass || fail "the Python module was not installed under $P/lib/python3.X"
