@@ -46,6 +46,9 @@ typedef struct cn_cache {
     int64_t result_frame;
     uint64_t result_key, result_fp;
     int has_result;
+    /* what the frames a render reads depend on, as the last render had it (cn_span_key) */
+    uint64_t span_key;
+    int have_span_key;
 } cn_cache;
 
 #define CN_HASH_INIT 0xcbf29ce484222325ull

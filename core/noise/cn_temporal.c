@@ -355,6 +355,53 @@ static void cn_span(const nprfx_coherent_noise_params *np, int64_t t, int first,
     *last = l;
 }
 
+/* What decides which frames a render reads from a warm cache: the params the pass states and
+ * their span depend on, the inputs connected (channels: 0 where not), the shot. A render stores
+ * it; nprfx_coherent_noise_frames trusts the cache only when its own is the same. */
+static uint64_t cn_span_key(const nprfx_coherent_noise_params *np, const int *channels,
+                            int first_frame, int last_frame)
+{
+    uint64_t k = CN_HASH_INIT;
+    k = internal_cn_hash_f64(k, np->alpha);
+    k = internal_cn_hash_f64(k, np->epsilon);
+    k = internal_cn_hash_i64(k, np->noise);
+    k = internal_cn_hash_f64(k, np->sigma_lo);
+    k = internal_cn_hash_f64(k, np->sigma_hi);
+    k = internal_cn_hash_i64(k, np->channels);
+    k = internal_cn_hash_i64(k, np->seed);
+    k = internal_cn_hash_i64(k, np->mode);
+    k = internal_cn_hash_i64(k, np->start);
+    k = internal_cn_hash_i64(k, np->window);
+    k = internal_cn_hash_i64(k, np->cache_mb);
+    k = internal_cn_hash_f64(k, np->min_confidence);
+    /* which inputs are connected (not their channel counts, which a host may give otherwise
+     * at render) */
+    for (int i = 0; i < IN_COUNT; i++)
+        k = internal_cn_hash_i64(k, channels && channels[i] > 0);
+    k = internal_cn_hash_i64(k, first_frame);
+    return internal_cn_hash_i64(k, last_frame);
+}
+
+/* The saved forward state a render at t would step from (its frame in *from), when the cache in
+ * state was made for the same span key and the pass starts where t's span does: a render in order
+ * then reads its inputs from there on only. */
+static int cn_warm_from(const void *state, uint64_t key, int64_t start, int64_t t, int64_t *from)
+{
+    cn_cache *c = (cn_cache *)state; /* its lock is taken, nothing else changed */
+    int warm = 0;
+    pthread_mutex_lock(&c->lock);
+    cn_pass *ps = &c->pass[0];
+    if (c->have_span_key && c->span_key == key && ps->valid && ps->origin == start) {
+        const cn_slot *s = internal_cn_pass_nearest(ps, t);
+        if (s) {
+            *from = s->frame;
+            warm = 1;
+        }
+    }
+    pthread_mutex_unlock(&c->lock);
+    return warm;
+}
+
 double nprfx_coherent_noise_state_bytes(const nprfx_coherent_noise_params *np, int width,
                                         int height, int source_channels, int first_frame,
                                         int last_frame)
@@ -388,6 +435,33 @@ int nprfx_coherent_noise_frames(const nprfx_coherent_noise_params *np, const npr
     cn_span(np, t, q->first_frame, q->last_frame, &start, &last);
     int symmetric = np->mode == NPRFX_CN_MODE_SYMMETRIC;
     int input_noise = np->noise == NPRFX_CN_NOISE_INPUT;
+    /* A warm cache steps on from its last state s <= t: the steps s+1..t read depth at h and h-1
+     * (s: the kept depth, or a fetch), the rest at h; the check of frame t reads t. The origin
+     * (and its fingerprint) is read only by a cold pass. */
+    int64_t from;
+    if (q->state && t >= start &&
+        cn_warm_from(q->state, cn_span_key(np, q->input_channels, q->first_frame, q->last_frame),
+                     start, t, &from)) {
+        switch (input) {
+        case IN_DEPTH:
+        case IN_CONFIDENCE:
+            ranges[0].first = (int)from;
+            ranges[0].last = (int)(symmetric ? last : t);
+            return 1;
+        case IN_MOTION_PREV:
+        case IN_ZVEL:
+            ranges[0].first = (int)(from < t ? from + 1 : t);
+            ranges[0].last = (int)(input == IN_ZVEL && symmetric && last - 1 > t ? last - 1 : t);
+            return 1;
+        case IN_SOURCE:
+            if (!input_noise) break;
+            ranges[0].first = (int)(from < t ? from + 1 : t);
+            ranges[0].last = (int)(symmetric ? last : t);
+            return 1;
+        default:
+            break;
+        }
+    }
     /* Forward: the origin reads depth, motion_prev (its fingerprint) and source at start; each
      * step h in start+1..t reads depth at h and h-1, motion_prev, zvel and source at h. Backward
      * the same mirrored from last, with motion_next. */
@@ -627,6 +701,14 @@ nprfx_result nprfx_coherent_noise_render(const nprfx_render_args *args,
     }
     cn_copy_window(args, &cache->result, 0, 0.0f);
 unlock:
+    /* what the frames a next render reads depend on (nprfx_coherent_noise_frames) */
+    cache->have_span_key = r == NPRFX_OK;
+    if (r == NPRFX_OK) {
+        int ch[IN_COUNT];
+        for (int k = 0; k < IN_COUNT; k++)
+            ch[k] = in[k].data ? in[k].channels : 0;
+        cache->span_key = cn_span_key(np, ch, args->first_frame, args->last_frame);
+    }
     pthread_mutex_unlock(&cache->lock);
     nprfx_image_free(&run.unit_depth);
     return r;

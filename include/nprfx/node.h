@@ -125,6 +125,12 @@ typedef struct nprfx_frames_query {
     int time;                    /* the frame rendered */
     int first_frame, last_frame; /* the shot; last < first when unknown */
     const int *input_channels;   /* per input: its channel count, 0 when not connected */
+    /* The instance's state (what nprfx_render_args.state holds; NULL: none, or not asked). A
+     * node that keeps what earlier frames computed may answer with what it still has to read
+     * (coherent-noise rendered in order: the new frame, not the recursion from its start), so a
+     * host prepares no frame the render will not read. The caller keeps it from being freed or
+     * rendered into meanwhile. */
+    const void *state;
 } nprfx_frames_query;
 
 /* What a node keeps between calls depends on: the question desc->state_bytes answers. */

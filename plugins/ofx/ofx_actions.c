@@ -3,6 +3,7 @@
  * needed and the clip preferences, each answered from the node's descriptor and params as the
  * runner would decide them. */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -111,6 +112,13 @@ OfxStatus ofx_frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
             n = ofx_derive_frames(d, &inst->plan, values, &q, !inst->plan.count[main], r);
         set_frame_ranges(out_args, d, main, r, n);
     }
+    /* A stateful node answers with what its state still needs (coherent-noise rendered in
+     * order: the new frame, not the recursion from its start). The state is read only when no
+     * render holds it: a render may be fetching through the host, which may ask this on another
+     * thread; then the whole span, as for a fresh instance. */
+    int locked = (d->flags & NPRFX_NODE_STATEFUL) && !inst->derive &&
+                 pthread_mutex_trylock(&inst->lock) == 0;
+    q.state = locked ? inst->state : NULL;
     for (int k = 0; k < d->num_inputs && !inst->derive; k++) {
         if (!inst->clips[k] || !channels[k]) continue;
         nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
@@ -127,6 +135,7 @@ OfxStatus ofx_frames_needed(ofx_instance *inst, OfxPropertySetHandle in_args,
         }
         set_frame_ranges(out_args, d, k, r, n);
     }
+    if (locked) pthread_mutex_unlock(&inst->lock);
     if (inst->mask && ofx_clip_connected(inst->mask)) {
         double r[2] = {t, t};
         set_clip_rect(out_args, kOfxImageClipPropFrameRangePrefix, NPRFX_OFX_MASK_CLIP, r, 2);

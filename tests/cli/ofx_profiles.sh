@@ -19,6 +19,10 @@
 #     and the coverage in A (the test host reads A back as the coverage channel), and its
 #     'export' files (CSV and SVG, absolute paths) are written by the plug-in byte-identical to
 #     the runner's.
+#  5. natron: coherent-noise rendered in order declares, after its first frame, only what its
+#     state still needs (depth at t-1 and t, the motion at t), not the recursion from the shot's
+#     start, and renders the runner's pixels (the host refuses any fetch outside what was
+#     declared).
 # Against an adapter that declares frames it does not read, or that lacks message suite 2, 8/16-
 # bit images, refusals at load, 5-channel output or exports, parts fail: that is what they test.
 #
@@ -227,6 +231,30 @@ for profile in strict natron; do
     done
   done
 done
+
+# --- 5. coherent-noise in order: the host prepares the new frame, not the whole past ----------
+C=$W/cn_order
+mkdir -p "$C"
+cat > "$C/cn.json" <<G
+{"frames": "1-24", "nodes": {
+ "plate": {"node": "synth", "scene": "orbit", "size": "64x48"},
+ "noise": {"node": "coherent-noise", "inputs": {"depth": "plate", "motion_prev": "plate"}, "params": {"seed": 4}},
+ "w": {"node": "write", "inputs": {"image": "noise"}, "path": "noise.####.exr"}}}
+G
+"$NPRFX" run "$C/cn.json" --output-dir "$C/direct" --quiet || fail "coherent-noise: direct render"
+if NPRFX_OFXTEST_FRAMES_LOG=$C/frames.log ofx "$C/cn.json" --profile natron --output-dir "$C/natron" \
+     --quiet --threads 2 2> "$C/natron.log"; then
+  bad=0
+  for f in $(seq -f %04g 1 24); do same "$C/direct/noise.$f.exr" "$C/natron/noise.$f.exr" || bad=1; done
+  [ $bad -eq 0 ] && pass || fail "coherent-noise under natron in order differs from the runner"
+  # every declaration after frame 1: at most 2 frames a clip (and frame 1 declared 1 frame)
+  wide=$(awk 'tolower($1) ~ /coherent/ && $3 >= 2 && $5 - $4 > 1' "$C/frames.log" | head -n 3)
+  total=$(awk 'tolower($1) ~ /coherent/ { n += $5 - $4 + 1 } END { print n + 0 }' "$C/frames.log")
+  if [ -z "$wide" ] && [ "$total" -gt 0 ] && [ "$total" -le $((24 * 2 * 2)) ]; then pass
+  else fail "coherent-noise in order declared more than its state needs (clip-frames declared: $total; e.g. $wide)"; fi
+else
+  fail "coherent-noise under natron: $(tail -n 2 "$C/natron.log" | tr '\n' ' ')"
+fi
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ] && [ $passes -gt 0 ]

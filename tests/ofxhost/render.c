@@ -467,6 +467,18 @@ static nprfx_result query_regions(node_inst *ni, const nprfx_render_args *a)
             goto done;
         }
     }
+    /* $NPRFX_OFXTEST_FRAMES_LOG: every declaration, a line a pair ("ID CLIP TIME LO HI"), for
+     * tests of how much a plug-in makes a host prepare */
+    const char *log = getenv("NPRFX_OFXTEST_FRAMES_LOG");
+    FILE *lf = log && *log ? fopen(log, "a") : NULL;
+    for (int k = 0; lf && k < d->num_inputs; k++) {
+        const hframes *f = &ni->frames[k];
+        if (!a->inputs[k].data) continue;
+        ofx_names_clip_name(d, k, name, sizeof name);
+        for (int j = 0; j < f->ndecl; j++)
+            fprintf(lf, "%s %s %g %g %g\n", id, name, a->time, f->decl[2 * j], f->decl[2 * j + 1]);
+    }
+    if (lf) fclose(lf);
 done:
     internal_props_free(&in);
     internal_props_free(&out);

@@ -35,6 +35,10 @@ typedef struct scene {
     double theta, zs;   /* rotate: rad/frame; zoom: scale/frame */
     unsigned connected; /* bit per input */
     long long fetches;  /* calls to scene_fetch */
+    /* when declared_on: the frames declared per input, and the fetches outside them */
+    int declared_on;
+    nprfx_frame_range declared[IN_COUNT];
+    long long outside;
     nprfx_context *ctx;
     nprfx_image arena[ARENA_MAX];
     int narena;
@@ -107,6 +111,8 @@ static nprfx_result scene_fetch(void *user, int input, double time, nprfx_image 
     int f = (int)floor(time + 0.5);
     s->fetches++;
     if (!(s->connected & (1u << input))) return NPRFX_ERR_MISSING_INPUT;
+    if (s->declared_on && (f < s->declared[input].first || f > s->declared[input].last))
+        s->outside++;
     if (s->kind == SC_SYNTH) {
         const nprfx_image *pl = synth_plate(s, f);
         if (!pl) return NPRFX_ERR_IO;
@@ -1040,6 +1046,65 @@ static void test_cost(nprfx_context *ctx)
     nprfx_image_free(&o);
 }
 
+/* What a host prepares: with the instance's state, rendering in order, frame t reads depth at
+ * t-1 and t and motion at t (the recursion steps on from its last state); without it, or once the
+ * params change, the recursion from its start. Every fetch lies in what was declared. */
+static void test_frames_warm(nprfx_context *ctx)
+{
+    enum { W = 12, H = 10, LAST = 30 };
+    scene s;
+    memset(&s, 0, sizeof s);
+    s.kind = SC_TRANSLATE;
+    s.W = W;
+    s.H = H;
+    s.vx = 0.37;
+    s.vy = 0.23;
+    s.connected = (1u << IN_DEPTH) | (1u << IN_MPREV);
+    nprfx_value pv[32];
+    defaults(pv);
+    nprfx_image o;
+    nprfx_image_alloc(ctx, nprfx_rect_make(0, 0, W, H), 1, &o);
+    void *state = NULL;
+    int ich[IN_COUNT] = {1, 2, 0, 0, 0, 0}, bad = 0, narrow = 0;
+    for (int t = 1; t <= LAST; t++) {
+        nprfx_frames_query cold = {t, 1, LAST, ich, NULL}, warm = {t, 1, LAST, ich, state};
+        nprfx_frame_range c[NPRFX_MAX_FRAME_RANGES], d[NPRFX_MAX_FRAME_RANGES];
+        int nc = 0, nd = 0;
+        CHECK_OK(nprfx_node_frames_needed(ctx, node, pv, &cold, IN_DEPTH, c, &nc));
+        CHECK_OK(nprfx_node_frames_needed(ctx, node, pv, &warm, IN_DEPTH, d, &nd));
+        s.declared[IN_DEPTH] = d[0];
+        CHECK_OK(nprfx_node_frames_needed(ctx, node, pv, &warm, IN_MPREV, d, &nd));
+        s.declared[IN_MPREV] = d[0];
+        if (nc != 1 || c[0].first != 1 || c[0].last != t) bad++;
+        if (t >= 2 && s.declared[IN_DEPTH].first == t - 1 && s.declared[IN_DEPTH].last == t &&
+            s.declared[IN_MPREV].first == t && s.declared[IN_MPREV].last == t)
+            narrow++;
+        s.declared_on = 1;
+        CHECK_OK(render_full(&s, ctx, pv, t, 1, LAST, &state, &o));
+        s.declared_on = 0;
+    }
+    CHECK(bad == 0);
+    CHECK(narrow == LAST - 1);
+    CHECK(s.outside == 0);
+    /* another seed: the cache is not for it, so the whole recursion again */
+    set_param(pv, "seed", 7);
+    nprfx_frames_query q = {LAST + 0, 1, LAST, ich, state};
+    nprfx_frame_range r[NPRFX_MAX_FRAME_RANGES];
+    int nr = 0;
+    CHECK_OK(nprfx_node_frames_needed(ctx, node, pv, &q, IN_DEPTH, r, &nr));
+    CHECK(nr == 1 && r[0].first == 1 && r[0].last == LAST);
+    /* a frame out of order (back to 5): from the nearest state before it */
+    defaults(pv);
+    q.time = 5;
+    CHECK_OK(nprfx_node_frames_needed(ctx, node, pv, &q, IN_DEPTH, r, &nr));
+    printf("frames declared: cold 1-t; in order warm depth t-1..t, motion t (%d of %d frames); "
+           "back to 5 after 30: depth %d-%d\n",
+           narrow, LAST - 1, r[0].first, r[0].last);
+    CHECK(nr == 1 && r[0].first >= 1 && r[0].first <= 5 && r[0].last == 5);
+    state_release(&state);
+    nprfx_image_free(&o);
+}
+
 static void test_errors(nprfx_context *ctx)
 {
     scene s;
@@ -1088,6 +1153,7 @@ int main(void)
     test_one_step_by_hand(ctx);
     test_symmetric_by_hand(ctx);
     test_errors(ctx);
+    test_frames_warm(ctx);
     test_cost(ctx);
     test_bilinear_fades(ctx);
     test_paths_agree(ctx);
