@@ -33,6 +33,7 @@
 #include "graph_write_jobs.h"
 #include "graph_read.h"
 #include "graph_names.h"
+#include "graph_knobs.h"
 #include "nprfx/io.h"
 #include "nprfx/nprfx.h"
 #include "nprfx/seq.h"
@@ -468,6 +469,11 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
             r = nprfx_error(ctx, NPRFX_ERR_PARSE, "top-level entry 'nodes' is given twice");
             goto done;
         }
+        if (!strcmp(e->key, "comment") && json_is(e, INTERNAL_JSON_STRING) && !g->comment &&
+            !(g->comment = engine_strdup(e->string))) {
+            r = nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+            goto done;
+        }
         if (!strcmp(e->key, "nodes") || !strcmp(e->key, "comment")) continue;
         /* A key given twice is ambiguous (JSON leaves it to the reader): refuse it rather than
          * take one silently. */
@@ -497,10 +503,12 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
                 goto done;
             }
             g->design_width = e->number;
+        } else if (!strcmp(e->key, "knobs")) {
+            if ((r = internal_graph_knobs_parse(g, e))) goto done;
         } else {
             r = nprfx_error(ctx, NPRFX_ERR_PARSE,
                             "unexpected top-level entry '%s' (expected frames, nodes, ocio, "
-                            "format, design_width)",
+                            "format, design_width, knobs)",
                             e->key);
             goto done;
         }
@@ -556,6 +564,7 @@ nprfx_result nprfx_graph_parse(nprfx_context *ctx, const char *json, const char 
     if (!r) r = internal_graph_check_limits(g);
     if (!r) r = nprfx_image_limit(ctx, &g->mem_limit);
     g->visible = g->count;
+    if (!r) r = internal_graph_knobs_check(g);
     if (!r) r = add_fallback_flows(g);
 done:
     internal_json_free(root);
@@ -654,6 +663,8 @@ void nprfx_graph_free(nprfx_graph *g)
     free(g->out_dir);
     free(g->ocio);
     free(g->fmt_text);
+    free(g->comment);
+    internal_graph_knobs_free(g);
     free(g);
 }
 
@@ -668,6 +679,8 @@ nprfx_result nprfx_graph_set(nprfx_graph *g, const char *assignment)
     char name[256], key[256];
     snprintf(name, sizeof name, "%.*s", (int)(dot - assignment), assignment);
     snprintf(key, sizeof key, "%.*s", (int)(eq - dot - 1), dot + 1);
+    /* NODE with * (a knob such as strokes*.radius): every processing node it matches */
+    if (strchr(name, '*')) return internal_graph_set_matching(g, name, key, eq + 1);
     int i = internal_graph_find_node(g, name);
     if (i < 0)
         return nprfx_error(g->ctx, NPRFX_ERR_UNKNOWN_NODE, "--set: the graph has no node '%s'",

@@ -122,7 +122,11 @@ struct nprfx_graph {
     char *base_dir, *out_dir, *ocio;
     char *fmt_text;      /* "format": "WxH" for graphs without inputs */
     double design_width; /* "design_width": the plate width its pixel params are for; 0: none */
-    int *name_slots;     /* hash index of node names (graph_names.c) */
+    char *comment;       /* "comment": what the graph makes, for help texts; NULL: none */
+    char **knobs;        /* "knobs": the params worth turning, "NODE.PARAM" (graph_knobs.c) */
+    char **knob_help;    /* per knob: the graph's words on it, or NULL */
+    int nknobs;
+    int *name_slots; /* hash index of node names (graph_names.c) */
     size_t name_nslots;
     centry *head, *tail;
     centry **cache_slots; /* hash table of the entries (graph_cache.c) */

@@ -47,6 +47,13 @@ int internal_py_take_params(nprfx_context *ctx, const nprfx_node_desc *node, PyO
  * by commas, anything else as str() gives it. New reference, NULL with the error raised. */
 PyObject *internal_py_value_text(PyObject *value);
 
+/* A param's value as Python sees it: a number, a bool, a choice's name, a colour's tuple, a
+ * string. */
+PyObject *internal_py_param_value(const nprfx_param_desc *p, const nprfx_value *v);
+/* A param's description from its descriptor (nodes()'s params): name, label, help, type,
+ * default, min, max, soft_min, soft_max, choices. */
+PyObject *internal_py_param_info(const nprfx_param_desc *p);
+
 /* Module parts. */
 extern PyTypeObject internal_py_node_type;
 extern PyTypeObject internal_py_graph_type;

@@ -387,6 +387,30 @@ done:
     return out;
 }
 
+/* knobs(): the graph's knobs (its "knobs": the params worth turning), with the graph's words on
+ * each, the param's description and its value in the graph. */
+static PyObject *graph_knobs(py_graph *s, PyObject *noargs)
+{
+    (void)noargs;
+    if (graph_ready(s)) return NULL;
+    PyObject *l = PyList_New(0);
+    for (int i = 0; l && i < nprfx_graph_knob_count(s->g); i++) {
+        nprfx_graph_knob_info k = {sizeof k};
+        if (nprfx_graph_knob(s->g, i, &k)) {
+            Py_DECREF(l);
+            return internal_py_raise(s->env.ctx);
+        }
+        PyObject *help = k.help ? PyUnicode_FromString(k.help) : (Py_INCREF(Py_None), Py_None);
+        PyObject *rec = internal_py_namespace(Py_BuildValue(
+            "{s:s,s:N,s:s,s:s,s:i,s:N,s:N}", "name", k.name, "help", help, "node", k.node, "type",
+            k.desc->id, "nodes", k.nodes, "param", internal_py_param_info(k.param), "value",
+            internal_py_param_value(k.param, k.value)));
+        if (!rec || PyList_Append(l, rec)) Py_CLEAR(l);
+        Py_XDECREF(rec);
+    }
+    return l;
+}
+
 /* eval(node, frame): a node's result at frame, as an array, nothing written. */
 static PyObject *graph_eval(py_graph *s, PyObject *args)
 {
@@ -421,6 +445,9 @@ static PyMethodDef graph_methods[] = {
     {"run", (PyCFunction)(void (*)(void))graph_run, METH_VARARGS | METH_KEYWORDS,
      "run(frames=None, shot=None, progress=None, keep_going=False, serial=False, analysis=None):"
      " render the frames as `nprfx run` does; returns per-frame records and the costs."},
+    {"knobs", (PyCFunction)graph_knobs, METH_NOARGS,
+     "knobs() -> list: the graph's knobs, the params worth turning (name as set() takes it, the "
+     "graph's help, the first node it sets and how many, the param's description, its value)."},
     {"eval", (PyCFunction)graph_eval, METH_VARARGS,
      "eval(node, frame) -> numpy.ndarray: a node's result at frame, nothing written."},
     {NULL, NULL, 0, NULL}};

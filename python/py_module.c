@@ -17,27 +17,16 @@ static PyObject *str_or_none(const char *s)
     Py_RETURN_NONE;
 }
 
-/* A param's default as Python sees it: a number, a bool, a choice's name, a colour's tuple, a
- * string. */
 static PyObject *param_default(const nprfx_param_desc *p)
 {
-    switch (p->type) {
-    case NPRFX_PARAM_BOOL:
-        return PyBool_FromLong(p->def[0] != 0.0);
-    case NPRFX_PARAM_INT:
-        return PyLong_FromDouble(p->def[0]);
-    case NPRFX_PARAM_CHOICE:
-        return str_or_none(p->choices ? p->choices[(int)p->def[0]] : NULL);
-    case NPRFX_PARAM_COLOR:
-        return Py_BuildValue("(dddd)", p->def[0], p->def[1], p->def[2], p->def[3]);
-    case NPRFX_PARAM_STRING:
-        return PyUnicode_FromString(p->def_string ? p->def_string : "");
-    default:
-        return PyFloat_FromDouble(p->def[0]);
-    }
+    nprfx_value v;
+    memset(&v, 0, sizeof v);
+    memcpy(v.v, p->def, sizeof v.v);
+    v.s = p->def_string ? p->def_string : "";
+    return internal_py_param_value(p, &v);
 }
 
-static PyObject *param_info(const nprfx_param_desc *p)
+PyObject *internal_py_param_info(const nprfx_param_desc *p)
 {
     PyObject *choices = NULL;
     if (p->choices) {
@@ -77,7 +66,7 @@ static PyObject *node_info(const nprfx_node_desc *d)
         Py_XDECREF(v);
     }
     for (int i = 0; params && i < d->num_params; i++) {
-        PyObject *v = param_info(&d->params[i]);
+        PyObject *v = internal_py_param_info(&d->params[i]);
         if (!v || PyDict_SetItemString(params, d->params[i].name, v)) Py_CLEAR(params);
         Py_XDECREF(v);
     }

@@ -209,3 +209,27 @@ int internal_py_take_params(nprfx_context *ctx, const nprfx_node_desc *node, PyO
     }
     return 0;
 }
+
+PyObject *internal_py_param_value(const nprfx_param_desc *p, const nprfx_value *v)
+{
+    switch (p->type) {
+    case NPRFX_PARAM_BOOL:
+        return PyBool_FromLong(v->v[0] != 0.0);
+    case NPRFX_PARAM_INT:
+        return PyLong_FromDouble(v->v[0]);
+    case NPRFX_PARAM_CHOICE: {
+        int n = 0;
+        while (p->choices && p->choices[n])
+            n++;
+        int c = (int)v->v[0];
+        if (c >= 0 && c < n) return PyUnicode_FromString(p->choices[c]);
+        Py_RETURN_NONE;
+    }
+    case NPRFX_PARAM_COLOR:
+        return Py_BuildValue("(dddd)", v->v[0], v->v[1], v->v[2], v->v[3]);
+    case NPRFX_PARAM_STRING:
+        return PyUnicode_FromString(v->s ? v->s : "");
+    default:
+        return PyFloat_FromDouble(v->v[0]);
+    }
+}

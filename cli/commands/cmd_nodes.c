@@ -4,7 +4,10 @@
 #include <string.h>
 
 #include "commands.h"
+#include "nprfx/graph.h"
+#include "nprfx/io_oiio.h"
 #include "nprfx/nprfx.h"
+#include "util/cli_util.h"
 
 /* Print text wrapped at `width` columns, each line indented by `indent`; blank lines in the
  * text separate paragraphs; lines starting with two spaces are kept verbatim (formulas). */
@@ -208,15 +211,60 @@ int cli_cmd_list(int argc, char **argv)
     return 0;
 }
 
+/* A graph file's help: its comment, its shot, and its knobs (the params worth turning) with
+ * their values there, types, ranges and help from the descriptors. */
+static int print_graph(const char *path)
+{
+    cli_env env;
+    if (cli_env_init(&env, 1)) return 1;
+    nprfx_graph_options opt = {sizeof opt, 0, 0, NULL, NULL};
+    opt.io = nprfx_io_oiio();
+    nprfx_graph *g = NULL;
+    if (nprfx_graph_load(env.ctx, path, &opt, &g)) {
+        fprintf(stderr, "nprfx help: %s\n", cli_message(env.ctx));
+        cli_env_free(&env);
+        return 2;
+    }
+    printf("%s\n", path);
+    const char *comment = nprfx_graph_comment(g);
+    if (comment) print_wrapped(stdout, comment, 2, 96);
+    int first, last;
+    if (nprfx_graph_shot(g, &first, &last)) printf("\nShot: frames %d-%d", first, last);
+    if (nprfx_graph_design_width(g) > 0)
+        printf("; params set for plates %g pixels wide", nprfx_graph_design_width(g));
+    printf("\n\nKnobs (set with 'nprfx run %s --set KNOB=VALUE'):\n", path);
+    if (!nprfx_graph_knob_count(g)) printf("  none listed (\"knobs\" in the graph file)\n");
+    for (int i = 0; i < nprfx_graph_knob_count(g); i++) {
+        nprfx_graph_knob_info k = {sizeof k};
+        if (nprfx_graph_knob(g, i, &k)) continue;
+        char val[256], rng[256];
+        nprfx_param_format(k.param, k.value, val, sizeof val);
+        range_text(k.param, rng, sizeof rng);
+        printf("  %-24s %s, %s%s%s", k.name, nprfx_param_type_name(k.param->type), val,
+               rng[0] ? "; " : "", rng);
+        if (k.nodes > 1) printf(" (%d nodes)", k.nodes);
+        printf("\n");
+        if (k.help) print_wrapped(stdout, k.help, 27, 96);
+        if (k.param->help) print_wrapped(stdout, k.param->help, 27, 96);
+    }
+    nprfx_graph_free(g);
+    cli_env_free(&env);
+    return 0;
+}
+
 int cli_cmd_help(int argc, char **argv)
 {
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
-        printf("usage: nprfx help NODE\n\nDocuments a node: what it does, its inputs with the AOV "
-               "channels it looks for, and every param with its type, default and range.\n"
-               "'nprfx list' lists the nodes.\n");
+        printf("usage: nprfx help NODE\n       nprfx help GRAPH.json\n\nDocuments a node: what "
+               "it does, its inputs with the AOV channels it looks for, and every param with its "
+               "type, default and range ('nprfx list' lists the nodes). Or a graph file: what it "
+               "makes, its shot, and its knobs, the params worth turning, with their values "
+               "there and their ranges.\n");
         return argc < 2 ? 2 : 0;
     }
     const nprfx_node_desc *d = nprfx_node_find(argv[1]);
+    size_t len = strlen(argv[1]);
+    if (!d && len > 5 && !strcmp(argv[1] + len - 5, ".json")) return print_graph(argv[1]);
     if (!d) {
         fprintf(stderr, "nprfx help: unknown node '%s' (nprfx list shows the nodes)\n", argv[1]);
         return 2;

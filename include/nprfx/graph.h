@@ -271,6 +271,25 @@ typedef struct nprfx_graph_node_info {
     int file_channels;
 } nprfx_graph_node_info;
 
+/* One of the graph's knobs: the params worth turning its author lists ("knobs": ["light.out_low",
+ * "strokes*.orientation", ...]; * matches any part of node names, and one knob sets every node it
+ * matches). Pointers are the graph's, valid while it lives and until nprfx_graph_set. */
+typedef struct nprfx_graph_knob_info {
+    size_t size;                   /* sizeof(nprfx_graph_knob_info), set by the caller */
+    const char *name;              /* as the graph gives it: "strokes*.orientation" */
+    const char *help;              /* the graph's words on what it does in this look, or NULL */
+    const char *node;              /* the first node it sets */
+    const nprfx_node_desc *desc;   /* that node's descriptor */
+    const nprfx_param_desc *param; /* the param's descriptor: type, ranges, help */
+    const nprfx_value *value;      /* its value on that node */
+    int nodes;                     /* how many nodes it sets */
+} nprfx_graph_knob_info;
+
+/* The graph file's "comment" (what it makes, how to use it), or NULL. */
+NPRFX_API const char *nprfx_graph_comment(const nprfx_graph *g);
+NPRFX_API int nprfx_graph_knob_count(const nprfx_graph *g);
+NPRFX_API nprfx_result nprfx_graph_knob(const nprfx_graph *g, int i, nprfx_graph_knob_info *out);
+
 NPRFX_API int nprfx_graph_node_count(const nprfx_graph *g);
 /* The index of node `name`, or -1. */
 NPRFX_API int nprfx_graph_node_index(const nprfx_graph *g, const char *name);

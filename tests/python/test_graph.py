@@ -68,6 +68,17 @@ for f in (1, 2, 3, 4):
 e = g.eval('out', 3)
 check(np.array_equal(e[:, :, 0], pixels('runner/look.0003.exr')[:, :, 0]), 'eval differs')
 
+# knobs: the graph's params worth turning, with its words and the param's description
+src = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+hatching = nprfx.Graph.load(os.path.join(src, 'samples', 'graphs', 'cross_hatching.json'))
+knobs = {k.name: k for k in hatching.knobs()}
+k = knobs.get('strokes*.frequency')
+check(k is not None and k.nodes == 2 and k.help == 'stroke spacing' and k.type == 'gabor-splat'
+      and k.param.name == 'frequency' and k.param.max > k.param.min, 'knob: %s' % k)
+hatching.set('strokes*.frequency', 0.25)
+check({x.name: x.value for x in hatching.knobs()}['strokes*.frequency'] == 0.25,
+      'set through a knob did not change it')
+
 # a progress callable that raises stops the run, and its exception reaches the caller
 class Stop(Exception):
     pass
