@@ -72,10 +72,12 @@ nprfx_result internal_graph_knobs_parse(nprfx_graph *g, const internal_json *e)
                                "knobs: entry %d is not \"NODE.PARAM\" or {\"param\": "
                                "\"NODE.PARAM\", \"help\": \"...\"}",
                                g->nknobs + 1);
-        if (!(g->knobs[g->nknobs] = engine_strdup(param->string)) ||
-            (help && !(g->knob_help[g->nknobs] = engine_strdup(help->string))))
+        const int n = g->nknobs;
+        if (!(g->knobs[n] = engine_strdup(param->string)))
             return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
-        g->nknobs++;
+        g->nknobs++; /* freed with the graph from here on */
+        if (help && !(g->knob_help[n] = engine_strdup(help->string)))
+            return nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
     }
     return NPRFX_OK;
 }
