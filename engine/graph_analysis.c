@@ -367,3 +367,11 @@ int nprfx_graph_analysis_stale(const nprfx_graph *g)
 {
     return g->analysis_stale;
 }
+
+int nprfx_graph_measuring_nodes(const nprfx_graph *g)
+{
+    int n = 0;
+    for (int i = 0; g && i < g->visible; i++)
+        n += g->nodes[i].kind == GK_NODE && nprfx_node_measures_shot(g->nodes[i].desc);
+    return n;
+}

@@ -239,14 +239,7 @@ static PyObject *graph_check(py_graph *s, PyObject *args, PyObject *kw)
  * file's own when it is there), as `nprfx run` seeds them. */
 static int graph_seed(py_graph *s, const char *analysis)
 {
-    int any = 0;
-    for (int i = 0; i < nprfx_graph_node_count(s->g); i++) {
-        nprfx_graph_node_info info = {sizeof info};
-        if (!nprfx_graph_node(s->g, i, &info) && info.kind == NPRFX_GRAPH_NODE &&
-            nprfx_node_measures_shot(info.desc))
-            any = 1;
-    }
-    if (!any || (analysis && !strcmp(analysis, "off"))) return 0;
+    if (!nprfx_graph_measuring_nodes(s->g) || (analysis && !strcmp(analysis, "off"))) return 0;
     char path[8192];
     if (analysis) {
         snprintf(path, sizeof path, "%s", analysis);
@@ -260,6 +253,11 @@ static int graph_seed(py_graph *s, const char *analysis)
         char msg[4096], note[4200];
         nprfx_context_last_error(s->env.ctx, msg, sizeof msg);
         snprintf(note, sizeof note, "warning: %s: measuring the shot in this run", msg);
+        graph_notice(s, note);
+    } else if (seeded) { /* as the runner says it */
+        char note[8400];
+        snprintf(note, sizeof note, "note: the shot statistics of %d node%s from %s", seeded,
+                 seeded == 1 ? "" : "s", path);
         graph_notice(s, note);
     }
     return 0;

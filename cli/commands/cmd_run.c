@@ -265,14 +265,7 @@ static int seed_graph(nprfx_context *ctx, nprfx_graph *g, const char *graph_path
                       const run_opts *ro)
 {
     char path[8192];
-    int any = 0;
-    for (int i = 0; i < nprfx_graph_node_count(g); i++) {
-        nprfx_graph_node_info info = {sizeof info};
-        if (!nprfx_graph_node(g, i, &info) && info.kind == NPRFX_GRAPH_NODE &&
-            nprfx_node_measures_shot(info.desc))
-            any = 1;
-    }
-    if (!any || (ro->analysis && !strcmp(ro->analysis, "off"))) return 0;
+    if (!nprfx_graph_measuring_nodes(g) || (ro->analysis && !strcmp(ro->analysis, "off"))) return 0;
     if (ro->analysis)
         snprintf(path, sizeof path, "%s", ro->analysis);
     else {

@@ -230,16 +230,11 @@ int farm_prepare(cli_env *env, const char *cmd, const farm_graph_args *a, int ch
     }
     /* Shot statistics: the analysis job measures them once, every chunk reads them. */
     job->analysis[0] = 0;
-    for (int i = 0; i < nprfx_graph_node_count(g); i++) {
-        nprfx_graph_node_info info = {sizeof info};
-        if (nprfx_graph_node(g, i, &info) || info.kind != NPRFX_GRAPH_NODE ||
-            !nprfx_node_measures_shot(info.desc))
-            continue;
+    if (nprfx_graph_measuring_nodes(g)) {
         char path[4096];
         nprfx_graph_analysis_path(g, job->graph, path, sizeof path);
         snprintf(job->analysis, sizeof job->analysis, "%s%s%s", path[0] == '/' ? "" : job->workdir,
                  path[0] == '/' ? "" : "/", path);
-        break;
     }
     job->nframes = fl.count;
     if (!(job->frames = farm_frames_spec(fl.frames, fl.count)) ||

@@ -185,6 +185,9 @@ NPRFX_API nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int fr
  * at the shot's first frame, so that each state holds its measurement; *measured (may be NULL)
  * receives how many hold one. The graph needs a shot ("frames" or nprfx_graph_set_shot). */
 NPRFX_API nprfx_result nprfx_graph_analyze(nprfx_graph *g, int *measured);
+/* How many of the graph's nodes measure over the shot (nprfx_node_measures_shot): 0 means an
+ * analysis has nothing to store or seed. */
+NPRFX_API int nprfx_graph_measuring_nodes(const nprfx_graph *g);
 /* Write what those states hold to `path` (JSON, under a temporary name then renamed), with the
  * shot and a fingerprint of every read node's files over it (sizes and times; no pixel). */
 NPRFX_API nprfx_result nprfx_graph_analysis_save(nprfx_graph *g, const char *path);
