@@ -181,4 +181,68 @@ static inline int ofx_names_selector_default(const nprfx_input_desc *in)
     return 0;
 }
 
+/* ---- look plug-ins: a graph file as one effect ---------------------------------------------- */
+
+#define NPRFX_OFX_LOOK_PREFIX NPRFX_OFX_ID_PREFIX "look."
+
+/* Words joined in CamelCase: "cross_hatching" -> "CrossHatching", "motion_prev" -> "MotionPrev". */
+static inline void ofx_names_camel(const char *s, char *buf, size_t n)
+{
+    size_t j = 0;
+    int up = 1;
+    for (; s && *s && j + 1 < n; s++) {
+        if (!isalnum((unsigned char)*s)) {
+            up = 1;
+            continue;
+        }
+        buf[j++] = up ? (char)toupper((unsigned char)*s) : *s;
+        up = 0;
+    }
+    if (n) buf[j] = 0;
+}
+
+/* A look's identifier from its graph file's name without ".json": "toon" -> "org.nprfx.look.Toon". */
+static inline void ofx_names_look_id(const char *stem, char *buf, size_t n)
+{
+    char camel[NPRFX_OFX_NAME_MAX];
+    ofx_names_camel(stem, camel, sizeof camel);
+    snprintf(buf, n, "%s%.100s", NPRFX_OFX_LOOK_PREFIX, camel);
+}
+
+/* The clip that carries AOV `aov` (nprfx_aov_name's name, NULL: the whole file of a map) of read
+ * node `read`: for the look's first frame sequence ("main"), Source for the picture and the
+ * AOV's name in CamelCase for the others ("Depth", "MotionPrev"); for another read, its name in
+ * CamelCase before it ("Pam", "EnvDepth"). Coverage travels as Source's alpha. */
+static inline void ofx_names_look_clip(const char *read, int main, const char *aov, char *buf,
+                                       size_t n)
+{
+    char a[64] = "", r[64] = "";
+    int beauty = aov && !strcmp(aov, "beauty");
+    if (aov && !beauty) ofx_names_camel(aov, a, sizeof a);
+    if (!strcmp(a, "Uv")) snprintf(a, sizeof a, "UV");
+    if (!strcmp(a, "Id")) snprintf(a, sizeof a, "ID");
+    if (main) {
+        snprintf(buf, n, "%s", beauty ? NPRFX_OFX_SOURCE_CLIP : a);
+        return;
+    }
+    ofx_names_camel(read, r, sizeof r);
+    if (ofx_names_reserved_clip(r)) snprintf(r + strlen(r), sizeof r - strlen(r), "Map");
+    snprintf(buf, n, "%s%s", r, a);
+}
+
+/* A knob's param name: the graph's NODE.PARAM with every other character an underscore
+ * ("ink.width" -> "ink_width", "strokes*.radius" -> "strokes_radius"). */
+static inline void ofx_names_look_knob(const char *knob, char *buf, size_t n)
+{
+    size_t j = 0;
+    for (const char *s = knob; *s && j + 1 < n; s++) {
+        char c = isalnum((unsigned char)*s) ? *s : '_';
+        if (c == '_' && (j == 0 || buf[j - 1] == '_')) continue;
+        buf[j++] = c;
+    }
+    while (j > 0 && buf[j - 1] == '_')
+        j--;
+    if (n) buf[j] = 0;
+}
+
 #endif

@@ -15,6 +15,7 @@ struct nprfx_context {
     const nprfx_executor *executor;
     char *data_dir;
     const nprfx_flow_provider *flow;
+    void *front_end; /* nprfx_context_set_front_end: the root's */
     /* nprfx_context_set_memory_limit: the bound and what set it ("--mem-limit") */
     int have_memory_limit;
     uint64_t memory_limit;
@@ -132,6 +133,18 @@ const nprfx_flow_provider *nprfx_context_flow(const nprfx_context *ctx)
     while (ctx && ctx->parent)
         ctx = ctx->parent;
     return ctx ? ctx->flow : NULL;
+}
+
+void nprfx_context_set_front_end(nprfx_context *ctx, void *data)
+{
+    if (ctx) ctx->front_end = data;
+}
+
+void *nprfx_context_front_end(const nprfx_context *ctx)
+{
+    while (ctx && ctx->parent)
+        ctx = ctx->parent;
+    return ctx ? ctx->front_end : NULL;
 }
 
 const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx)

@@ -54,6 +54,12 @@ NPRFX_API const char *nprfx_context_data_dir(const nprfx_context *ctx);
 /* The flow provider given at creation (scoped contexts: their root's), or NULL. */
 NPRFX_API const nprfx_flow_provider *nprfx_context_flow(const nprfx_context *ctx);
 
+/* The front end's own data for callbacks that receive only a context (an nprfx_io a plug-in
+ * serves its host's images through; NULL: none). Set on a root context; scoped contexts give
+ * their root's. Not thread-safe against concurrent setting. */
+NPRFX_API void nprfx_context_set_front_end(nprfx_context *ctx, void *data);
+NPRFX_API void *nprfx_context_front_end(const nprfx_context *ctx);
+
 /* The executor given at creation (never NULL: a serial one when none was given). */
 NPRFX_API const nprfx_executor *nprfx_context_executor(const nprfx_context *ctx);
 

@@ -334,6 +334,47 @@ NPRFX_API nprfx_result nprfx_graph_motion_sources(nprfx_graph *g, int node, cons
                                                   const char *const *names, int nc, int *idx,
                                                   double *sign);
 
+/* ---- feeding a graph from elsewhere (a host's clips as its plates) -------------------------- */
+
+/* One read node and what the graph takes from it. */
+typedef struct nprfx_graph_source_info {
+    size_t size;      /* sizeof(nprfx_graph_source_info), set by the caller */
+    int node;         /* the read node's index */
+    const char *name; /* its name (the graph's string) */
+    int sequence;     /* 1: its path has frame tokens (the render's plates); 0: one file (a map) */
+    /* A bit (1u << aov) for every canonical AOV (nprfx/aov.h) the graph's inputs read from it,
+     * by selection ("plate:depth", "plate:beauty.RGB") or by their AOV hint; for a sequence also
+     * what stands in for a missing one (beauty always; depth for rest, uv and position). An
+     * input that takes the whole plate counts as beauty. */
+    unsigned aovs;
+    /* The first selection that names plate channels rather than an AOV ("plate:Vector.XY"):
+     * what only the renderer's own files can give; NULL when none. */
+    const char *raw;
+} nprfx_graph_source_info;
+
+/* The graph's read nodes, in graph order. */
+NPRFX_API int nprfx_graph_source_count(const nprfx_graph *g);
+NPRFX_API nprfx_result nprfx_graph_source(const nprfx_graph *g, int i,
+                                       nprfx_graph_source_info *out);
+/* AOV `aov` of read node `node`'s plate at `frame`, as an input that selects it by name receives
+ * it: in nprfx's conventions (motion in pixels, y down; ids decoded; depth as z), fallbacks
+ * applied. *out is allocated (free with nprfx_image_free). */
+NPRFX_API nprfx_result nprfx_graph_eval_aov(nprfx_graph *g, int node, int aov, int frame,
+                                            nprfx_image *out);
+
+/* The frames of AOV `aov` of read node `source` (-1: of any AOV: a read decodes every channel
+ * the graph wants of its file at each frame it reads) that evaluating node `node` at `frame`
+ * reads, as
+ * runs of frames within the shot (at most max; a last run covers what did not fit): each
+ * node's nprfx_node_frames_needed at each frame it is evaluated at, through the graph, with
+ * what the nodes' states already hold. `present`: the AOVs (bits) the source has; what an absent
+ * one is made of is read instead (the picture for albedo, light and motion: optical flow reads
+ * the neighbouring frame; depth for rest, uv and position). A front end that serves the plates
+ * declares these frames to its host (the OpenFX look plug-ins' frames needed). */
+NPRFX_API nprfx_result nprfx_graph_frames_read(nprfx_graph *g, int node, int frame, int source,
+                                               int aov, unsigned present,
+                                               nprfx_frame_range *ranges, int max, int *count);
+
 /* ---- checking and running a shot ------------------------------------------------------------ */
 
 /* Everything a render of `frames` would refuse before a pixel is read: a graph without a write

@@ -16,6 +16,7 @@
 #include "ofx_api.h"
 #include "ofx_describe.h"
 #include "ofx_instance.h"
+#include "ofx_look.h"
 #include "ofx_names.h"
 #include "ofx_render.h"
 #include "ofx_suites.h"
@@ -63,7 +64,7 @@ static OfxPluginEntryPoint *const entries[MAX_PLUGINS] = {
 
 static OfxPlugin plugins[MAX_PLUGINS];
 static char plugin_ids[MAX_PLUGINS][NPRFX_OFX_NAME_MAX];
-static int plugin_count;
+static int plugin_count, node_count; /* the nodes first, then the looks (ofx_look.h) */
 static pthread_once_t plugins_once = PTHREAD_ONCE_INIT;
 
 static void set_host(OfxHost *host)
@@ -91,7 +92,20 @@ static void init_plugins(void)
         plugins[i].setHost = set_host;
         plugins[i].mainEntry = entries[i];
     }
-    plugin_count = n;
+    node_count = n;
+    int looks = ofx_looks_discover(MAX_PLUGINS - n);
+    for (int i = 0; i < looks; i++) {
+        OfxPlugin *p = &plugins[n + i];
+        snprintf(plugin_ids[n + i], sizeof plugin_ids[n + i], "%s", ofx_look_at(i)->id);
+        p->pluginApi = kOfxImageEffectPluginApi;
+        p->apiVersion = kOfxImageEffectPluginApiVersion;
+        p->pluginIdentifier = plugin_ids[n + i];
+        p->pluginVersionMajor = 1;
+        p->pluginVersionMinor = 0;
+        p->setHost = set_host;
+        p->mainEntry = entries[n + i];
+    }
+    plugin_count = n + looks;
 }
 
 NPRFX_OFX_EXPORT int OfxGetNumberOfPlugins(void)
@@ -111,6 +125,7 @@ NPRFX_OFX_EXPORT OfxPlugin *OfxGetPlugin(int nth)
 static OfxStatus main_entry(int index, const char *action, const void *handle,
                             OfxPropertySetHandle in_args, OfxPropertySetHandle out_args)
 {
+    if (index >= node_count) return ofx_look_main(index - node_count, action, handle, in_args, out_args);
     const nprfx_node_desc *d = nprfx_node_at(index);
     OfxImageEffectHandle fx = (OfxImageEffectHandle)handle;
     if (!d || !action) return kOfxStatErrUnknown;

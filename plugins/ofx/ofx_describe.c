@@ -175,8 +175,8 @@ static OfxStatus define_extra(OfxParamSetHandle ps, const nprfx_node_desc *d, co
     return kOfxStatOK;
 }
 
-static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
-                              const nprfx_param_desc *p)
+OfxStatus ofx_define_param(OfxParamSetHandle ps, const nprfx_param_desc *p, const char *name,
+                           const char *label, const char *lead, const nprfx_value *def)
 {
     static const char *const types[] = {kOfxParamTypeDouble,  kOfxParamTypeInteger,
                                         kOfxParamTypeBoolean, kOfxParamTypeChoice,
@@ -184,11 +184,17 @@ static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
     if ((int)p->type < 0 || (int)p->type >= (int)(sizeof types / sizeof types[0]))
         return kOfxStatErrUnsupported;
     OfxPropertySetHandle pp;
-    OfxStatus st = ofx_g.param->paramDefine(ps, types[p->type], p->name, &pp);
+    OfxStatus st = ofx_g.param->paramDefine(ps, types[p->type], name, &pp);
     if (st != kOfxStatOK) return st;
-    ofx_set_str(pp, kOfxPropLabel, 0, p->label ? p->label : p->name);
-    ofx_set_str(pp, kOfxParamPropScriptName, 0, p->name);
+    ofx_set_str(pp, kOfxPropLabel, 0, label);
+    ofx_set_str(pp, kOfxParamPropScriptName, 0, name);
+    const double *dv = def ? def->v : p->def;
+    const char *ds = def ? def->s : p->def_string;
     strbuf hint = {0};
+    if (lead && lead[0]) {
+        sb_add(&hint, lead);
+        if (p->help) sb_add(&hint, "\n\n");
+    }
     sb_add(&hint, p->help ? p->help : "");
     if (p->flags & (NPRFX_PARAM_PIXELS | NPRFX_PARAM_AREA))
         sb_add(&hint, p->flags & NPRFX_PARAM_PIXELS
@@ -196,7 +202,7 @@ static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
                           : "\n\nIn pixels^2 at full resolution; proxy renders scale it.");
     switch (p->type) {
     case NPRFX_PARAM_DOUBLE:
-        ofx_set_dbl(pp, kOfxParamPropDefault, 0, p->def[0]);
+        ofx_set_dbl(pp, kOfxParamPropDefault, 0, dv[0]);
         ofx_set_dbl(pp, kOfxParamPropMin, 0, p->hard_min);
         ofx_set_dbl(pp, kOfxParamPropMax, 0, p->hard_max);
         ofx_set_dbl(pp, kOfxParamPropDisplayMin, 0, p->soft_min);
@@ -207,14 +213,14 @@ static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
                     p->soft_max > p->soft_min ? (p->soft_max - p->soft_min) / 100.0 : 0.01);
         break;
     case NPRFX_PARAM_INT:
-        ofx_set_int(pp, kOfxParamPropDefault, 0, int_bound(p->def[0]));
+        ofx_set_int(pp, kOfxParamPropDefault, 0, int_bound(dv[0]));
         ofx_set_int(pp, kOfxParamPropMin, 0, int_bound(p->hard_min));
         ofx_set_int(pp, kOfxParamPropMax, 0, int_bound(p->hard_max));
         ofx_set_int(pp, kOfxParamPropDisplayMin, 0, int_bound(p->soft_min));
         ofx_set_int(pp, kOfxParamPropDisplayMax, 0, int_bound(p->soft_max));
         break;
     case NPRFX_PARAM_BOOL:
-        ofx_set_int(pp, kOfxParamPropDefault, 0, p->def[0] != 0.0);
+        ofx_set_int(pp, kOfxParamPropDefault, 0, dv[0] != 0.0);
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
         break;
     case NPRFX_PARAM_CHOICE: {
@@ -228,13 +234,13 @@ static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
                 sb_add(&hint, p->choice_help[n]);
             }
         }
-        ofx_set_int(pp, kOfxParamPropDefault, 0, int_bound(p->def[0]));
+        ofx_set_int(pp, kOfxParamPropDefault, 0, int_bound(dv[0]));
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
         break;
     }
     case NPRFX_PARAM_COLOR:
         for (int c = 0; c < 4; c++) {
-            ofx_set_dbl(pp, kOfxParamPropDefault, c, p->def[c]);
+            ofx_set_dbl(pp, kOfxParamPropDefault, c, dv[c]);
             ofx_set_dbl(pp, kOfxParamPropMin, c, p->hard_min);
             ofx_set_dbl(pp, kOfxParamPropMax, c, p->hard_max);
             ofx_set_dbl(pp, kOfxParamPropDisplayMin, c, p->soft_min);
@@ -242,7 +248,7 @@ static OfxStatus define_param(OfxParamSetHandle ps, const nprfx_node_desc *d,
         }
         break;
     case NPRFX_PARAM_STRING:
-        ofx_set_str(pp, kOfxParamPropDefault, 0, p->def_string ? p->def_string : "");
+        ofx_set_str(pp, kOfxParamPropDefault, 0, ds ? ds : "");
         ofx_set_str(pp, kOfxParamPropStringMode, 0,
                     (p->flags & NPRFX_PARAM_PATH) ? kOfxParamStringIsFilePath
                                                   : kOfxParamStringIsSingleLine);
@@ -370,7 +376,10 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
     int nchildren = 0;
     OfxStatus st;
     for (int i = 0; i < d->num_params; i++) {
-        if ((st = define_param(ps, d, &d->params[i])) != kOfxStatOK) return st;
+        const nprfx_param_desc *p = &d->params[i];
+        if ((st = ofx_define_param(ps, p, p->name, p->label ? p->label : p->name, NULL, NULL)) !=
+            kOfxStatOK)
+            return st;
         add_page_child(page, &nchildren, d->params[i].name);
     }
     char name[NPRFX_OFX_NAME_MAX + 16];

@@ -16,4 +16,10 @@ OfxStatus ofx_describe(const nprfx_node_desc *d, OfxImageEffectHandle fx);
 OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle fx,
                                   OfxPropertySetHandle in_args);
 
+/* Define param p of a node under `name` and `label`: its type, range, soft range, choices and
+ * help (after `lead`, a look's words on it, when given), with default `def` (NULL: the
+ * descriptor's). The node plug-ins define their params with it, the look plug-ins their knobs. */
+OfxStatus ofx_define_param(OfxParamSetHandle ps, const nprfx_param_desc *p, const char *name,
+                           const char *label, const char *lead, const nprfx_value *def);
+
 #endif

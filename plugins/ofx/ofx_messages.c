@@ -30,24 +30,34 @@ void ofx_post(void *handle, const char *type, const char *message)
 
 void ofx_post_error(ofx_instance *inst, const char *message)
 {
+    ofx_post_error_on(inst->fx, &inst->persistent, message);
+}
+
+void ofx_clear_error(ofx_instance *inst)
+{
+    ofx_clear_error_on(inst->fx, &inst->persistent);
+}
+
+void ofx_post_error_on(OfxImageEffectHandle fx, int *persistent, const char *message)
+{
     const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->setPersistentMessage) {
-        ofx_post(inst->fx, kOfxMessageError, message);
+        ofx_post(fx, kOfxMessageError, message);
         return;
     }
     char text[2048];
     as_format(message && message[0] ? message : "nprfx: an error without a message", text,
               sizeof text);
-    if (m2->setPersistentMessage(inst->fx, kOfxMessageError, "", text) == kOfxStatOK)
-        __atomic_store_n(&inst->persistent, 1, __ATOMIC_RELAXED);
+    if (m2->setPersistentMessage(fx, kOfxMessageError, "", text) == kOfxStatOK)
+        __atomic_store_n(persistent, 1, __ATOMIC_RELAXED);
     else
-        ofx_post(inst->fx, kOfxMessageError, message);
+        ofx_post(fx, kOfxMessageError, message);
 }
 
-void ofx_clear_error(ofx_instance *inst)
+void ofx_clear_error_on(OfxImageEffectHandle fx, int *persistent)
 {
     const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->clearPersistentMessage) return;
-    if (__atomic_exchange_n(&inst->persistent, 0, __ATOMIC_RELAXED))
-        (void)m2->clearPersistentMessage(inst->fx);
+    if (__atomic_exchange_n(persistent, 0, __ATOMIC_RELAXED))
+        (void)m2->clearPersistentMessage(fx);
 }

@@ -14,5 +14,9 @@ void ofx_post(void *handle, const char *type, const char *message);
 void ofx_post_error(ofx_instance *inst, const char *message);
 /* A successful render takes down the persistent error of an earlier one. */
 void ofx_clear_error(ofx_instance *inst);
+/* The same for any effect whose flag *persistent says a persistent message is up (the look
+ * plug-ins' instances). */
+void ofx_post_error_on(OfxImageEffectHandle fx, int *persistent, const char *message);
+void ofx_clear_error_on(OfxImageEffectHandle fx, int *persistent);
 
 #endif

@@ -15,7 +15,7 @@ ofx_suites ofx_g;
 
 /* The module is BUNDLE/Contents/ARCH/nprfx.ofx (the file that holds this function); its data sit
  * in BUNDLE/Contents/Resources. */
-static void find_data_dir(void)
+void ofx_find_data_dir(void)
 {
     ofx_g.data_dir[0] = 0;
     Dl_info info;
@@ -51,7 +51,7 @@ OfxStatus ofx_suites_load(void)
         temporal = 1;
     ofx_g.temporal = temporal != 0;
     ofx_g.flow = flow_opencv_provider(); /* NULL without OpenCV: nothing is derived */
-    find_data_dir();
+    ofx_find_data_dir();
     return kOfxStatOK;
 }
 

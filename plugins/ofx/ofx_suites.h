@@ -37,6 +37,9 @@ extern ofx_suites ofx_g;
 /* The load action: fetch the suites from ofx_g.host and find out what the host can do.
  * kOfxStatErrMissingHostFeature without the required suites. */
 OfxStatus ofx_suites_load(void);
+/* Find data_dir from the module's own path (the load action does; the plug-in table needs it
+ * earlier, for the looks the bundle ships). */
+void ofx_find_data_dir(void);
 
 /* Memory through the host's memory suite when it has one (hosts account plug-in memory that
  * way); the choice is fixed at load, so alloc and free always pair up. ofx_zalloc zeroes it. */

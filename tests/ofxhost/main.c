@@ -8,6 +8,7 @@
 
 #include "commands/commands.h"
 #include "ofx_host.h"
+#include "ofx_host_internal.h"
 
 typedef struct ofx_run {
     const char *bundle;  /* --ofx */
@@ -75,7 +76,10 @@ static void usage(FILE *f)
             "nprfx-ofxtest — the nprfx runner with every node rendered through the plug-ins of "
             "an OpenFX\nbundle, in a minimal test host\n\n"
             "usage: nprfx-ofxtest run GRAPH.json --ofx BUNDLE [--profile NAME] [options of nprfx "
-            "run]\n\n"
+            "run]\n"
+            "       nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames SPEC] "
+            "[--scramble] [-o DIR]\n"
+            "       (the look plug-in of GRAPH, its clips fed with GRAPH's plates' AOVs)\n\n"
             "'nprfx-ofxtest run --help' lists the options.\n");
 }
 
@@ -85,8 +89,9 @@ int main(int argc, char **argv)
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
     }
+    if (!strcmp(argv[1], "look")) return internal_look_main(argc - 1, argv + 1);
     if (strcmp(argv[1], "run")) {
-        fprintf(stderr, "nprfx-ofxtest: unknown command '%s' (the only one is run)\n", argv[1]);
+        fprintf(stderr, "nprfx-ofxtest: unknown command '%s' (run or look)\n", argv[1]);
         return 2;
     }
     ofx_run o = {NULL, NULL, 0, 0, NULL};

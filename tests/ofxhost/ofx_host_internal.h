@@ -293,6 +293,9 @@ void internal_messages_reset(node_inst *ni);
 nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void **slot);
 void internal_hook_release(void *user, const nprfx_node_desc *node, void *instance);
 
+/* `nprfx-ofxtest look ...` (look.c): argv[0] is "look". Returns the exit status. */
+int internal_look_main(int argc, char **argv);
+
 /* The host's render scale for the runner's args: a proxy's (vector_scale); render_scale also
  * holds a graph's design scale, which the host passes as the designWidth param instead. */
 static inline double internal_host_scale(const nprfx_render_args *a)

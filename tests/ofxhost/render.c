@@ -28,7 +28,11 @@ static void inst_free(node_inst *ni)
 static hplugin *find_plugin(nprfx_ofx_host *h, const nprfx_node_desc *d)
 {
     char id[NPRFX_OFX_NAME_MAX];
-    ofx_names_plugin_id(d, id, sizeof id);
+    /* a look (look.c) stands as a node whose id is its plug-in's identifier */
+    if (!strncmp(d->id, NPRFX_OFX_LOOK_PREFIX, strlen(NPRFX_OFX_LOOK_PREFIX)))
+        snprintf(id, sizeof id, "%s", d->id);
+    else
+        ofx_names_plugin_id(d, id, sizeof id);
     for (int i = 0; i < h->nplugins; i++)
         if (h->plugins[i].p->pluginIdentifier && !strcmp(h->plugins[i].p->pluginIdentifier, id))
             return &h->plugins[i];
@@ -149,7 +153,10 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, i
         const char *depth = connected ? internal_depth_name(pf->depth) : kOfxBitDepthNone;
         internal_set_string(cp, kOfxImageEffectPropPixelDepth, 0, depth);
         internal_set_string(cp, kOfxImageClipPropUnmappedPixelDepth, 0, depth);
-        internal_set_string(cp, kOfxImageEffectPropPreMultiplication, 0, kOfxImageUnPreMultiplied);
+        /* a picture without alpha (RGB footage) is opaque, as hosts mark it */
+        int rgb = c->input >= 0 && connected && a->inputs[c->input].channels == 3;
+        internal_set_string(cp, kOfxImageEffectPropPreMultiplication, 0,
+                            rgb ? kOfxImageOpaque : kOfxImageUnPreMultiplied);
         internal_set_double(cp, kOfxImagePropPixelAspectRatio, 0, 1.0);
         internal_set_double(cp, kOfxImageEffectPropFrameRate, 0, 24.0);
         internal_set_double(cp, kOfxImageEffectPropUnmappedFrameRate, 0, 24.0);
@@ -330,7 +337,9 @@ static nprfx_result sync_params(node_inst *ni, const nprfx_render_args *a, int f
         hparam *p = internal_effect_param(e, name);
         if (!p) {
             int opts[NPRFX_OFX_CHAN_OPTIONS];
-            if (ofx_names_selector_options(&d->inputs[k], opts) > 1) {
+            /* a look's clips carry their AOVs whole: no selectors */
+            if (ofx_names_selector_options(&d->inputs[k], opts) > 1 &&
+                strncmp(d->id, NPRFX_OFX_LOOK_PREFIX, strlen(NPRFX_OFX_LOOK_PREFIX))) {
                 r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: no selector %s", id, name);
                 goto done;
             }

@@ -1,0 +1,769 @@
+/* nprfx OpenFX adapter — a look plug-in's instance (declared in ofx_look.h): its graph, loaded
+ * from the look's file with the knobs' values set into it, evaluated a whole frame at a time;
+ * the plates the graph reads served from the host's clips through an nprfx_io (a plate's
+ * channels are the connected clips' AOVs under the generic profile's names, so the engine reads
+ * them as a render's files); and the questions the host asks before a render (region of
+ * definition, frames needed, clip preferences) answered from the graph. */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "flow_opencv.h"
+#include "nprfx/aov.h"
+#include "ofx_executor.h"
+#include "ofx_image.h"
+#include "ofx_look.h"
+#include "ofx_messages.h"
+#include "ofx_suites.h"
+
+/* Where the graph's reads point: the clips, never a file. */
+#define LOOK_PLATES "/nprfx-ofx-look/"
+
+typedef struct look_inst {
+    const ofx_look *look;
+    OfxImageEffectHandle fx;
+    OfxImageClipHandle output;
+    OfxImageClipHandle clips[LOOK_MAX_CLIPS]; /* NULL: not defined in this context */
+    OfxParamHandle *knobs, output_choice, design;
+    pthread_mutex_t lock; /* the graph and the render in flight */
+    nprfx_context *ctx;
+    nprfx_graph *g;
+    char *settings; /* what the graph was loaded with (ofx_look_render.c, settings_at) */
+    int out_node;   /* the graph node the Output shows */
+    int persistent;
+    /* the render in flight: its time, render scale and the frame in host pixels */
+    double time, scale;
+    OfxRectI frame;
+} look_inst;
+
+static look_inst *inst_of(OfxImageEffectHandle fx)
+{
+    OfxPropertySetHandle p;
+    void *data = NULL;
+    if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK ||
+        ofx_g.prop->propGetPointer(p, kOfxPropInstanceData, 0, &data) != kOfxStatOK)
+        return NULL;
+    return data;
+}
+
+OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
+{
+    look_inst *li = calloc(1, sizeof *li);
+    if (!li) return kOfxStatErrMemory;
+    li->knobs = calloc((size_t)look->nknobs + 1, sizeof *li->knobs);
+    if (!li->knobs) {
+        free(li);
+        return kOfxStatErrMemory;
+    }
+    li->look = look;
+    li->fx = fx;
+    (void)ofx_g.fx->clipGetHandle(fx, NPRFX_OFX_OUTPUT_CLIP, &li->output, NULL);
+    for (int i = 0; i < look->nclips; i++)
+        if (ofx_g.fx->clipGetHandle(fx, look->clips[i].name, &li->clips[i], NULL) != kOfxStatOK)
+            li->clips[i] = NULL;
+    OfxParamSetHandle ps;
+    if (ofx_g.fx->getParamSet(fx, &ps) == kOfxStatOK) {
+        for (int i = 0; i < look->nknobs; i++)
+            (void)ofx_g.param->paramGetHandle(ps, look->knobs[i].param, &li->knobs[i], NULL);
+        if (look->noutputs > 1)
+            (void)ofx_g.param->paramGetHandle(ps, "output", &li->output_choice, NULL);
+        (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
+    }
+    pthread_mutex_init(&li->lock, NULL);
+    OfxPropertySetHandle p;
+    if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK ||
+        ofx_g.prop->propSetPointer(p, kOfxPropInstanceData, 0, li) != kOfxStatOK) {
+        pthread_mutex_destroy(&li->lock);
+        free(li->knobs);
+        free(li);
+        return kOfxStatErrBadHandle;
+    }
+    return kOfxStatOK;
+}
+
+static void drop_graph(look_inst *li)
+{
+    nprfx_graph_free(li->g);
+    li->g = NULL;
+    nprfx_context_destroy(li->ctx);
+    li->ctx = NULL;
+    free(li->settings);
+    li->settings = NULL;
+}
+
+/* ---- the plates: the clips as files ---------------------------------------------------------- */
+
+/* The channel names AOV `aov` has in a plate served to the graph: the generic profile's. */
+static const char *const *aov_channels(int aov, int *n)
+{
+    static const char *const beauty[] = {"R", "G", "B", "A"};
+    static const char *const albedo[] = {"albedo.R", "albedo.G", "albedo.B"};
+    static const char *const light[] = {"diffuse_light.R", "diffuse_light.G", "diffuse_light.B"};
+    static const char *const depth[] = {"depth.Z"};
+    static const char *const normal[] = {"N.X", "N.Y", "N.Z"};
+    static const char *const position[] = {"P.X", "P.Y", "P.Z"};
+    static const char *const rest[] = {"Pref.X", "Pref.Y", "Pref.Z"};
+    static const char *const uv[] = {"UV.U", "UV.V"};
+    static const char *const id[] = {"id"};
+    static const char *const prev[] = {"motion_prev.X", "motion_prev.Y"};
+    static const char *const next[] = {"motion_next.X", "motion_next.Y"};
+    static const char *const *const names[NPRFX_AOV_COUNT] = {
+        beauty, albedo, light, depth, normal, position, rest, uv, id, NULL, prev, next};
+    *n = aov >= 0 && aov < NPRFX_AOV_COUNT && names[aov] ? nprfx_aov_channels(aov) : 0;
+    return *n ? names[aov] : NULL;
+}
+
+/* "/nprfx-ofx-look/plate.0012.exr" -> read node index, frame (map: no frame, *frame the time). */
+static int parse_plate(const look_inst *li, const char *path, int *node, int *frame)
+{
+    if (strncmp(path, LOOK_PLATES, strlen(LOOK_PLATES))) return 0;
+    const char *name = path + strlen(LOOK_PLATES);
+    const char *dot = strchr(name, '.');
+    size_t len = dot ? (size_t)(dot - name) : strlen(name);
+    *frame = (int)floor(li->time + 0.5);
+    if (dot) *frame = (int)strtol(dot + 1, NULL, 10);
+    for (int i = 0; i < li->look->nclips; i++) {
+        nprfx_graph_node_info ni = {sizeof ni};
+        if (nprfx_graph_node(li->g, li->look->clips[i].node, &ni)) continue;
+        if (strlen(ni.name) == len && !strncmp(ni.name, name, len)) {
+            *node = li->look->clips[i].node;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* The plate's channels: per connected clip of the node, its AOV's channels. */
+typedef struct plate_chan {
+    const char *name;
+    int clip, comp;
+} plate_chan;
+
+static int plate_channels(const look_inst *li, int node, plate_chan *out, int max)
+{
+    int n = 0;
+    for (int i = 0; i < li->look->nclips; i++) {
+        const look_clip *c = &li->look->clips[i];
+        if (c->node != node || !ofx_clip_connected(li->clips[i])) continue;
+        int count = 4;
+        static const char *const rgba[] = {"R", "G", "B", "A"};
+        const char *const *names = c->aov >= 0 ? aov_channels(c->aov, &count) : rgba;
+        /* a picture the host calls opaque has no alpha to read (RGB footage): none, so the
+         * graph falls back as on a plate without one */
+        char *premult = NULL;
+        OfxPropertySetHandle cp = ofx_clip_props(li->clips[i]);
+        if (c->aov == NPRFX_AOV_BEAUTY && cp &&
+            ofx_g.prop->propGetString(cp, kOfxImageEffectPropPreMultiplication, 0, &premult) ==
+                kOfxStatOK &&
+            premult && !strcmp(premult, kOfxImageOpaque))
+            count = 3;
+        for (int k = 0; names && k < count && n < max; k++, n++) {
+            out[n].name = names[k];
+            out[n].clip = i;
+            out[n].comp = k;
+        }
+    }
+    return n;
+}
+
+static OfxRectI to_pixels(OfxRectD r, double s)
+{
+    OfxRectI p;
+    p.x1 = (int)floor(r.x1 * s + 1e-9);
+    p.y1 = (int)floor(r.y1 * s + 1e-9);
+    p.x2 = (int)ceil(r.x2 * s - 1e-9);
+    p.y2 = (int)ceil(r.y2 * s - 1e-9);
+    return p;
+}
+
+/* The plate's rectangle: the frame for the plates, a map clip's own region for a map. */
+static nprfx_result plate_rect(nprfx_context *ctx, const look_inst *li, int node, int frame,
+                               OfxRectI *r)
+{
+    for (int i = 0; i < li->look->nclips; i++) {
+        const look_clip *c = &li->look->clips[i];
+        if (c->node != node) continue;
+        if (c->aov >= 0) {
+            *r = li->frame;
+            return NPRFX_OK;
+        }
+        OfxRectD rod;
+        if (!ofx_clip_connected(li->clips[i]))
+            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                               "the %s clip is not connected: the look reads a map from it",
+                               c->name);
+        if (ofx_g.fx->clipGetRegionOfDefinition(li->clips[i], frame, &rod) != kOfxStatOK)
+            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                               "the host gives no region of definition for clip %s", c->name);
+        *r = to_pixels(rod, li->scale);
+        return NPRFX_OK;
+    }
+    *r = li->frame;
+    return NPRFX_OK;
+}
+
+static char *dup_s(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d) memcpy(d, s, n);
+    return d;
+}
+
+static nprfx_result look_info(nprfx_context *ctx, const char *path, nprfx_file_info *out)
+{
+    look_inst *li = nprfx_context_front_end(ctx);
+    memset(out, 0, sizeof *out);
+    int node = -1, frame = 0;
+    if (!li || !parse_plate(li, path, &node, &frame))
+        return nprfx_error(ctx, NPRFX_ERR_IO, "'%s': a look reads its plates from its clips", path);
+    plate_chan ch[64];
+    int nc = plate_channels(li, node, ch, 64);
+    OfxRectI r;
+    nprfx_result res = plate_rect(ctx, li, node, frame, &r);
+    if (res) return res;
+    int f = r.y1 + r.y2 - 1;
+    snprintf(out->format, sizeof out->format, "ofx");
+    out->subimages = out->nparts = 1;
+    out->bounds = out->display = ofx_flip_rect(r, f);
+    out->nchannels = nc;
+    out->names = calloc((size_t)nc + 1, sizeof *out->names);
+    out->types = calloc((size_t)nc + 1, sizeof *out->types);
+    out->parts = calloc(1, sizeof *out->parts);
+    int ok = out->names && out->types && out->parts;
+    if (ok) {
+        nprfx_part_info *pt = &out->parts[0];
+        pt->bounds = pt->display = out->bounds;
+        pt->nchannels = nc;
+        pt->names = calloc((size_t)nc + 1, sizeof *pt->names);
+        pt->types = calloc((size_t)nc + 1, sizeof *pt->types);
+        pt->miplevels = 1;
+        pt->pixel_aspect = 1;
+        pt->used = 1;
+        ok = pt->names && pt->types;
+        for (int c = 0; ok && c < nc; c++)
+            ok = (out->names[c] = dup_s(ch[c].name)) && (out->types[c] = dup_s("float")) &&
+                 (pt->names[c] = dup_s(ch[c].name)) && (pt->types[c] = dup_s("float"));
+    }
+    if (!ok) {
+        nprfx_file_info_free(out);
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    return NPRFX_OK;
+}
+
+static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_read_options *opt,
+                              nprfx_plate *out)
+{
+    look_inst *li = nprfx_context_front_end(ctx);
+    memset(out, 0, sizeof *out);
+    int node = -1, frame = 0;
+    if (!li || !parse_plate(li, path, &node, &frame))
+        return nprfx_error(ctx, NPRFX_ERR_IO, "'%s': a look reads its plates from its clips", path);
+    if (!ofx_g.temporal && frame != (int)floor(li->time + 0.5))
+        return nprfx_error(ctx, NPRFX_ERR_UNSUPPORTED,
+                           "the look reads frame %d of its clips to render frame %g, and this "
+                           "host gives no other frame (no temporal clip access)",
+                           frame, li->time);
+    plate_chan all[64];
+    int na = plate_channels(li, node, all, 64);
+    const char *names[64];
+    for (int c = 0; c < na; c++)
+        names[c] = all[c].name;
+    /* the channels asked for, by name, in their order */
+    int pick[64], np = 0;
+    if (opt && opt->size >= offsetof(nprfx_read_options, pick) && opt->channels) {
+        for (int i = 0; i < opt->nchannels && np < 64; i++)
+            for (int c = 0; c < na; c++)
+                if (!strcmp(opt->channels[i], names[c])) {
+                    pick[np++] = c;
+                    break;
+                }
+    } else if (opt && opt->size > offsetof(nprfx_read_options, pick) && opt->pick) {
+        np = opt->pick(opt->pick_user, names, na, pick);
+    }
+    if (np <= 0)
+        for (np = 0; np < na; np++)
+            pick[np] = np;
+    OfxRectI r;
+    nprfx_result res = plate_rect(ctx, li, node, frame, &r);
+    if (res) return res;
+    int f = r.y1 + r.y2 - 1;
+    nprfx_rect b = ofx_flip_rect(r, f);
+    size_t w = (size_t)nprfx_rect_width(b), h = (size_t)nprfx_rect_height(b);
+    out->bounds = out->display = b;
+    out->nchannels = np;
+    out->pixel_aspect = 1;
+    out->names = calloc((size_t)np + 1, sizeof *out->names);
+    out->types = calloc((size_t)np + 1, 1);
+    out->pixels = calloc(w * h * (size_t)(np > 0 ? np : 1), sizeof *out->pixels);
+    if (!out->names || !out->types || !out->pixels) {
+        nprfx_plate_free(out);
+        return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory for a %zux%zu plate", w, h);
+    }
+    for (int c = 0; c < np; c++)
+        if (!(out->names[c] = dup_s(names[pick[c]]))) {
+            nprfx_plate_free(out);
+            return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+        }
+    /* each clip once: its image, then its channels into the plate */
+    for (int i = 0; i < li->look->nclips; i++) {
+        int used = 0;
+        for (int c = 0; c < np; c++)
+            used |= all[pick[c]].clip == i;
+        if (!used) continue;
+        const look_clip *lc = &li->look->clips[i];
+        ofx_img img;
+        OfxStatus st = ofx_img_fetch(li->clips[i], frame, 1, &img);
+        if (st != kOfxStatOK) {
+            nprfx_plate_free(out);
+            return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
+                               "the host gave no image of clip %s at frame %d (OFX status %d)",
+                               lc->name, frame, st);
+        }
+        nprfx_image v;
+        float *scratch = NULL;
+        if ((res = ofx_img_view(&img, f, 0, img.ncomp, &v, &scratch))) {
+            ofx_img_release(&img);
+            nprfx_plate_free(out);
+            return res;
+        }
+        /* motion comes in pixels at full resolution */
+        double k = lc->aov == NPRFX_AOV_MOTION_PREV || lc->aov == NPRFX_AOV_MOTION_NEXT
+                       ? li->scale
+                       : 1.0;
+        nprfx_rect in = nprfx_rect_intersect(b, v.bounds);
+        for (int c = 0; c < np; c++) {
+            const plate_chan *pc = &all[pick[c]];
+            if (pc->clip != i) continue;
+            int comp = v.channels == 1 ? 0 : pc->comp < v.channels ? pc->comp : -1;
+            if (comp < 0) continue; /* an RGB image's alpha: none */
+            for (int y = in.y0; y < in.y1; y++) {
+                const float *s = nprfx_image_at(&v, in.x0, y) + comp;
+                float *d = out->pixels +
+                           ((size_t)(y - b.y0) * w + (size_t)(in.x0 - b.x0)) * (size_t)np + c;
+                for (int x = in.x0; x < in.x1; x++, s += v.pixel_stride, d += np)
+                    *d = k == 1.0 ? *s : (float)(*s * k);
+            }
+        }
+        ofx_free(scratch);
+        ofx_img_release(&img);
+    }
+    return NPRFX_OK;
+}
+
+static const nprfx_io look_io = {sizeof(nprfx_io), look_read, NULL, NULL, NULL, look_info};
+
+/* ---- the graph ------------------------------------------------------------------------------- */
+
+static void append(char **buf, size_t *len, size_t *cap, const char *text)
+{
+    size_t n = strlen(text);
+    if (!*buf && !(*buf = calloc(1, *cap = 1024))) return;
+    if (*len + n + 2 > *cap) {
+        size_t c = (*len + n + 2) * 2;
+        char *g = realloc(*buf, c);
+        if (!g) return;
+        *buf = g;
+        *cap = c;
+    }
+    memcpy(*buf + *len, text, n);
+    *len += n;
+    (*buf)[(*len)++] = '\n';
+    (*buf)[*len] = 0;
+}
+
+/* A value as nprfx_graph_set takes it; doubles in full, so a value comes back bit for bit. */
+static void format_value(const nprfx_param_desc *p, const nprfx_value *v, char *text, size_t n)
+{
+    if (p->type == NPRFX_PARAM_DOUBLE)
+        snprintf(text, n, "%.17g", v->v[0]);
+    else if (p->type == NPRFX_PARAM_COLOR)
+        snprintf(text, n, "%.17g,%.17g,%.17g,%.17g", v->v[0], v->v[1], v->v[2], v->v[3]);
+    else
+        nprfx_param_format(p, v, text, n);
+}
+
+/* The knobs' values at time, as nprfx_graph_set assignments, then what else decides the graph:
+ * the output, design width, render scale, shot and connected clips. */
+static char *settings_at(const look_inst *li, double time, double scale)
+{
+    const ofx_look *lk = li->look;
+    char *buf = NULL, line[4300];
+    size_t len = 0, cap = 0;
+    for (int i = 0; i < lk->nknobs; i++) {
+        const look_knob *k = &lk->knobs[i];
+        OfxParamHandle h = li->knobs[i];
+        nprfx_value v = k->def;
+        char text[4096];
+        int iv = 0;
+        char *s = NULL;
+        if (h) switch (k->p->type) {
+            case NPRFX_PARAM_DOUBLE:
+                (void)ofx_g.param->paramGetValueAtTime(h, time, &v.v[0]);
+                break;
+            case NPRFX_PARAM_INT:
+            case NPRFX_PARAM_BOOL:
+            case NPRFX_PARAM_CHOICE:
+                if (ofx_g.param->paramGetValueAtTime(h, time, &iv) == kOfxStatOK) v.v[0] = iv;
+                break;
+            case NPRFX_PARAM_COLOR:
+                (void)ofx_g.param->paramGetValueAtTime(h, time, &v.v[0], &v.v[1], &v.v[2],
+                                                       &v.v[3]);
+                break;
+            case NPRFX_PARAM_STRING:
+                if (ofx_g.param->paramGetValueAtTime(h, time, &s) == kOfxStatOK && s) v.s = s;
+                break;
+            }
+        /* A knob at the graph's value sets nothing: a knob over several nodes ("pattern*.sigma")
+         * shows the first one's value, and the others keep their own until it is turned. */
+        char def[4096];
+        format_value(k->p, &v, text, sizeof text);
+        format_value(k->p, &k->def, def, sizeof def);
+        if (!strcmp(text, def)) continue;
+        snprintf(line, sizeof line, "%s=%s", k->name, text);
+        append(&buf, &len, &cap, line);
+    }
+    int out = 0;
+    double design = lk->design_width;
+    if (li->output_choice) (void)ofx_g.param->paramGetValue(li->output_choice, &out);
+    if (li->design) (void)ofx_g.param->paramGetValue(li->design, &design);
+    double range[2] = {0, -1};
+    OfxPropertySetHandle sp = ofx_clip_props(li->clips[lk->source]);
+    if (!sp || ofx_g.prop->propGetDoubleN(sp, kOfxImageEffectPropFrameRange, 2, range) !=
+                   kOfxStatOK)
+        range[0] = 0, range[1] = -1;
+    unsigned long long connected = 0;
+    for (int i = 0; i < lk->nclips; i++)
+        if (ofx_clip_connected(li->clips[i])) connected |= 1ull << i;
+    snprintf(line, sizeof line, "#output %d\n#design %.17g\n#scale %.17g\n#shot %d %d\n#clips %llx",
+             out < 0 || out >= lk->noutputs ? 0 : out, design, scale,
+             (int)floor(range[0] + 0.5), (int)floor(range[1] + 0.5), connected);
+    append(&buf, &len, &cap, line);
+    return buf;
+}
+
+/* The graph for these settings: the one loaded when they are the same, else loaded afresh from
+ * the look's file (a change of any knob forgets every cached frame and state). */
+static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err, size_t errn)
+{
+    if (li->g && li->settings && !strcmp(li->settings, settings)) return NPRFX_OK;
+    drop_graph(li);
+    const ofx_look *lk = li->look;
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    ci.executor = &ofx_host_executor;
+    ci.data_dir = ofx_g.data_dir[0] ? ofx_g.data_dir : NULL;
+    ci.flow = flow_opencv_provider();
+    if (nprfx_context_create(&ci, &li->ctx) != NPRFX_OK) {
+        snprintf(err, errn, "%s: out of memory", lk->label);
+        return NPRFX_ERR_OUT_OF_MEMORY;
+    }
+    nprfx_context_set_front_end(li->ctx, li);
+    nprfx_graph_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.size = sizeof opt;
+    opt.cache_bytes = (size_t)1 << 30;
+    opt.strip_rows = -1; /* whole frames: the clips come whole */
+    opt.no_pool = 1;
+    opt.io = &look_io;
+    nprfx_result r = nprfx_graph_load(li->ctx, lk->path, &opt, &li->g);
+    char line[4400];
+    for (int i = 0; !r && i < lk->nclips; i++) {
+        const look_clip *c = &lk->clips[i];
+        nprfx_graph_node_info ni = {sizeof ni};
+        if ((r = nprfx_graph_node(li->g, c->node, &ni))) break;
+        const char *name = ni.name;
+        if (c->aov < 0) {
+            snprintf(line, sizeof line, "%s.path=" LOOK_PLATES "%s", name, name);
+            r = nprfx_graph_set(li->g, line);
+            continue;
+        }
+        snprintf(line, sizeof line, "%s.path=" LOOK_PLATES "%s.####.exr", name, name);
+        if (!r) r = nprfx_graph_set(li->g, line);
+        snprintf(line, sizeof line, "%s.aovs=generic", name);
+        if (!r) r = nprfx_graph_set(li->g, line);
+        snprintf(line, sizeof line, "%s.vectors=auto", name);
+        if (!r) r = nprfx_graph_set(li->g, line);
+        snprintf(line, sizeof line, "%s.colorspace=", name); /* the host's pictures are linear */
+        if (!r) r = nprfx_graph_set(li->g, line);
+    }
+    const char *s = settings;
+    int first = 0, last = -1, out = 0;
+    double design = 0;
+    while (!r && s && *s) {
+        const char *e = strchr(s, '\n');
+        size_t n = e ? (size_t)(e - s) : strlen(s);
+        snprintf(line, sizeof line, "%.*s", (int)n, s);
+        if (line[0] != '#')
+            r = nprfx_graph_set(li->g, line);
+        else if (sscanf(line, "#shot %d %d", &first, &last) == 2 ||
+                 sscanf(line, "#output %d", &out) == 1)
+            ;
+        else if (sscanf(line, "#design %lf", &design) == 1)
+            r = nprfx_graph_set_design_width(li->g, design);
+        s = e ? e + 1 : NULL;
+    }
+    if (!r && last >= first) {
+        snprintf(line, sizeof line, "%d-%d", first, last);
+        r = nprfx_graph_set_shot(li->g, line);
+    }
+    li->out_node = nprfx_graph_node_index(li->g, lk->outputs[out < lk->noutputs ? out : 0]);
+    if (r) {
+        char msg[1024];
+        nprfx_context_last_error(li->ctx, msg, sizeof msg);
+        snprintf(err, errn, "%s (%.600s): %.1000s", lk->label, lk->path, msg);
+        drop_graph(li);
+        return r;
+    }
+    li->settings = dup_s(settings);
+    return NPRFX_OK;
+}
+
+/* The frame in host pixels at the render scale: Source's region of definition. */
+static OfxStatus frame_rod(const look_inst *li, double time, OfxRectD *rod)
+{
+    OfxImageClipHandle src = li->clips[li->look->source];
+    if (!ofx_clip_connected(src)) return kOfxStatFailed;
+    return ofx_g.fx->clipGetRegionOfDefinition(src, time, rod);
+}
+
+static OfxStatus fail(look_inst *li, const char *msg)
+{
+    ofx_post_error_on(li->fx, &li->persistent, msg);
+    return kOfxStatFailed;
+}
+
+static OfxStatus render(look_inst *li, OfxPropertySetHandle in_args)
+{
+    const OfxPropertySuiteV1 *ps = ofx_g.prop;
+    double time = 0, scale[2] = {1, 1};
+    int win[4] = {0, 0, 0, 0};
+    if (ps->propGetDouble(in_args, kOfxPropTime, 0, &time) != kOfxStatOK ||
+        ps->propGetIntN(in_args, kOfxImageEffectPropRenderWindow, 4, win) != kOfxStatOK)
+        return kOfxStatErrBadHandle;
+    if (ps->propGetDoubleN(in_args, kOfxImageEffectPropRenderScale, 2, scale) != kOfxStatOK ||
+        !(scale[0] > 0))
+        scale[0] = 1;
+    char msg[2048];
+    OfxRectD rod;
+    if (frame_rod(li, time, &rod) != kOfxStatOK) {
+        snprintf(msg, sizeof msg, "%s: the Source clip is not connected: it is the render's picture",
+                 li->look->label);
+        return fail(li, msg);
+    }
+    char *settings = settings_at(li, time, scale[0]);
+    if (!settings) return kOfxStatErrMemory;
+    pthread_mutex_lock(&li->lock);
+    nprfx_result r = ensure_graph(li, settings, msg, sizeof msg);
+    free(settings);
+    ofx_img out;
+    memset(&out, 0, sizeof out);
+    OfxStatus status = kOfxStatFailed;
+    if (r) goto done;
+    li->time = time;
+    li->scale = scale[0];
+    li->frame = to_pixels(rod, scale[0]);
+    int f = li->frame.y1 + li->frame.y2 - 1;
+    int frame = (int)floor(time + 0.5);
+    nprfx_image im;
+    const char *const *names = NULL;
+    nprfx_graph_node_info ni = {sizeof ni};
+    if (li->out_node < 0 || nprfx_graph_node(li->g, li->out_node, &ni)) {
+        snprintf(msg, sizeof msg, "%s: the graph has no output node", li->look->label);
+        r = NPRFX_ERR_INTERNAL;
+        goto done;
+    }
+    if ((r = nprfx_graph_eval(li->g, ni.name, frame, &im, &names))) {
+        char e[1500];
+        nprfx_context_last_error(li->ctx, e, sizeof e);
+        snprintf(msg, sizeof msg, "%s: %s", li->look->label, e);
+        goto done;
+    }
+    OfxStatus st = ofx_img_fetch(li->output, time, 0, &out);
+    if (st != kOfxStatOK) {
+        snprintf(msg, sizeof msg, "%s: the host gave no output image (%d)", li->look->label, st);
+        r = NPRFX_ERR_INTERNAL;
+        status = st;
+        goto done;
+    }
+    /* the window, from the look's image: grey for one channel, opaque where it has no alpha */
+    int nc = im.channels;
+    for (int y = win[1]; y < win[3]; y++)
+        for (int x = win[0]; x < win[2]; x++) {
+            if (x < out.b.x1 || x >= out.b.x2 || y < out.b.y1 || y >= out.b.y2) continue;
+            int yd = f - y;
+            float px[4] = {0, 0, 0, 0};
+            if (nprfx_rect_contains(im.bounds, x, yd)) {
+                const float *s = nprfx_image_at(&im, x, yd);
+                if (nc == 1)
+                    px[0] = px[1] = px[2] = s[0], px[3] = 1;
+                else
+                    for (int c = 0; c < 4; c++)
+                        px[c] = c < nc ? s[c] : c == 3 ? 1.0f : 0.0f;
+            }
+            for (int c = 0; c < out.ncomp && c < 4; c++)
+                ofx_img_store(&out, x, y, out.ncomp == 1 ? 3 : c, px[out.ncomp == 1 ? 3 : c]);
+        }
+    status = kOfxStatOK;
+    ofx_clear_error_on(li->fx, &li->persistent);
+done:
+    pthread_mutex_unlock(&li->lock);
+    ofx_img_release(&out);
+    if (r) {
+        ofx_post_error_on(li->fx, &li->persistent, msg);
+        if (status == kOfxStatOK) status = kOfxStatFailed;
+    }
+    return status;
+}
+
+/* ---- the questions before a render ----------------------------------------------------------- */
+
+static void set_clip_prop(OfxPropertySetHandle out, const char *prefix, const char *clip, int n,
+                          const double *v)
+{
+    char name[256];
+    snprintf(name, sizeof name, "%s%s", prefix, clip);
+    (void)ofx_g.prop->propSetDoubleN(out, name, n, v);
+}
+
+static OfxStatus frames_needed(look_inst *li, OfxPropertySetHandle in_args,
+                               OfxPropertySetHandle out_args)
+{
+    double time = 0;
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &time);
+    const ofx_look *lk = li->look;
+    int frame = (int)floor(time + 0.5);
+    char *settings = settings_at(li, time, li->scale > 0 ? li->scale : 1);
+    char msg[1024];
+    /* The graph's nodes' own answers through the graph, from the states a render left; a
+     * render holding the graph (it may be fetching through the host on another thread) leaves
+     * the whole shot declared, as for a fresh instance. */
+    int locked = settings && pthread_mutex_trylock(&li->lock) == 0;
+    int ok = locked && ensure_graph(li, settings, msg, sizeof msg) == NPRFX_OK;
+    free(settings);
+    unsigned present[LOOK_MAX_CLIPS];
+    memset(present, 0, sizeof present);
+    for (int i = 0; i < lk->nclips; i++)
+        for (int j = 0; j < lk->nclips; j++)
+            if (lk->clips[j].node == lk->clips[i].node && lk->clips[j].aov >= 0 &&
+                ofx_clip_connected(li->clips[j])) {
+                present[i] |= 1u << lk->clips[j].aov;
+                if (lk->clips[j].aov == NPRFX_AOV_BEAUTY) present[i] |= 1u << NPRFX_AOV_COVERAGE;
+            }
+    for (int i = 0; i < lk->nclips; i++) {
+        if (!ofx_clip_connected(li->clips[i])) continue;
+        double v[2 * 8];
+        int n = 0;
+        if (!ofx_g.temporal || !lk->temporal || lk->clips[i].aov < 0) {
+            v[0] = v[1] = time;
+            n = 1;
+        } else if (ok) {
+            nprfx_frame_range r[8];
+            /* a plate is read whole (every AOV the graph wants) at each frame any is read */
+            if (nprfx_graph_frames_read(li->g, li->out_node, frame, lk->clips[i].node, -1,
+                                        present[i], r, 8, &n) != NPRFX_OK)
+                n = 0;
+            for (int k = 0; k < n; k++)
+                v[2 * k] = r[k].first, v[2 * k + 1] = r[k].last;
+            if (!n) continue; /* the look does not read this clip at this frame */
+        } else {
+            double range[2] = {time, time};
+            OfxPropertySetHandle sp = ofx_clip_props(li->clips[i]);
+            if (sp) (void)ofx_g.prop->propGetDoubleN(sp, kOfxImageEffectPropFrameRange, 2, range);
+            v[0] = range[0] < time ? range[0] : time;
+            v[1] = range[1] > time ? range[1] : time;
+            n = 1;
+        }
+        set_clip_prop(out_args, kOfxImageClipPropFrameRangePrefix, lk->clips[i].name, 2 * n, v);
+    }
+    if (locked) pthread_mutex_unlock(&li->lock);
+    return kOfxStatOK;
+}
+
+static void set_clip_str(OfxPropertySetHandle out, const char *prefix, const char *clip,
+                         const char *v)
+{
+    char name[256];
+    snprintf(name, sizeof name, "%s%s", prefix, clip);
+    (void)ofx_g.prop->propSetString(out, name, 0, v);
+}
+
+static OfxStatus clip_preferences(look_inst *li, OfxPropertySetHandle out_args)
+{
+    set_clip_str(out_args, kOfxImageClipPropComponentsPrefix, NPRFX_OFX_OUTPUT_CLIP,
+                 kOfxImageComponentRGBA);
+    set_clip_str(out_args, kOfxImageClipPropDepthPrefix, NPRFX_OFX_OUTPUT_CLIP, kOfxBitDepthFloat);
+    for (int i = 0; i < li->look->nclips; i++)
+        if (li->clips[i])
+            set_clip_str(out_args, kOfxImageClipPropDepthPrefix, li->look->clips[i].name,
+                         kOfxBitDepthFloat);
+    (void)ofx_g.prop->propSetString(out_args, kOfxImageEffectPropPreMultiplication, 0,
+                                    kOfxImageUnPreMultiplied);
+    (void)ofx_g.prop->propSetInt(out_args, kOfxImageEffectFrameVarying, 0, 1);
+    return kOfxStatOK;
+}
+
+static OfxStatus regions_of_interest(look_inst *li, OfxPropertySetHandle in_args,
+                                     OfxPropertySetHandle out_args)
+{
+    double t = 0;
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
+    for (int i = 0; i < li->look->nclips; i++) {
+        OfxRectD rod;
+        if (!ofx_clip_connected(li->clips[i]) ||
+            ofx_g.fx->clipGetRegionOfDefinition(li->clips[i], t, &rod) != kOfxStatOK)
+            continue;
+        double v[4] = {rod.x1, rod.y1, rod.x2, rod.y2};
+        set_clip_prop(out_args, kOfxImageClipPropRoIPrefix, li->look->clips[i].name, 4, v);
+    }
+    return kOfxStatOK;
+}
+
+OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
+                                   OfxImageEffectHandle fx, OfxPropertySetHandle in_args,
+                                   OfxPropertySetHandle out_args)
+{
+    (void)look;
+    look_inst *li = inst_of(fx);
+    if (!li) return kOfxStatErrBadHandle;
+    if (!strcmp(action, kOfxActionDestroyInstance)) {
+        OfxPropertySetHandle p;
+        if (ofx_g.fx->getPropertySet(fx, &p) == kOfxStatOK)
+            (void)ofx_g.prop->propSetPointer(p, kOfxPropInstanceData, 0, NULL);
+        drop_graph(li);
+        pthread_mutex_destroy(&li->lock);
+        free(li->knobs);
+        free(li);
+        return kOfxStatOK;
+    }
+    if (!strcmp(action, kOfxImageEffectActionRender)) return render(li, in_args);
+    if (!strcmp(action, kOfxImageEffectActionGetRegionOfDefinition)) {
+        double t = 0;
+        (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
+        OfxRectD rod;
+        if (frame_rod(li, t, &rod) != kOfxStatOK) return kOfxStatReplyDefault;
+        double v[4] = {rod.x1, rod.y1, rod.x2, rod.y2};
+        return ofx_g.prop->propSetDoubleN(out_args, kOfxImageEffectPropRegionOfDefinition, 4, v);
+    }
+    if (!strcmp(action, kOfxImageEffectActionGetRegionsOfInterest))
+        return regions_of_interest(li, in_args, out_args);
+    if (!strcmp(action, kOfxImageEffectActionGetFramesNeeded))
+        return frames_needed(li, in_args, out_args);
+    if (!strcmp(action, kOfxImageEffectActionGetClipPreferences))
+        return clip_preferences(li, out_args);
+    if (!strcmp(action, kOfxActionPurgeCaches)) {
+        pthread_mutex_lock(&li->lock);
+        drop_graph(li);
+        pthread_mutex_unlock(&li->lock);
+        return kOfxStatOK;
+    }
+    if (!strcmp(action, kOfxActionInstanceChanged) ||
+        !strcmp(action, kOfxImageEffectActionBeginSequenceRender) ||
+        !strcmp(action, kOfxImageEffectActionEndSequenceRender) ||
+        !strcmp(action, kOfxActionBeginInstanceChanged) ||
+        !strcmp(action, kOfxActionEndInstanceChanged))
+        return kOfxStatOK; /* a change shows in the settings the next render reads */
+    return kOfxStatReplyDefault;
+}

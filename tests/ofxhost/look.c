@@ -1,0 +1,262 @@
+/* nprfx OpenFX test host — a look plug-in driven as a host drives it:
+ * `nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames SPEC] [--scramble]
+ * [-o DIR]` renders the look plug-in of GRAPH (found through NPRFX_LOOK_PATH, set to the graph's
+ * folder) frame by frame, its clips fed with the AOVs of the graph's own plates as the engine
+ * reads them (nprfx_graph_eval_aov: nprfx's conventions, what a compositor's shuffles would
+ * give), and writes its Output as DIR/STEM.####.exr (RGBA float). tests/cli/ofx_looks.sh compares
+ * them with `nprfx run GRAPH`. The look stands as a node of the render hook (render.c) whose
+ * inputs are the look's clips, so every check of the hook holds: frames declared equal frames
+ * fetched on the first render, images released, messages not empty. */
+#define _POSIX_C_SOURCE 200809L /* setenv, strdup */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nprfx/aov.h"
+#include "nprfx/io_oiio.h"
+#include "ofx_host_internal.h"
+
+#define LOOK_INPUTS 32
+#define LOOK_RING 16
+
+typedef struct look_run {
+    nprfx_context *ctx;
+    nprfx_graph *g;
+    int n;
+    int node[LOOK_INPUTS], aov[LOOK_INPUTS]; /* aov -1: a map's whole plate */
+    nprfx_input_desc in[LOOK_INPUTS];
+    char names[LOOK_INPUTS][64];
+    nprfx_image ring[LOOK_RING]; /* fetched frames of this render */
+    int nring;
+} look_run;
+
+/* Input k at frame: an AOV of a plate, or a map's plate; allocated. */
+static nprfx_result look_image(look_run *lr, int k, int frame, nprfx_image *out)
+{
+    memset(out, 0, sizeof *out);
+    if (lr->aov[k] >= 0) return nprfx_graph_eval_aov(lr->g, lr->node[k], lr->aov[k], frame, out);
+    nprfx_graph_node_info ni = {sizeof ni};
+    nprfx_image v;
+    nprfx_result r = nprfx_graph_node(lr->g, lr->node[k], &ni);
+    if (!r) r = nprfx_graph_eval(lr->g, ni.name, frame, &v, NULL);
+    if (!r) r = nprfx_image_alloc(lr->ctx, v.bounds, v.channels < 4 ? v.channels : 4, out);
+    if (!r) r = nprfx_image_copy(lr->ctx, &v, out);
+    return r;
+}
+
+static nprfx_result look_fetch(void *user, int input, double time, nprfx_image *out)
+{
+    look_run *lr = user;
+    if (lr->nring == LOOK_RING) {
+        nprfx_image_free(&lr->ring[0]);
+        memmove(lr->ring, lr->ring + 1, (LOOK_RING - 1) * sizeof *lr->ring);
+        lr->nring--;
+    }
+    nprfx_image *im = &lr->ring[lr->nring];
+    nprfx_result r = look_image(lr, input, (int)(time >= 0 ? time + 0.5 : time - 0.5), im);
+    if (r) return r;
+    lr->nring++;
+    *out = *im;
+    return NPRFX_OK;
+}
+
+static void usage(void)
+{
+    fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
+                    "SPEC] [--scramble] [-o DIR]\n");
+}
+
+int internal_look_main(int argc, char **argv)
+{
+    const char *graph = NULL, *bundle = NULL, *profile = NULL, *frames = NULL, *dir = ".";
+    const char *channels = "R,G,B,A";
+    int scramble = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *next = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--scramble"))
+            scramble = 1;
+        else if (next && !strcmp(a, "--ofx"))
+            bundle = argv[++i];
+        else if (next && !strcmp(a, "--profile"))
+            profile = argv[++i];
+        else if (next && !strcmp(a, "--frames"))
+            frames = argv[++i];
+        else if (next && !strcmp(a, "--channels"))
+            channels = argv[++i];
+        else if (next && !strcmp(a, "-o"))
+            dir = argv[++i];
+        else if (!graph && a[0] != '-')
+            graph = a;
+        else {
+            usage();
+            return 2;
+        }
+    }
+    if (!graph || !bundle) {
+        usage();
+        return 2;
+    }
+    /* the look plug-in of this graph file: its folder first among the looks */
+    char folder[4096], stem[256];
+    snprintf(folder, sizeof folder, "%s", graph);
+    char *slash = strrchr(folder, '/');
+    const char *base = slash ? slash + 1 : graph;
+    snprintf(stem, sizeof stem, "%s", base);
+    if (strlen(stem) > 5 && !strcmp(stem + strlen(stem) - 5, ".json")) stem[strlen(stem) - 5] = 0;
+    if (slash)
+        *slash = 0;
+    else
+        snprintf(folder, sizeof folder, ".");
+    setenv("NPRFX_LOOK_PATH", folder, 1);
+
+    look_run lr;
+    memset(&lr, 0, sizeof lr);
+    nprfx_pool *pool = NULL;
+    nprfx_ofx_host *h = NULL;
+    nprfx_frame_list list = {0};
+    void *slot = NULL;
+    nprfx_node_desc desc;
+    memset(&desc, 0, sizeof desc);
+    char id[NPRFX_OFX_NAME_MAX];
+    ofx_names_look_id(stem, id, sizeof id);
+    int status = 1;
+    nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
+    nprfx_result r = nprfx_pool_create(2, &pool);
+    if (!r) {
+        ci.executor = nprfx_pool_executor(pool);
+        r = nprfx_context_create(&ci, &lr.ctx);
+    }
+    if (r) {
+        fprintf(stderr, "nprfx-ofxtest: out of memory\n");
+        nprfx_pool_destroy(pool);
+        return 1;
+    }
+    nprfx_graph_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.size = sizeof opt;
+    opt.io = nprfx_io_oiio();
+    if ((r = nprfx_graph_load(lr.ctx, graph, &opt, &lr.g))) goto done;
+    if ((r = nprfx_graph_frames(lr.g, frames, &list))) goto done;
+    if (list.count < 1) {
+        r = nprfx_error(lr.ctx, NPRFX_ERR_INVALID_ARGUMENT, "no frames to render");
+        goto done;
+    }
+    if ((r = nprfx_ofx_host_open(lr.ctx, bundle, profile, &h))) goto done;
+    /* the look's clips, as the plug-in derives them (ofx_look.c): per read node in graph order,
+     * a sequence's AOVs but coverage, a map's whole plate */
+    int first_seq = -1, main_input = -1;
+    for (int i = 0; i < nprfx_graph_source_count(lr.g); i++) {
+        nprfx_graph_source_info s = {sizeof s};
+        if ((r = nprfx_graph_source(lr.g, i, &s))) goto done;
+        int is_main = s.sequence && first_seq < 0;
+        if (is_main) first_seq = s.node;
+        for (int aov = s.sequence ? 0 : -1; aov < (s.sequence ? NPRFX_AOV_COUNT : 0); aov++) {
+            if (aov >= 0 && (!(s.aovs & (1u << aov)) || aov == NPRFX_AOV_COVERAGE)) continue;
+            if (lr.n == LOOK_INPUTS) break;
+            int k = lr.n++;
+            lr.node[k] = s.node;
+            lr.aov[k] = aov;
+            ofx_names_look_clip(s.name, is_main, aov >= 0 ? nprfx_aov_name(aov) : NULL,
+                                lr.names[k], sizeof lr.names[k]);
+            lr.in[k].name = lr.names[k];
+            lr.in[k].label = lr.names[k];
+            lr.in[k].flags = NPRFX_INPUT_OPTIONAL | (aov < 0 ? NPRFX_INPUT_UNALIGNED : 0);
+            if (is_main && aov == NPRFX_AOV_BEAUTY) {
+                lr.in[k].flags |= NPRFX_INPUT_MAIN;
+                main_input = k;
+            }
+        }
+    }
+    if (main_input < 0) {
+        r = nprfx_error(lr.ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s reads no frame sequence", graph);
+        goto done;
+    }
+    desc.id = id;
+    desc.label = stem;
+    desc.num_inputs = lr.n;
+    desc.inputs = lr.in;
+    desc.flags = NPRFX_NODE_TEMPORAL;
+    int first = list.frames[0], last = list.frames[list.count - 1];
+    (void)nprfx_graph_shot(lr.g, &first, &last);
+    for (int fi = 0; fi < list.count; fi++) {
+        /* --scramble: the frames in an order no host promises (odd ones first, then even) */
+        int idx = fi;
+        if (scramble) idx = fi < (list.count + 1) / 2 ? 2 * fi : 2 * (fi - (list.count + 1) / 2) + 1;
+        int frame = list.frames[idx];
+        nprfx_image inputs[LOOK_INPUTS], out;
+        memset(inputs, 0, sizeof inputs);
+        memset(&out, 0, sizeof out);
+        for (int k = 0; k < lr.n && !r; k++) {
+            r = look_image(&lr, k, frame, &inputs[k]);
+            /* the clip's channel count, from the first frame: RGBA or fewer */
+            if (!r && !lr.in[k].channels) lr.in[k].channels = inputs[k].channels;
+        }
+        nprfx_render_args a;
+        memset(&a, 0, sizeof a);
+        if (!r) r = nprfx_image_alloc(lr.ctx, inputs[main_input].bounds, 4, &out);
+        if (!r) {
+            a.size = sizeof a;
+            a.ctx = lr.ctx;
+            a.node = &desc;
+            a.time = frame;
+            a.render_scale = a.vector_scale = 1;
+            a.frame = a.window = inputs[main_input].bounds;
+            a.first_frame = first;
+            a.last_frame = last;
+            a.inputs = inputs;
+            a.output = &out;
+            a.fetch = look_fetch;
+            a.fetch_user = &lr;
+            r = internal_hook_render(h, &a, &slot);
+        }
+        if (!r) {
+            char path[4400];
+            snprintf(path, sizeof path, "%s/%s.%04d.exr", dir, stem, frame);
+            /* --channels: the first channels of the Output, under the names the runner's file
+             * has; what the plug-in fills beyond a look's channels is checked here: grey
+             * (G = B = R) for one channel, opaque (A = 1) for up to three */
+            char names_buf[256];
+            const char *names[4];
+            int nn = 0;
+            snprintf(names_buf, sizeof names_buf, "%s", channels);
+            for (char *t = strtok(names_buf, ","); t && nn < 4; t = strtok(NULL, ","))
+                names[nn++] = t;
+            for (int y = out.bounds.y0; y < out.bounds.y1 && !r; y++)
+                for (int x = out.bounds.x0; x < out.bounds.x1 && !r; x++) {
+                    const float *p = nprfx_image_at(&out, x, y);
+                    if ((nn == 1 && (p[1] != p[0] || p[2] != p[0])) || (nn < 4 && p[3] != 1.0f))
+                        r = nprfx_error(lr.ctx, NPRFX_ERR_INTERNAL,
+                                        "frame %d: pixel (%d, %d) of the Output is (%g, %g, %g, "
+                                        "%g): a look of %d channels fills it otherwise",
+                                        frame, x, y, p[0], p[1], p[2], p[3], nn);
+                }
+            nprfx_image first_n = nprfx_image_channels(&out, 0, nn);
+            nprfx_write_options wo;
+            memset(&wo, 0, sizeof wo);
+            wo.size = sizeof wo;
+            if (!r) r = opt.io->write(lr.ctx, path, &first_n, names, NULL, &wo);
+            if (!r) fprintf(stderr, "look %s: frame %d -> %s\n", id, frame, path);
+        }
+        for (int k = 0; k < lr.n; k++)
+            nprfx_image_free(&inputs[k]);
+        for (int k = 0; k < lr.nring; k++)
+            nprfx_image_free(&lr.ring[k]);
+        lr.nring = 0;
+        nprfx_image_free(&out);
+        if (r) goto done;
+    }
+    status = 0;
+done:
+    if (r) {
+        char msg[2048];
+        nprfx_context_last_error(lr.ctx, msg, sizeof msg);
+        fprintf(stderr, "nprfx-ofxtest look: %s\n", msg);
+    }
+    if (slot) internal_hook_release(h, &desc, slot);
+    nprfx_seq_frames_free(&list);
+    nprfx_graph_free(lr.g);
+    nprfx_ofx_host_close(h);
+    nprfx_context_destroy(lr.ctx);
+    nprfx_pool_destroy(pool);
+    return status;
+}
