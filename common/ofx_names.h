@@ -201,7 +201,8 @@ static inline void ofx_names_camel(const char *s, char *buf, size_t n)
     if (n) buf[j] = 0;
 }
 
-/* A look's identifier from its graph file's name without ".json": "toon" -> "org.nprfx.look.Toon". */
+/* A look's identifier from its graph file's name without ".json": "toon" -> "org.nprfx.look.Toon".
+ */
 static inline void ofx_names_look_id(const char *stem, char *buf, size_t n)
 {
     char camel[NPRFX_OFX_NAME_MAX];

@@ -264,6 +264,8 @@ void internal_graph_render_args(nprfx_graph *g, gnode *n, int frame, nprfx_rect 
     a->node = d;
     a->time = frame;
     a->render_scale = internal_graph_param_scale(g, display);
+    g->last_display = display;
+    g->have_display = 1;
     a->vector_scale = 1.0; /* a plate's vectors are in its own pixels */
     a->frame = frame_rect;
     a->first_frame = g->first_frame;

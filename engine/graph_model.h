@@ -119,6 +119,10 @@ struct nprfx_graph {
     int count;
     char *frames_text;
     int first_frame, last_frame;
+    /* the display window of the last node render: the params' scale a question about the next
+     * frames assumes (nprfx_graph_frames_read); have_display 0 before any render */
+    nprfx_rect last_display;
+    int have_display;
     char *base_dir, *out_dir, *ocio;
     char *fmt_text;      /* "format": "WxH" for graphs without inputs */
     double design_width; /* "design_width": the plate width its pixel params are for; 0: none */

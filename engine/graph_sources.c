@@ -9,6 +9,7 @@
 #include "graph_model.h"
 #include "graph_names.h"
 #include "graph_resolve.h"
+#include "graph_scale.h"
 #include "nprfx/aov.h"
 #include "nprfx/graph.h"
 #include "nprfx/seq.h"
@@ -143,8 +144,8 @@ nprfx_result nprfx_graph_eval_aov(nprfx_graph *g, int node, int aov, int frame, 
 typedef struct needs_walk {
     const nprfx_graph *g;
     int source, aov;
-    unsigned present;  /* the AOVs the source has: the others are read through their fallbacks */
-    int first, span;   /* the shot */
+    unsigned present;    /* the AOVs the source has: the others are read through their fallbacks */
+    int first, span;     /* the shot */
     unsigned char *seen; /* per node, per shot frame: visited */
     unsigned char *out;  /* per shot frame: read */
     int outside;         /* a frame outside the shot was read (then the node's frame, below) */
@@ -172,8 +173,8 @@ static void mark_ref(needs_walk *w, const gnode *reader, int k, int frame)
     if (w->aov < 0 || (bits & (1u << w->aov))) mark(w, frame);
     unsigned missing = bits & ~w->present;
     const unsigned motion = (1u << NPRFX_AOV_MOTION_PREV) | (1u << NPRFX_AOV_MOTION_NEXT);
-    const unsigned beauty_for = motion | (1u << NPRFX_AOV_ALBEDO) | (1u << NPRFX_AOV_DIFFUSE_LIGHT) |
-                                (1u << NPRFX_AOV_COVERAGE);
+    const unsigned beauty_for = motion | (1u << NPRFX_AOV_ALBEDO) |
+                                (1u << NPRFX_AOV_DIFFUSE_LIGHT) | (1u << NPRFX_AOV_COVERAGE);
     const unsigned depth_for =
         (1u << NPRFX_AOV_REST) | (1u << NPRFX_AOV_UV) | (1u << NPRFX_AOV_POSITION);
     if ((w->aov < 0 || w->aov == NPRFX_AOV_BEAUTY) && (missing & beauty_for)) {
@@ -199,10 +200,16 @@ static void walk(needs_walk *w, int node, int frame)
     const nprfx_node_desc *d = n->kind == GK_NODE ? n->desc : NULL;
     int ninputs = n->ninputs < 32 ? n->ninputs : 32;
     for (int k = 0; k < ninputs; k++)
-        in_ch[k] = n->inputs[k].src < 0 ? 0
+        in_ch[k] = n->inputs[k].src < 0             ? 0
                    : d && d->inputs[k].channels > 0 ? d->inputs[k].channels
                                                     : 1;
     nprfx_frames_query q = {frame, g->first_frame, g->last_frame, in_ch, n->state};
+    /* the params as the render has them (scaled to the plate): a state is keyed by them */
+    nprfx_value scaled[64];
+    const nprfx_value *params = n->params;
+    if (d && d->num_params <= 64 && g->have_display)
+        params = internal_graph_scale_params(
+            n, n->params, internal_graph_param_scale(g, g->last_display), scaled);
     for (int k = 0; k < ninputs; k++) {
         int src = n->inputs[k].src;
         if (src < 0) continue;
@@ -210,7 +217,7 @@ static void walk(needs_walk *w, int node, int frame)
         int nr = 1;
         r[0].first = r[0].last = frame;
         if (d && (d->flags & NPRFX_NODE_TEMPORAL) &&
-            nprfx_node_frames_needed(NULL, d, n->params, &q, k, r, &nr) != NPRFX_OK) {
+            nprfx_node_frames_needed(NULL, d, params, &q, k, r, &nr) != NPRFX_OK) {
             nr = 1;
             r[0].first = g->last_frame >= g->first_frame ? g->first_frame : frame;
             r[0].last = g->last_frame >= g->first_frame ? g->last_frame : frame;

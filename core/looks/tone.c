@@ -367,8 +367,19 @@ int nprfx_tone_frames(const nprfx_tone_params *p, const nprfx_frames_query *q,
 {
     /* Every connected input (tone, albedo, coverage) is sampled at the measured frames. */
     ranges[0].first = ranges[0].last = q->time;
+    /* A state that holds this shot's range, measured with these params, reads the frame itself
+     * (whose fingerprint it checks): a host rendering on prepares one frame, not the shot.
+     * (Range 'frame' reads its reference frame every time, to check it.) */
+    const tone_cache *c = q->state;
+    int first = q->first_frame, last = q->last_frame;
     if (p->range == NPRFX_TONE_RANGE_SHOT)
-        tone_shot(q->time, q->first_frame, q->last_frame, &ranges[0].first, &ranges[0].last);
+        tone_shot(q->time, q->first_frame, q->last_frame, &first, &last);
+    if (p->range == NPRFX_TONE_RANGE_SHOT && c && c->valid && c->range == p->range &&
+        c->low == p->low && c->high == p->high && c->first == first && c->last == last &&
+        q->time >= first && q->time <= last)
+        return 1;
+    if (p->range == NPRFX_TONE_RANGE_SHOT)
+        ranges[0].first = first, ranges[0].last = last;
     else if (p->range == NPRFX_TONE_RANGE_FRAME)
         ranges[0].first = ranges[0].last = p->reference_frame;
     return 1;

@@ -355,7 +355,7 @@ typedef struct nprfx_graph_source_info {
 /* The graph's read nodes, in graph order. */
 NPRFX_API int nprfx_graph_source_count(const nprfx_graph *g);
 NPRFX_API nprfx_result nprfx_graph_source(const nprfx_graph *g, int i,
-                                       nprfx_graph_source_info *out);
+                                          nprfx_graph_source_info *out);
 /* AOV `aov` of read node `node`'s plate at `frame`, as an input that selects it by name receives
  * it: in nprfx's conventions (motion in pixels, y down; ids decoded; depth as z), fallbacks
  * applied. *out is allocated (free with nprfx_image_free). */
@@ -372,8 +372,8 @@ NPRFX_API nprfx_result nprfx_graph_eval_aov(nprfx_graph *g, int node, int aov, i
  * the neighbouring frame; depth for rest, uv and position). A front end that serves the plates
  * declares these frames to its host (the OpenFX look plug-ins' frames needed). */
 NPRFX_API nprfx_result nprfx_graph_frames_read(nprfx_graph *g, int node, int frame, int source,
-                                               int aov, unsigned present,
-                                               nprfx_frame_range *ranges, int max, int *count);
+                                               int aov, unsigned present, nprfx_frame_range *ranges,
+                                               int max, int *count);
 
 /* ---- checking and running a shot ------------------------------------------------------------ */
 

@@ -125,7 +125,8 @@ NPRFX_OFX_EXPORT OfxPlugin *OfxGetPlugin(int nth)
 static OfxStatus main_entry(int index, const char *action, const void *handle,
                             OfxPropertySetHandle in_args, OfxPropertySetHandle out_args)
 {
-    if (index >= node_count) return ofx_look_main(index - node_count, action, handle, in_args, out_args);
+    if (index >= node_count)
+        return ofx_look_main(index - node_count, action, handle, in_args, out_args);
     const nprfx_node_desc *d = nprfx_node_at(index);
     OfxImageEffectHandle fx = (OfxImageEffectHandle)handle;
     if (!d || !action) return kOfxStatErrUnknown;

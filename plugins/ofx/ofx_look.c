@@ -33,8 +33,7 @@ static int add_clip(ofx_look *lk, const char *read, int node, int aov, int main)
 {
     if (lk->nclips >= LOOK_MAX_CLIPS) return 0;
     look_clip *c = &lk->clips[lk->nclips++];
-    ofx_names_look_clip(read, main, aov >= 0 ? nprfx_aov_name(aov) : NULL, c->name,
-                        sizeof c->name);
+    ofx_names_look_clip(read, main, aov >= 0 ? nprfx_aov_name(aov) : NULL, c->name, sizeof c->name);
     c->node = node;
     c->aov = aov;
     c->main = main;
@@ -81,7 +80,8 @@ static int describe_graph(nprfx_graph *g, ofx_look *lk, char *why, size_t n)
             lk->temporal = 1;
         if (ni.kind == NPRFX_GRAPH_WRITE && ni.ninputs > 0 && ni.inputs[0].src >= 0) {
             char **o = realloc(lk->outputs, (size_t)(lk->noutputs + 1) * sizeof *o);
-            char **l = o ? realloc(lk->output_labels, (size_t)(lk->noutputs + 1) * sizeof *l) : NULL;
+            char **l =
+                o ? realloc(lk->output_labels, (size_t)(lk->noutputs + 1) * sizeof *l) : NULL;
             if (o) lk->outputs = o;
             if (l) lk->output_labels = l;
             if (!o || !l) return 0;
@@ -282,20 +282,30 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
 static const char *aov_help(int aov)
 {
     switch (aov) {
-    case NPRFX_AOV_BEAUTY: return "the render's picture, scene-linear RGBA (alpha: coverage)";
-    case NPRFX_AOV_ALBEDO: return "diffuse colour (albedo), RGB";
-    case NPRFX_AOV_DIFFUSE_LIGHT: return "diffuse lighting without the albedo, RGB";
-    case NPRFX_AOV_DEPTH: return "camera depth z in R (or alpha of an Alpha clip)";
-    case NPRFX_AOV_NORMAL: return "surface normal, RGB = XYZ";
-    case NPRFX_AOV_POSITION: return "position, RGB = XYZ";
-    case NPRFX_AOV_REST: return "rest (reference) position, RGB = XYZ";
-    case NPRFX_AOV_UV: return "texture coordinates, RG = UV";
-    case NPRFX_AOV_ID: return "object id in R: one number per object, 0 none";
+    case NPRFX_AOV_BEAUTY:
+        return "the render's picture, scene-linear RGBA (alpha: coverage)";
+    case NPRFX_AOV_ALBEDO:
+        return "diffuse colour (albedo), RGB";
+    case NPRFX_AOV_DIFFUSE_LIGHT:
+        return "diffuse lighting without the albedo, RGB";
+    case NPRFX_AOV_DEPTH:
+        return "camera depth z in R (or alpha of an Alpha clip)";
+    case NPRFX_AOV_NORMAL:
+        return "surface normal, RGB = XYZ";
+    case NPRFX_AOV_POSITION:
+        return "position, RGB = XYZ";
+    case NPRFX_AOV_REST:
+        return "rest (reference) position, RGB = XYZ";
+    case NPRFX_AOV_UV:
+        return "texture coordinates, RG = UV";
+    case NPRFX_AOV_ID:
+        return "object id in R: one number per object, 0 none";
     case NPRFX_AOV_MOTION_PREV:
         return "motion to the previous frame in RG: pixels at full resolution, x right, y down";
     case NPRFX_AOV_MOTION_NEXT:
         return "motion to the next frame in RG: pixels at full resolution, x right, y down";
-    default: return "";
+    default:
+        return "";
     }
 }
 
@@ -326,8 +336,9 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
             snprintf(hint, sizeof hint, "%s%s%s", c->main ? "" : c->name, c->main ? "" : ": ",
                      aov_help(c->aov));
         else
-            snprintf(hint, sizeof hint, "the image the look's read node reads from one file (a "
-                                        "map): connect a Read of it");
+            snprintf(hint, sizeof hint,
+                     "the image the look's read node reads from one file (a "
+                     "map): connect a Read of it");
         ofx_set_str(cp, kOfxParamPropHint, 0, hint);
         if (!general) break; /* Filter: Source alone */
     }
@@ -366,8 +377,8 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     return kOfxStatOK;
 }
 
-OfxStatus ofx_look_main(int i, const char *action, const void *handle,
-                        OfxPropertySetHandle in_args, OfxPropertySetHandle out_args)
+OfxStatus ofx_look_main(int i, const char *action, const void *handle, OfxPropertySetHandle in_args,
+                        OfxPropertySetHandle out_args)
 {
     const ofx_look *lk = ofx_look_at(i);
     OfxImageEffectHandle fx = (OfxImageEffectHandle)handle;

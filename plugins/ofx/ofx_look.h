@@ -21,7 +21,7 @@ typedef struct look_clip {
 
 /* One knob: a param of one or more graph nodes ("ink.width", "strokes*.radius"). */
 typedef struct look_knob {
-    char *name;                  /* as the graph gives it: what nprfx_graph_set takes */
+    char *name;                     /* as the graph gives it: what nprfx_graph_set takes */
     char param[NPRFX_OFX_NAME_MAX]; /* the OFX param's name */
     char *label, *help;
     const nprfx_param_desc *p; /* the node param's descriptor (the registry's) */
@@ -40,13 +40,13 @@ typedef struct ofx_look {
     int source; /* the Source clip's index in clips */
     look_knob *knobs;
     int nknobs;
-    char **outputs; /* the nodes its write nodes write, evaluated by the plug-in */
+    char **outputs;       /* the nodes its write nodes write, evaluated by the plug-in */
     char **output_labels; /* the write nodes' names */
     int noutputs;
-    int temporal;     /* a node reads other frames, or keeps state between them */
-    int measures;     /* nodes that measure over the shot (tone's range) */
+    int temporal; /* a node reads other frames, or keeps state between them */
+    int measures; /* nodes that measure over the shot (tone's range) */
     double design_width;
-    int filter;       /* reads nothing but its Source picture: offered in the Filter context */
+    int filter; /* reads nothing but its Source picture: offered in the Filter context */
 } ofx_look;
 
 /* Find the looks: every graph file in the folders of NPRFX_LOOK_PATH (':' between them), then
@@ -57,8 +57,8 @@ int ofx_looks_discover(int max);
 const ofx_look *ofx_look_at(int i);
 
 /* The actions of look i's plug-in. */
-OfxStatus ofx_look_main(int i, const char *action, const void *handle,
-                        OfxPropertySetHandle in_args, OfxPropertySetHandle out_args);
+OfxStatus ofx_look_main(int i, const char *action, const void *handle, OfxPropertySetHandle in_args,
+                        OfxPropertySetHandle out_args);
 
 /* ofx_look_render.c: instances and the render. */
 OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx);

@@ -331,9 +331,8 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
             return res;
         }
         /* motion comes in pixels at full resolution */
-        double k = lc->aov == NPRFX_AOV_MOTION_PREV || lc->aov == NPRFX_AOV_MOTION_NEXT
-                       ? li->scale
-                       : 1.0;
+        double k =
+            lc->aov == NPRFX_AOV_MOTION_PREV || lc->aov == NPRFX_AOV_MOTION_NEXT ? li->scale : 1.0;
         nprfx_rect in = nprfx_rect_intersect(b, v.bounds);
         for (int c = 0; c < np; c++) {
             const plate_chan *pc = &all[pick[c]];
@@ -410,8 +409,7 @@ static char *settings_at(const look_inst *li, double time, double scale)
                 if (ofx_g.param->paramGetValueAtTime(h, time, &iv) == kOfxStatOK) v.v[0] = iv;
                 break;
             case NPRFX_PARAM_COLOR:
-                (void)ofx_g.param->paramGetValueAtTime(h, time, &v.v[0], &v.v[1], &v.v[2],
-                                                       &v.v[3]);
+                (void)ofx_g.param->paramGetValueAtTime(h, time, &v.v[0], &v.v[1], &v.v[2], &v.v[3]);
                 break;
             case NPRFX_PARAM_STRING:
                 if (ofx_g.param->paramGetValueAtTime(h, time, &s) == kOfxStatOK && s) v.s = s;
@@ -432,15 +430,15 @@ static char *settings_at(const look_inst *li, double time, double scale)
     if (li->design) (void)ofx_g.param->paramGetValue(li->design, &design);
     double range[2] = {0, -1};
     OfxPropertySetHandle sp = ofx_clip_props(li->clips[lk->source]);
-    if (!sp || ofx_g.prop->propGetDoubleN(sp, kOfxImageEffectPropFrameRange, 2, range) !=
-                   kOfxStatOK)
+    if (!sp ||
+        ofx_g.prop->propGetDoubleN(sp, kOfxImageEffectPropFrameRange, 2, range) != kOfxStatOK)
         range[0] = 0, range[1] = -1;
     unsigned long long connected = 0;
     for (int i = 0; i < lk->nclips; i++)
         if (ofx_clip_connected(li->clips[i])) connected |= 1ull << i;
     snprintf(line, sizeof line, "#output %d\n#design %.17g\n#scale %.17g\n#shot %d %d\n#clips %llx",
-             out < 0 || out >= lk->noutputs ? 0 : out, design, scale,
-             (int)floor(range[0] + 0.5), (int)floor(range[1] + 0.5), connected);
+             out < 0 || out >= lk->noutputs ? 0 : out, design, scale, (int)floor(range[0] + 0.5),
+             (int)floor(range[1] + 0.5), connected);
     append(&buf, &len, &cap, line);
     return buf;
 }
@@ -549,7 +547,8 @@ static OfxStatus render(look_inst *li, OfxPropertySetHandle in_args)
     char msg[2048];
     OfxRectD rod;
     if (frame_rod(li, time, &rod) != kOfxStatOK) {
-        snprintf(msg, sizeof msg, "%s: the Source clip is not connected: it is the render's picture",
+        snprintf(msg, sizeof msg,
+                 "%s: the Source clip is not connected: it is the render's picture",
                  li->look->label);
         return fail(li, msg);
     }

@@ -58,6 +58,5 @@ void ofx_clear_error_on(OfxImageEffectHandle fx, int *persistent)
 {
     const OfxMessageSuiteV2 *m2 = ofx_g.msg2;
     if (!m2 || !m2->clearPersistentMessage) return;
-    if (__atomic_exchange_n(persistent, 0, __ATOMIC_RELAXED))
-        (void)m2->clearPersistentMessage(fx);
+    if (__atomic_exchange_n(persistent, 0, __ATOMIC_RELAXED)) (void)m2->clearPersistentMessage(fx);
 }

@@ -37,16 +37,18 @@ for sym in OfxGetNumberOfPlugins OfxGetPlugin; do
   if nm -D "$BIN" | grep -q " T $sym\$"; then pass; else fail "nm -D does not show $sym"; fi
 done
 
-# --- one plug-in per node (nprfx list also shows the I/O pseudo-nodes read and write) ----------
+# --- one plug-in per node (nprfx list also shows the I/O pseudo-nodes read and write), and one
+# per look the bundle ships (the sample graphs that name their knobs; tests/cli/ofx_looks.sh) ---
 nodes=$("$NPRFX" list | awk '$2 != "I/O"' | wc -l)
+looks=$(grep -l '"knobs"' "$SRC"/samples/graphs/*.json | wc -l)
 cat > "$W/count.json" <<'EOF'
 {"frames": "1", "nodes": {"p": {"node": "synth", "scene": "translate", "size": "8x8"},
  "w": {"node": "write", "inputs": {"image": "p"}, "path": "count.####.exr"}}}
 EOF
 line=$("$OFXTEST" run "$W/count.json" --output-dir "$W/count" --ofx "$BUNDLE" 2>&1 >/dev/null | grep '^ofx: ')
 plugins=$(echo "$line" | sed -n 's/^ofx: \([0-9]*\) plug-ins.*/\1/p')
-if [ -n "$plugins" ] && [ "$plugins" -eq "$nodes" ] && [ "$nodes" -gt 0 ]; then pass
-else fail "the bundle has '${plugins:-?}' plug-ins, nprfx list has $nodes nodes ($line)"; fi
+if [ -n "$plugins" ] && [ "$plugins" -eq $((nodes + looks)) ] && [ "$nodes" -gt 0 ] && [ "$looks" -gt 0 ]; then pass
+else fail "the bundle has '${plugins:-?}' plug-ins, nprfx list has $nodes nodes and samples/graphs $looks looks ($line)"; fi
 
 # --- the shipped runner holds no OpenFX host: no --ofx option, none of the host's code ----------
 "$NPRFX" run "$W/count.json" --output-dir "$W/count" --ofx "$BUNDLE" > "$W/runner.out" 2>&1

@@ -1,12 +1,12 @@
 /* nprfx OpenFX test host — a look plug-in driven as a host drives it:
  * `nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames SPEC] [--scramble]
- * [-o DIR]` renders the look plug-in of GRAPH (found through NPRFX_LOOK_PATH, set to the graph's
- * folder) frame by frame, its clips fed with the AOVs of the graph's own plates as the engine
- * reads them (nprfx_graph_eval_aov: nprfx's conventions, what a compositor's shuffles would
- * give), and writes its Output as DIR/STEM.####.exr (RGBA float). tests/cli/ofx_looks.sh compares
- * them with `nprfx run GRAPH`. The look stands as a node of the render hook (render.c) whose
- * inputs are the look's clips, so every check of the hook holds: frames declared equal frames
- * fetched on the first render, images released, messages not empty. */
+ * [--set KNOB=VALUE] [--channels R,G,B] [-o DIR]` renders the look plug-in of GRAPH (found through
+ * NPRFX_LOOK_PATH, set to the graph's folder) frame by frame, its clips fed with the AOVs of the
+ * graph's own plates as the engine reads them (nprfx_graph_eval_aov: nprfx's conventions, what a
+ * compositor's shuffles would give), and writes its Output as DIR/STEM.####.exr (RGBA float).
+ * tests/cli/ofx_looks.sh compares them with `nprfx run GRAPH`. The look stands as a node of the
+ * render hook (render.c) whose inputs are the look's clips, so every check of the hook holds:
+ * frames declared equal frames fetched on the first render, images released, messages not empty. */
 #define _POSIX_C_SOURCE 200809L /* setenv, strdup */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +26,10 @@ typedef struct look_run {
     int node[LOOK_INPUTS], aov[LOOK_INPUTS]; /* aov -1: a map's whole plate */
     nprfx_input_desc in[LOOK_INPUTS];
     char names[LOOK_INPUTS][64];
+    nprfx_param_desc params[LOOK_INPUTS]; /* the knobs, under their OFX names */
+    char pnames[LOOK_INPUTS][NPRFX_OFX_NAME_MAX];
+    nprfx_value values[LOOK_INPUTS];
+    int nparams;
     nprfx_image ring[LOOK_RING]; /* fetched frames of this render */
     int nring;
 } look_run;
@@ -63,13 +67,15 @@ static nprfx_result look_fetch(void *user, int input, double time, nprfx_image *
 static void usage(void)
 {
     fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
-                    "SPEC] [--scramble] [-o DIR]\n");
+                    "SPEC] [--scramble] [--set NODE.PARAM=VALUE] [--channels R,G,B] [-o DIR]\n");
 }
 
 int internal_look_main(int argc, char **argv)
 {
     const char *graph = NULL, *bundle = NULL, *profile = NULL, *frames = NULL, *dir = ".";
     const char *channels = "R,G,B,A";
+    const char *sets[16];
+    int nsets = 0;
     int scramble = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *next = i + 1 < argc ? argv[i + 1] : NULL;
@@ -81,6 +87,8 @@ int internal_look_main(int argc, char **argv)
             profile = argv[++i];
         else if (next && !strcmp(a, "--frames"))
             frames = argv[++i];
+        else if (next && !strcmp(a, "--set") && nsets < 16)
+            sets[nsets++] = argv[++i];
         else if (next && !strcmp(a, "--channels"))
             channels = argv[++i];
         else if (next && !strcmp(a, "-o"))
@@ -136,7 +144,23 @@ int internal_look_main(int argc, char **argv)
     opt.size = sizeof opt;
     opt.io = nprfx_io_oiio();
     if ((r = nprfx_graph_load(lr.ctx, graph, &opt, &lr.g))) goto done;
-    if ((r = nprfx_graph_frames(lr.g, frames, &list))) goto done;
+    for (int i = 0; i < nsets && !r; i++)
+        r = nprfx_graph_set(lr.g, sets[i]);
+    if (r || (r = nprfx_graph_frames(lr.g, frames, &list))) goto done;
+    /* the knobs as the look's params: the host sets each to the graph's value (after --set),
+     * as a user turning it */
+    int nk = nprfx_graph_knob_count(lr.g);
+    if (nk > LOOK_INPUTS) nk = LOOK_INPUTS;
+    for (int i = 0; i < nk && !r; i++) {
+        nprfx_graph_knob_info k = {sizeof k};
+        if ((r = nprfx_graph_knob(lr.g, i, &k))) break;
+        lr.params[i] = *k.param;
+        ofx_names_look_knob(k.name, lr.pnames[i], sizeof lr.pnames[i]);
+        lr.params[i].name = lr.pnames[i];
+        lr.values[i] = *k.value;
+        lr.nparams++;
+    }
+    if (r) goto done;
     if (list.count < 1) {
         r = nprfx_error(lr.ctx, NPRFX_ERR_INVALID_ARGUMENT, "no frames to render");
         goto done;
@@ -156,8 +180,8 @@ int internal_look_main(int argc, char **argv)
             int k = lr.n++;
             lr.node[k] = s.node;
             lr.aov[k] = aov;
-            ofx_names_look_clip(s.name, is_main, aov >= 0 ? nprfx_aov_name(aov) : NULL,
-                                lr.names[k], sizeof lr.names[k]);
+            ofx_names_look_clip(s.name, is_main, aov >= 0 ? nprfx_aov_name(aov) : NULL, lr.names[k],
+                                sizeof lr.names[k]);
             lr.in[k].name = lr.names[k];
             lr.in[k].label = lr.names[k];
             lr.in[k].flags = NPRFX_INPUT_OPTIONAL | (aov < 0 ? NPRFX_INPUT_UNALIGNED : 0);
@@ -176,12 +200,15 @@ int internal_look_main(int argc, char **argv)
     desc.num_inputs = lr.n;
     desc.inputs = lr.in;
     desc.flags = NPRFX_NODE_TEMPORAL;
+    desc.num_params = lr.nparams;
+    desc.params = lr.params;
     int first = list.frames[0], last = list.frames[list.count - 1];
     (void)nprfx_graph_shot(lr.g, &first, &last);
     for (int fi = 0; fi < list.count; fi++) {
         /* --scramble: the frames in an order no host promises (odd ones first, then even) */
         int idx = fi;
-        if (scramble) idx = fi < (list.count + 1) / 2 ? 2 * fi : 2 * (fi - (list.count + 1) / 2) + 1;
+        if (scramble)
+            idx = fi < (list.count + 1) / 2 ? 2 * fi : 2 * (fi - (list.count + 1) / 2) + 1;
         int frame = list.frames[idx];
         nprfx_image inputs[LOOK_INPUTS], out;
         memset(inputs, 0, sizeof inputs);
@@ -204,6 +231,7 @@ int internal_look_main(int argc, char **argv)
             a.first_frame = first;
             a.last_frame = last;
             a.inputs = inputs;
+            a.params = lr.values;
             a.output = &out;
             a.fetch = look_fetch;
             a.fetch_user = &lr;

@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# The look plug-ins (plugins/ofx/ofx_look.c): each graph file of a looks folder is one effect that
+# evaluates the graph inside the plug-in, its plates served from the host's clips (Source the
+# picture, one clip per AOV). `nprfx-ofxtest look GRAPH` drives a look as a host does, its clips
+# fed with the graph's own plates' AOVs in nprfx's conventions, and every render checks that the
+# first render fetches exactly the frames getFramesNeeded declared.
+#  1. strict: every look the bundle ships (the sample graphs that name their knobs) renders
+#     frames 1-3 bit-identically to `nprfx run` of its graph.
+#  2. natron: toon, watercolor and stippling in order, and toon frame by frame out of order
+#     (odd frames, then even), bit-identical over 1-6.
+#  3. knobs: toon with two knobs turned (ink.width, bands.bands) equals `nprfx run --set` of the
+#     same, and differs from the look at its defaults.
+#  4. frames declared: rendered in order, after its first frames toon declares its clips at t-1
+#     and t only (tone's range kept from the first frame, coherent-noise stepping on), not the
+#     shot.
+#  5. mlt (no temporal clip access): the looks are unavailable, with the reason.
+#
+# usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx_looks.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
+set -u
+NPRFX=$1; SRC=$2; W=$3
+OFXTEST=${NPRFX_OFXTEST:-}
+BUNDLE=${NPRFX_OFX_BUNDLE:-$(cd "$(dirname "$NPRFX")" && pwd)/plugins/ofx/nprfx.ofx.bundle}
+rm -rf "$W"; mkdir -p "$W"
+W=$(cd "$W" && pwd); SRC=$(cd "$SRC" && pwd)
+passes=0; fails=0
+pass() { passes=$((passes+1)); }
+fail() { echo "FAIL: $*"; fails=$((fails+1)); }
+if [ -z "$OFXTEST" ] || [ ! -x "$OFXTEST" ]; then
+  echo "FAIL: NPRFX_OFXTEST is not set to the test host (ctest sets it)"; exit 1; fi
+
+# the runner's output of GRAPH's first write node over FRAMES into DIR; prints its pattern
+runner() { # GRAPH FRAMES DIR [--set ...]
+  local g=$1 f=$2 d=$3; shift 3
+  "$NPRFX" run "$g" --frames "$f" --output-dir "$d" --quiet --threads 2 "$@" >/dev/null 2>"$d.log" || return 1
+  python3 -c "import json,sys;g=json.load(open(sys.argv[1]));print([v['path'] for v in g['nodes'].values() if v.get('node')=='write'][0])" "$g"
+}
+# compare the runner's frames with the look's (STEM.####.exr in LOOKDIR)
+same_frames() { # RUNNER_PATTERN LOOKDIR STEM FRAMES...
+  local pat=$1 dir=$2 stem=$3; shift 3
+  for f in "$@"; do
+    local n; n=$(printf %04d "$f")
+    "$NPRFX" diff "${pat//####/$n}" "$dir/$stem.$n.exr" --fail 0 --hardfail 0 --warn 0 -q >/dev/null 2>&1 || return 1
+  done
+}
+channels_of() { "$NPRFX" info "$1" | sed -n 3p | sed 's/ (.*//; s/^ *//; s/ /,/g'; }
+
+look() { # PROFILE GRAPH FRAMES OUTDIR [options]
+  local pf=$1 g=$2 f=$3 d=$4; shift 4
+  mkdir -p "$d"
+  "$OFXTEST" look "$g" --ofx "$BUNDLE" --profile "$pf" --frames "$f" -o "$d" "$@" >/dev/null 2>"$d.log"
+}
+
+check() { # PROFILE GRAPH FRAMES [look options]
+  local pf=$1 g=$2 f=$3; shift 3
+  local s; s=$(basename "$g" .json)
+  local r="$W/$pf/runner/$s" o="$W/$pf/look/$s"
+  mkdir -p "$r"
+  local pat; pat=$(runner "$g" "$f" "$r") || { fail "$s: nprfx run failed: $(tail -n 2 "$r.log")"; return; }
+  pat="$r/$pat"
+  local ch; ch=$(channels_of "${pat//####/0001}")
+  if ! look "$pf" "$g" "$f" "$o" --channels "$ch" "$@"; then
+    fail "$s under $pf: $(grep -v 'is no look' "$o.log" | tail -n 2 | tr '\n' ' ')"; return; fi
+  if same_frames "$pat" "$o" "$s" $(seq ${f%-*} ${f#*-}); then pass
+  else fail "$s under $pf ($*): the look plug-in differs from nprfx run"; fi
+}
+
+# 1 -----------------------------------------------------------------------------------------------
+for g in $(grep -l '"knobs"' "$SRC"/samples/graphs/*.json); do check strict "$g" 1-3; done
+
+# 2 -----------------------------------------------------------------------------------------------
+for s in toon watercolor stippling; do check natron "$SRC/samples/graphs/$s.json" 1-6; done
+check natron "$SRC/samples/graphs/toon.json" 1-6 --scramble
+
+# 3 -----------------------------------------------------------------------------------------------
+T="$SRC/samples/graphs/toon.json"
+mkdir -p "$W/knobs/runner"
+pat=$(runner "$T" 1-2 "$W/knobs/runner" --set ink.width=3 --set bands.bands=4) && pat="$W/knobs/runner/$pat"
+if look strict "$T" 1-2 "$W/knobs/look" --set ink.width=3 --set bands.bands=4 &&
+   same_frames "$pat" "$W/knobs/look" toon 1 2; then pass
+else fail "toon with knobs turned differs from nprfx run --set ($(tail -n 1 "$W/knobs/look.log"))"; fi
+if ! "$NPRFX" diff "$W/knobs/look/toon.0002.exr" "$W/strict/look/toon/toon.0002.exr" -q >/dev/null 2>&1; then pass
+else fail "turning toon's knobs changed nothing"; fi
+
+# 4 -----------------------------------------------------------------------------------------------
+rm -f "$W/frames.log"
+if (export NPRFX_OFXTEST_FRAMES_LOG="$W/frames.log"; look natron "$T" 1-8 "$W/inorder"); then
+  wide=$(awk '$3 >= 3 && $5 - $4 > 1' "$W/frames.log" | head -n 3)
+  first=$(awk '$3 == 1 && $5 - $4 > 1' "$W/frames.log" | head -n 1)
+  if [ -z "$wide" ] && [ -n "$first" ]; then pass
+  else fail "toon in order: declarations after frame 2 span more than t-1..t ($wide), or frame 1 not the shot ($first)"; fi
+else fail "toon under natron 1-8: $(tail -n 2 "$W/inorder.log" 2>/dev/null | tr '\n' ' ')"; fi
+
+# 5 -----------------------------------------------------------------------------------------------
+if look mlt "$T" 1 "$W/mlt"; then fail "toon rendered in a host without temporal clip access"
+elif grep -q "not available in this host.*temporal clip access" "$W/mlt.log"; then pass
+else fail "toon under mlt: no reason given ($(tail -n 1 "$W/mlt.log"))"; fi
+
+echo "$passes passed, $fails failed"
+[ $fails -eq 0 ] && [ $passes -gt 0 ]
