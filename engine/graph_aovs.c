@@ -416,6 +416,8 @@ nprfx_result internal_graph_prepare(nprfx_graph *g, int frame)
             r = nprfx_error(g->ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
             break;
         }
+        /* the io may serve plates from its front end's data (a plug-in's clips) */
+        nprfx_context_set_front_end(quiet, nprfx_context_front_end(g->ctx));
         nprfx_result e = g->io.info(quiet, file, &info);
         nprfx_context_destroy(quiet);
         if (e) {

@@ -72,7 +72,9 @@ void internal_graph_prefetch_next(nprfx_graph *g, int node, int frame)
     int ok = 0;
     if (internal_graph_pooled_open(g, node, g->next_frame, 1, &f->p, &ok) || !ok) return;
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
-    if (nprfx_context_create(&ci, &f->ctx) || pthread_create(&f->thread, NULL, fill_main, f)) {
+    if (!nprfx_context_create(&ci, &f->ctx))
+        nprfx_context_set_front_end(f->ctx, nprfx_context_front_end(g->ctx)); /* for the io */
+    if (!f->ctx || pthread_create(&f->thread, NULL, fill_main, f)) {
         nprfx_context_destroy(f->ctx);
         f->ctx = NULL;
         internal_graph_pooled_drop(g, &f->p);

@@ -89,8 +89,12 @@ nprfx_result internal_graph_write_job_start(nprfx_graph *g, write_job *job)
     }
     nprfx_context_init ci = NPRFX_CONTEXT_INIT_DEFAULT;
     for (int i = 0; i < items; i++) {
-        if (nprfx_context_create(&ci, &job->ctx[i]) ||
-            pthread_create(&job->thread[i], NULL, i ? thread_preview : thread_exr, job)) {
+        int failed = nprfx_context_create(&ci, &job->ctx[i]) != NPRFX_OK;
+        if (!failed) { /* the io may reach its front end's data through it */
+            nprfx_context_set_front_end(job->ctx[i], nprfx_context_front_end(g->ctx));
+            failed = pthread_create(&job->thread[i], NULL, i ? thread_preview : thread_exr, job);
+        }
+        if (failed) {
             int frame = job->frame;
             join(job);
             for (int k = 0; k < 2; k++)

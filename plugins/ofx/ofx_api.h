@@ -433,6 +433,36 @@ typedef struct OfxMessageSuiteV2 {
     OfxStatus (*clearPersistentMessage)(void *handle);
 } OfxMessageSuiteV2;
 
+/* ---- multi-plane images: The Foundry's extension (nuke/fnOfxExtensions.h) and Natron's
+ * layers on top of it (ofxNatron.h) ---------------------------------------------------------------
+ * A multi-plane host (Nuke, Natron) carries several images ("planes", Natron's "layers") in one
+ * clip; a plug-in that says it is multi-planar lists the planes it needs in the get clip
+ * components action and fetches each with clipGetImagePlane. The clip property "planes present"
+ * lists what a clip carries: the colour plane and, in Natron, every other layer encoded as
+ * PLANE_PREFIX + layer name + (CHANNEL_SEP + channel name) per channel. */
+#define kFnOfxImageEffectPropMultiPlanar "uk.co.thefoundry.OfxImageEffectPropMultiPlanar"
+#define kFnOfxImageEffectPropPassThroughComponents                                                 \
+    "uk.co.thefoundry.OfxImageEffectPropPassThroughComponents"
+#define kFnOfxImageEffectPropComponentsPresent                                                     \
+    "uk.co.thefoundry.OfxImageEffectClipPropPlanesPresent"
+#define kFnOfxImageEffectActionGetClipComponents                                                   \
+    "uk.co.thefoundry.OfxImageEffectActionGetClipComponents"
+/* out-args of that action: this prefix then a clip's name, the components it needs or makes */
+#define kFnOfxImageEffectActionGetClipComponentsPropString "uk.co.thefoundry.OfxNeededComp_"
+#define kFnOfxImageEffectPropPassThroughClip "uk.co.thefoundry.ImageEffectPropPassThroughClip"
+#define kFnOfxImagePlaneColour "uk.co.thefoundry.OfxImagePlaneColour"
+#define kFnOfxImageEffectPlaneSuite "uk.co.thefoundry.FnOfxImageEffectPlaneSuite"
+#define kNatronOfxImageComponentsPlane "NatronOfxImageComponentsPlane_"
+#define kNatronOfxImageComponentsPlaneChannel "_Channel_"
+#define kNatronOfxImageComponentXY "NatronOfxImageComponentXY"
+
+typedef struct FnOfxImageEffectPlaneSuiteV1 {
+    /* An image of one plane of clip at time (region NULL: the region of interest), released
+     * with the image effect suite's clipReleaseImage. */
+    OfxStatus (*clipGetImagePlane)(OfxImageClipHandle clip, OfxTime time, const char *plane,
+                                   OfxRectD *region, OfxPropertySetHandle *imageHandle);
+} FnOfxImageEffectPlaneSuiteV1;
+
 /* ---- the two symbols a plug-in binary exports ------------------------------------------------ */
 
 typedef int (*OfxGetNumberOfPluginsFn)(void);

@@ -53,13 +53,25 @@ static OfxStatus img_to_float(ofx_img *im)
 
 /* An image of clip at t. Inputs (convert = 1) always come out as float; the output keeps the
  * host's depth and is written with ofx_img_store. */
-OfxStatus ofx_img_fetch(OfxImageClipHandle clip, OfxTime t, int convert, ofx_img *im)
+/* The components of an image: the standard ones, 2 for Natron's XY, and a Natron layer's channel
+ * count (one "_Channel_" per channel); 0 for anything else. */
+static int components_count(const char *comps)
 {
-    memset(im, 0, sizeof *im);
-    OfxPropertySetHandle h = NULL;
-    OfxStatus st = ofx_g.fx->clipGetImage(clip, t, NULL, &h);
-    if (st != kOfxStatOK) return st;
-    if (!h) return kOfxStatFailed;
+    if (!strcmp(comps, kOfxImageComponentRGBA)) return 4;
+    if (!strcmp(comps, kOfxImageComponentRGB)) return 3;
+    if (!strcmp(comps, kOfxImageComponentAlpha)) return 1;
+    if (!strcmp(comps, kNatronOfxImageComponentXY)) return 2;
+    if (strncmp(comps, kNatronOfxImageComponentsPlane, strlen(kNatronOfxImageComponentsPlane)))
+        return 0;
+    int n = 0;
+    for (const char *s = strstr(comps, kNatronOfxImageComponentsPlaneChannel); s;
+         s = strstr(s + 1, kNatronOfxImageComponentsPlaneChannel))
+        n++;
+    return n >= 1 && n <= 4 ? n : 0;
+}
+
+static OfxStatus img_from_handle(OfxPropertySetHandle h, int convert, ofx_img *im)
+{
     im->h = h;
     void *data = NULL;
     char *depth = NULL, *comps = NULL;
@@ -74,21 +86,40 @@ OfxStatus ofx_img_fetch(OfxImageClipHandle clip, OfxTime t, int convert, ofx_img
     }
     im->data = data;
     im->b.x1 = b[0], im->b.y1 = b[1], im->b.x2 = b[2], im->b.y2 = b[3];
-    im->ncomp = !strcmp(comps, kOfxImageComponentRGBA)    ? 4
-                : !strcmp(comps, kOfxImageComponentAlpha) ? 1
-                : !strcmp(comps, kOfxImageComponentRGB)   ? 3
-                                                          : 0;
+    im->ncomp = components_count(comps);
     im->bytes = depth_bytes(depth);
     if (!im->bytes || !im->ncomp || im->row_bytes % im->bytes ||
         (!im->data && im->b.x2 > im->b.x1 && im->b.y2 > im->b.y1)) {
         ofx_img_release(im);
         return kOfxStatErrImageFormat;
     }
+    OfxStatus st;
     if (convert && im->bytes != 4 && (st = img_to_float(im)) != kOfxStatOK) {
         ofx_img_release(im);
         return st;
     }
     return kOfxStatOK;
+}
+
+OfxStatus ofx_img_fetch(OfxImageClipHandle clip, OfxTime t, int convert, ofx_img *im)
+{
+    memset(im, 0, sizeof *im);
+    OfxPropertySetHandle h = NULL;
+    OfxStatus st = ofx_g.fx->clipGetImage(clip, t, NULL, &h);
+    if (st != kOfxStatOK) return st;
+    if (!h) return kOfxStatFailed;
+    return img_from_handle(h, convert, im);
+}
+
+OfxStatus ofx_img_fetch_plane(OfxImageClipHandle clip, OfxTime t, const char *plane, ofx_img *im)
+{
+    memset(im, 0, sizeof *im);
+    if (!ofx_g.planes) return kOfxStatErrUnsupported;
+    OfxPropertySetHandle h = NULL;
+    OfxStatus st = ofx_g.planes->clipGetImagePlane(clip, t, plane, NULL, &h);
+    if (st != kOfxStatOK) return st;
+    if (!h) return kOfxStatFailed;
+    return img_from_handle(h, 1, im);
 }
 
 /* Write v into component c of pixel (x, y_up) of a host image of any depth (integers clamp to
@@ -126,6 +157,7 @@ static int host_comp(const ofx_img *im, int c)
 {
     if (im->ncomp == 4) return c;
     if (im->ncomp == 3) return c < 3 ? c : -1;
+    if (im->ncomp == 2) return c < 2 ? c : -1; /* a plane of two channels (XY) */
     return c == 3 ? 0 : -1;
 }
 

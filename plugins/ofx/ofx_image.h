@@ -12,7 +12,7 @@ typedef struct ofx_img {
     char *data;             /* pixel (bounds.x1, bounds.y1) */
     int row_bytes;
     OfxRectI b;
-    int ncomp;   /* 1 Alpha, 3 RGB, 4 RGBA */
+    int ncomp;   /* 1 Alpha, 3 RGB, 4 RGBA; a plane's: its channels (2: XY) */
     int bytes;   /* per component of data: 4 float, 2 unsigned short, 1 unsigned char */
     float *conv; /* an 8/16-bit input converted to float (data points here then) */
 } ofx_img;
@@ -23,6 +23,9 @@ void ofx_img_release(ofx_img *im);
 /* An image of clip at t. Inputs (convert = 1) always come out as float; the output keeps the
  * host's depth and is written with ofx_img_store. */
 OfxStatus ofx_img_fetch(OfxImageClipHandle clip, OfxTime t, int convert, ofx_img *im);
+/* An image of one plane of clip at t through the host's plane suite (a multi-plane host), as
+ * float; its components may be any 1 to 4 (a Natron layer's channels). */
+OfxStatus ofx_img_fetch_plane(OfxImageClipHandle clip, OfxTime t, const char *plane, ofx_img *im);
 
 /* Write v into component c of pixel (x, y_up) of a host image of any depth (integers clamp to
  * [0, 1] and round; NaN becomes 0). */

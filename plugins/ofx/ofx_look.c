@@ -276,6 +276,11 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
     ofx_set_int(p, kOfxImageEffectPropSupportsMultipleClipPARs, 0, 0);
     ofx_set_int(p, kOfxImageEffectPluginPropFieldRenderTwiceAlways, 0, 0);
     ofx_set_int(p, kOfxImageEffectInstancePropSequentialRender, 0, lk->temporal ? 2 : 0);
+    /* a multi-plane host gives the render's layers on Source: no clip per AOV */
+    if (ofx_g.multiplanar) {
+        ofx_set_int(p, kFnOfxImageEffectPropMultiPlanar, 0, 1);
+        ofx_set_int(p, kFnOfxImageEffectPropPassThroughComponents, 0, 0);
+    }
     return kOfxStatOK;
 }
 
@@ -324,6 +329,7 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     ofx_set_str(cp, kOfxImageEffectPropSupportedComponents, 0, kOfxImageComponentRGBA);
     for (int i = 0; i < lk->nclips; i++) {
         const look_clip *c = &lk->clips[i];
+        if (ofx_g.multiplanar && c->main && c->aov != NPRFX_AOV_BEAUTY) continue;
         if (ofx_g.fx->clipDefine(fx, c->name, &cp) != kOfxStatOK) return kOfxStatFailed;
         ofx_set_str(cp, kOfxImageEffectPropSupportedComponents, 0, kOfxImageComponentRGBA);
         ofx_set_str(cp, kOfxImageEffectPropSupportedComponents, 1, kOfxImageComponentAlpha);
@@ -341,6 +347,10 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
                      "map): connect a Read of it");
         ofx_set_str(cp, kOfxParamPropHint, 0, hint);
         if (!general) break; /* Filter: Source alone */
+        if (c->main && ofx_g.multiplanar)
+            ofx_set_str(cp, kOfxParamPropHint, 0,
+                        "the render: every layer of a multilayer EXR; the look finds each AOV "
+                        "it reads among them by the renderer's names (Renderer)");
     }
     OfxParamSetHandle ps;
     if (ofx_g.fx->getParamSet(fx, &ps) != kOfxStatOK) return kOfxStatErrBadHandle;
@@ -358,6 +368,19 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
         ofx_set_str(pp, kOfxParamPropHint, 0, "Which of the graph's write nodes' images to show");
         for (int i = 0; i < lk->noutputs; i++)
             ofx_set_str(pp, kOfxParamPropChoiceOption, i, lk->output_labels[i]);
+        ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
+        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
+    }
+    if (ofx_g.multiplanar) {
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "renderer", &pp)) != kOfxStatOK)
+            return st;
+        ofx_set_str(pp, kOfxPropLabel, 0, "Renderer");
+        ofx_set_str(pp, kOfxParamPropHint, 0,
+                    "Whose names the look finds its AOVs under among Source's layers (nprfx info "
+                    "--aovs FILE shows them for a file): auto tells from the layer names.");
+        ofx_set_str(pp, kOfxParamPropChoiceOption, 0, "auto");
+        for (int i = 0; i < NPRFX_PROFILE_COUNT; i++)
+            ofx_set_str(pp, kOfxParamPropChoiceOption, i + 1, nprfx_aov_profile_name(i));
         ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
     }

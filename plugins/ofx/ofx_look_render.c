@@ -12,6 +12,7 @@
 
 #include "flow_opencv.h"
 #include "nprfx/aov.h"
+#include "nprfx/channels.h"
 #include "ofx_executor.h"
 #include "ofx_image.h"
 #include "ofx_look.h"
@@ -32,6 +33,9 @@ typedef struct look_inst {
     nprfx_graph *g;
     char *settings; /* what the graph was loaded with (ofx_look_render.c, settings_at) */
     int out_node;   /* the graph node the Output shows */
+    int planar;     /* a multi-plane host: the look's plates are Source's layers */
+    int profile;    /* there, the renderer profile the layers are read with (0: detected) */
+    OfxParamHandle renderer;
     int persistent;
     /* the render in flight: its time, render scale and the frame in host pixels */
     double time, scale;
@@ -59,6 +63,7 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
     }
     li->look = look;
     li->fx = fx;
+    li->planar = ofx_g.multiplanar;
     (void)ofx_g.fx->clipGetHandle(fx, NPRFX_OFX_OUTPUT_CLIP, &li->output, NULL);
     for (int i = 0; i < look->nclips; i++)
         if (ofx_g.fx->clipGetHandle(fx, look->clips[i].name, &li->clips[i], NULL) != kOfxStatOK)
@@ -70,6 +75,7 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
         if (look->noutputs > 1)
             (void)ofx_g.param->paramGetHandle(ps, "output", &li->output_choice, NULL);
         (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
+        if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "renderer", &li->renderer, NULL);
     }
     pthread_mutex_init(&li->lock, NULL);
     OfxPropertySetHandle p;
@@ -135,17 +141,104 @@ static int parse_plate(const look_inst *li, const char *path, int *node, int *fr
     return 0;
 }
 
-/* The plate's channels: per connected clip of the node, its AOV's channels. */
+/* The plate's channels: per connected clip of the node, its AOV's channels; in a multi-plane
+ * host, for the look's plates, the layers its Source carries: the colour plane as R, G, B, A and
+ * each other layer's channels as LAYER.CHANNEL, the names the render's file gives them, so the
+ * engine reads them as it reads the file (profile, conventions and all). */
 typedef struct plate_chan {
-    const char *name;
+    char name[160];
     int clip, comp;
+    int plane; /* index into the planes present, -1: the clip's image */
 } plate_chan;
 
-static int plate_channels(const look_inst *li, int node, plate_chan *out, int max)
+typedef struct plate_planes {
+    int n;
+    char *plane[64]; /* the clip's planes present (the host's strings) */
+} plate_planes;
+
+/* A Natron layer "NatronOfxImageComponentsPlane_LAYER_Channel_X_Channel_Y": its name into layer,
+ * its channels' names into ch; returns how many (0: not a layer). */
+static int natron_layer(const char *plane, char *layer, size_t n, char ch[4][32])
+{
+    size_t pl = strlen(kNatronOfxImageComponentsPlane),
+           sl = strlen(kNatronOfxImageComponentsPlaneChannel);
+    if (strncmp(plane, kNatronOfxImageComponentsPlane, pl)) return 0;
+    const char *s = plane + pl, *sep = strstr(s, kNatronOfxImageComponentsPlaneChannel);
+    if (!sep) return 0;
+    snprintf(layer, n, "%.*s", (int)(sep - s), s);
+    int count = 0;
+    while (sep && count < 4) {
+        const char *c = sep + sl, *next = strstr(c, kNatronOfxImageComponentsPlaneChannel);
+        size_t len = next ? (size_t)(next - c) : strlen(c);
+        snprintf(ch[count++], sizeof ch[0], "%.*s", (int)(len < 31 ? len : 31), c);
+        sep = next;
+    }
+    return count;
+}
+
+static int standard_components(const char *s)
+{
+    return !strcmp(s, kOfxImageComponentRGBA)    ? 4
+           : !strcmp(s, kOfxImageComponentRGB)   ? 3
+           : !strcmp(s, kOfxImageComponentAlpha) ? 1
+                                                 : 0;
+}
+
+/* The planes Source carries (kFnOfxImageEffectPropComponentsPresent). */
+static void planes_present(const look_inst *li, plate_planes *pp)
+{
+    pp->n = 0;
+    OfxPropertySetHandle cp = ofx_clip_props(li->clips[li->look->source]);
+    for (int i = 0; cp && i < 64; i++) {
+        char *s = NULL;
+        if (ofx_g.prop->propGetString(cp, kFnOfxImageEffectPropComponentsPresent, i, &s) !=
+                kOfxStatOK ||
+            !s)
+            break;
+        pp->plane[pp->n++] = s;
+    }
+}
+
+static int plate_channels(const look_inst *li, int node, plate_chan *out, int max, plate_planes *pp)
 {
     int n = 0;
-    for (int i = 0; i < li->look->nclips; i++) {
-        const look_clip *c = &li->look->clips[i];
+    pp->n = 0;
+    const ofx_look *lk = li->look;
+    if (li->planar && node == lk->clips[lk->source].node) {
+        planes_present(li, pp);
+        int colour = 0;
+        for (int p = 0; p < pp->n; p++) {
+            char layer[128], ch[4][32];
+            int count = standard_components(pp->plane[p]);
+            if (count && colour) continue; /* the colour plane once */
+            static const char *const rgba[] = {"R", "G", "B", "A"};
+            int first = count == 1 ? 3 : 0;
+            if (count) {
+                colour = 1;
+                for (int k = 0; k < count && n < max; k++, n++) {
+                    snprintf(out[n].name, sizeof out[n].name, "%s", rgba[first + k]);
+                    out[n].clip = lk->source, out[n].comp = k, out[n].plane = p;
+                }
+                continue;
+            }
+            count = natron_layer(pp->plane[p], layer, sizeof layer, ch);
+            for (int k = 0; k < count && n < max; k++, n++) {
+                snprintf(out[n].name, sizeof out[n].name, "%s.%s", layer, ch[k]);
+                out[n].clip = lk->source, out[n].comp = k, out[n].plane = p;
+            }
+        }
+        /* a host that lists nothing: its colour plane */
+        if (!pp->n) {
+            static const char *const rgba[] = {"R", "G", "B", "A"};
+            for (int k = 0; k < 4 && n < max; k++, n++) {
+                snprintf(out[n].name, sizeof out[n].name, "%s", rgba[k]);
+                out[n].clip = lk->source, out[n].comp = k, out[n].plane = -1;
+            }
+        }
+        return n;
+    }
+    for (int i = 0; i < lk->nclips; i++) {
+        const look_clip *c = &lk->clips[i];
         if (c->node != node || !ofx_clip_connected(li->clips[i])) continue;
         int count = 4;
         static const char *const rgba[] = {"R", "G", "B", "A"};
@@ -160,9 +253,10 @@ static int plate_channels(const look_inst *li, int node, plate_chan *out, int ma
             premult && !strcmp(premult, kOfxImageOpaque))
             count = 3;
         for (int k = 0; names && k < count && n < max; k++, n++) {
-            out[n].name = names[k];
+            snprintf(out[n].name, sizeof out[n].name, "%s", names[k]);
             out[n].clip = i;
             out[n].comp = k;
+            out[n].plane = -1;
         }
     }
     return n;
@@ -220,7 +314,8 @@ static nprfx_result look_info(nprfx_context *ctx, const char *path, nprfx_file_i
     if (!li || !parse_plate(li, path, &node, &frame))
         return nprfx_error(ctx, NPRFX_ERR_IO, "'%s': a look reads its plates from its clips", path);
     plate_chan ch[64];
-    int nc = plate_channels(li, node, ch, 64);
+    plate_planes pp;
+    int nc = plate_channels(li, node, ch, 64, &pp);
     OfxRectI r;
     nprfx_result res = plate_rect(ctx, li, node, frame, &r);
     if (res) return res;
@@ -268,7 +363,8 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
                            "host gives no other frame (no temporal clip access)",
                            frame, li->time);
     plate_chan all[64];
-    int na = plate_channels(li, node, all, 64);
+    plate_planes pp;
+    int na = plate_channels(li, node, all, 64, &pp);
     const char *names[64];
     for (int c = 0; c < na; c++)
         names[c] = all[c].name;
@@ -308,20 +404,26 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
             nprfx_plate_free(out);
             return nprfx_error(ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
         }
-    /* each clip once: its image, then its channels into the plate */
-    for (int i = 0; i < li->look->nclips; i++) {
-        int used = 0;
-        for (int c = 0; c < np; c++)
-            used |= all[pick[c]].clip == i;
-        if (!used) continue;
-        const look_clip *lc = &li->look->clips[i];
+    /* each image once (a clip's, or a plane of Source), then its channels into the plate */
+    int done[64] = {0};
+    for (int c0 = 0; c0 < np; c0++) {
+        if (done[c0]) continue;
+        const plate_chan *src = &all[pick[c0]];
+        const look_clip *lc = &li->look->clips[src->clip];
         ofx_img img;
-        OfxStatus st = ofx_img_fetch(li->clips[i], frame, 1, &img);
+        OfxStatus st = src->plane >= 0 && pp.n
+                           ? ofx_img_fetch_plane(li->clips[src->clip], frame,
+                                                 standard_components(pp.plane[src->plane])
+                                                     ? kFnOfxImagePlaneColour
+                                                     : pp.plane[src->plane],
+                                                 &img)
+                           : ofx_img_fetch(li->clips[src->clip], frame, 1, &img);
         if (st != kOfxStatOK) {
             nprfx_plate_free(out);
             return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                               "the host gave no image of clip %s at frame %d (OFX status %d)",
-                               lc->name, frame, st);
+                               "the host gave no image of clip %s%s%s at frame %d (OFX status %d)",
+                               lc->name, src->plane >= 0 ? ", layer of " : "",
+                               src->plane >= 0 ? src->name : "", frame, st);
         }
         nprfx_image v;
         float *scratch = NULL;
@@ -330,13 +432,16 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
             nprfx_plate_free(out);
             return res;
         }
-        /* motion comes in pixels at full resolution */
+        /* an AOV clip's motion comes in pixels at full resolution */
         double k =
-            lc->aov == NPRFX_AOV_MOTION_PREV || lc->aov == NPRFX_AOV_MOTION_NEXT ? li->scale : 1.0;
+            src->plane < 0 && (lc->aov == NPRFX_AOV_MOTION_PREV || lc->aov == NPRFX_AOV_MOTION_NEXT)
+                ? li->scale
+                : 1.0;
         nprfx_rect in = nprfx_rect_intersect(b, v.bounds);
-        for (int c = 0; c < np; c++) {
+        for (int c = c0; c < np; c++) {
             const plate_chan *pc = &all[pick[c]];
-            if (pc->clip != i) continue;
+            if (pc->clip != src->clip || pc->plane != src->plane) continue;
+            done[c] = 1;
             int comp = v.channels == 1 ? 0 : pc->comp < v.channels ? pc->comp : -1;
             if (comp < 0) continue; /* an RGB image's alpha: none */
             for (int y = in.y0; y < in.y1; y++) {
@@ -428,6 +533,8 @@ static char *settings_at(const look_inst *li, double time, double scale)
     double design = lk->design_width;
     if (li->output_choice) (void)ofx_g.param->paramGetValue(li->output_choice, &out);
     if (li->design) (void)ofx_g.param->paramGetValue(li->design, &design);
+    int renderer = 0;
+    if (li->renderer) (void)ofx_g.param->paramGetValue(li->renderer, &renderer);
     double range[2] = {0, -1};
     OfxPropertySetHandle sp = ofx_clip_props(li->clips[lk->source]);
     if (!sp ||
@@ -468,6 +575,8 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
     opt.io = &look_io;
     nprfx_result r = nprfx_graph_load(li->ctx, lk->path, &opt, &li->g);
     char line[4400];
+    const char *rs = strstr(settings, "#renderer ");
+    li->profile = rs ? atoi(rs + strlen("#renderer ")) : 0;
     for (int i = 0; !r && i < lk->nclips; i++) {
         const look_clip *c = &lk->clips[i];
         nprfx_graph_node_info ni = {sizeof ni};
@@ -480,10 +589,20 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
         }
         snprintf(line, sizeof line, "%s.path=" LOOK_PLATES "%s.####.exr", name, name);
         if (!r) r = nprfx_graph_set(li->g, line);
-        snprintf(line, sizeof line, "%s.aovs=generic", name);
-        if (!r) r = nprfx_graph_set(li->g, line);
-        snprintf(line, sizeof line, "%s.vectors=auto", name);
-        if (!r) r = nprfx_graph_set(li->g, line);
+        if (li->planar && c->main) {
+            /* the render's own layers: its profile as detected (or as the user names it), and
+             * the graph's motion convention */
+            if (!r && li->profile > 0) {
+                snprintf(line, sizeof line, "%s.aovs=%s", name,
+                         nprfx_aov_profile_name(li->profile - 1));
+                r = nprfx_graph_set(li->g, line);
+            }
+        } else {
+            snprintf(line, sizeof line, "%s.aovs=generic", name);
+            if (!r) r = nprfx_graph_set(li->g, line);
+            snprintf(line, sizeof line, "%s.vectors=auto", name);
+            if (!r) r = nprfx_graph_set(li->g, line);
+        }
         snprintf(line, sizeof line, "%s.colorspace=", name); /* the host's pictures are linear */
         if (!r) r = nprfx_graph_set(li->g, line);
     }
@@ -627,6 +746,37 @@ static void set_clip_prop(OfxPropertySetHandle out, const char *prefix, const ch
     (void)ofx_g.prop->propSetDoubleN(out, name, n, v);
 }
 
+/* In a multi-plane host, the AOVs Source's layers hold (bits), under the profile the look reads
+ * them with: what the graph's fallbacks need not stand in for. */
+static unsigned planar_present(const look_inst *li)
+{
+    plate_chan ch[64];
+    plate_planes pp;
+    int n = plate_channels(li, li->look->clips[li->look->source].node, ch, 64, &pp);
+    const char *names[64];
+    for (int i = 0; i < n; i++)
+        names[i] = ch[i].name;
+    int profile = li->profile > 0 ? li->profile - 1 : nprfx_aov_detect(names, n, NULL, NULL, 0);
+    unsigned bits = 0;
+    int idx[NPRFX_MAX_CHANNELS + 1];
+    for (int aov = 0; aov < NPRFX_AOV_COUNT; aov++) {
+        const char *cand = nprfx_aov_candidates(profile, aov);
+        if (aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT) {
+            const nprfx_aov_vectors *v = nprfx_aov_profile_vectors(profile);
+            cand = v ? v->channels : NULL;
+            if (nprfx_channels_from_hint(names, n,
+                                         aov == NPRFX_AOV_MOTION_PREV
+                                             ? "motion_prev.X,motion_prev.Y"
+                                             : "motion_next.X,motion_next.Y",
+                                         idx, NPRFX_MAX_CHANNELS + 1) > 0)
+                bits |= 1u << aov;
+        }
+        if (cand && nprfx_channels_from_hint(names, n, cand, idx, NPRFX_MAX_CHANNELS + 1) > 0)
+            bits |= 1u << aov;
+    }
+    return bits;
+}
+
 static OfxStatus frames_needed(look_inst *li, OfxPropertySetHandle in_args,
                                OfxPropertySetHandle out_args)
 {
@@ -644,8 +794,11 @@ static OfxStatus frames_needed(look_inst *li, OfxPropertySetHandle in_args,
     free(settings);
     unsigned present[LOOK_MAX_CLIPS];
     memset(present, 0, sizeof present);
+    unsigned planar_aovs = li->planar ? planar_present(li) : 0;
     for (int i = 0; i < lk->nclips; i++)
-        for (int j = 0; j < lk->nclips; j++)
+        if (li->planar && lk->clips[i].main) present[i] = planar_aovs;
+    for (int i = 0; i < lk->nclips; i++)
+        for (int j = 0; j < lk->nclips && !(li->planar && lk->clips[i].main); j++)
             if (lk->clips[j].node == lk->clips[i].node && lk->clips[j].aov >= 0 &&
                 ofx_clip_connected(li->clips[j])) {
                 present[i] |= 1u << lk->clips[j].aov;
@@ -687,6 +840,32 @@ static void set_clip_str(OfxPropertySetHandle out, const char *prefix, const cha
     char name[256];
     snprintf(name, sizeof name, "%s%s", prefix, clip);
     (void)ofx_g.prop->propSetString(out, name, 0, v);
+}
+
+/* A multi-plane host asks which planes the look reads: every layer Source carries (the graph
+ * picks its AOVs among them), RGBA of a map, and RGBA out; nothing passes through. */
+static OfxStatus clip_components(look_inst *li, OfxPropertySetHandle out_args)
+{
+    const ofx_look *lk = li->look;
+    char name[256];
+    for (int i = 0; i < lk->nclips; i++) {
+        if (!li->clips[i]) continue;
+        snprintf(name, sizeof name, "%s%s", kFnOfxImageEffectActionGetClipComponentsPropString,
+                 lk->clips[i].name);
+        plate_planes pp = {0};
+        if (i == lk->source) planes_present(li, &pp);
+        if (!pp.n) {
+            (void)ofx_g.prop->propSetString(out_args, name, 0, kOfxImageComponentRGBA);
+            continue;
+        }
+        for (int p = 0; p < pp.n; p++)
+            (void)ofx_g.prop->propSetString(out_args, name, p, pp.plane[p]);
+    }
+    snprintf(name, sizeof name, "%s%s", kFnOfxImageEffectActionGetClipComponentsPropString,
+             NPRFX_OFX_OUTPUT_CLIP);
+    (void)ofx_g.prop->propSetString(out_args, name, 0, kOfxImageComponentRGBA);
+    (void)ofx_g.prop->propSetString(out_args, kFnOfxImageEffectPropPassThroughClip, 0, "");
+    return kOfxStatOK;
 }
 
 static OfxStatus clip_preferences(look_inst *li, OfxPropertySetHandle out_args)
@@ -752,6 +931,8 @@ OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
         return frames_needed(li, in_args, out_args);
     if (!strcmp(action, kOfxImageEffectActionGetClipPreferences))
         return clip_preferences(li, out_args);
+    if (!strcmp(action, kFnOfxImageEffectActionGetClipComponents))
+        return li->planar ? clip_components(li, out_args) : kOfxStatReplyDefault;
     if (!strcmp(action, kOfxActionPurgeCaches)) {
         pthread_mutex_lock(&li->lock);
         drop_graph(li);

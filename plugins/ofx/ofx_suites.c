@@ -50,6 +50,12 @@ OfxStatus ofx_suites_load(void)
         kOfxStatOK)
         temporal = 1;
     ofx_g.temporal = temporal != 0;
+    /* Multi-plane (Nuke, Natron): a look then reads the render's layers from Source. */
+    int planar = 0;
+    ofx_g.planes = h->fetchSuite(h->host, kFnOfxImageEffectPlaneSuite, 1);
+    if (ofx_g.prop->propGetInt(h->host, kFnOfxImageEffectPropMultiPlanar, 0, &planar) != kOfxStatOK)
+        planar = 0;
+    ofx_g.multiplanar = planar && ofx_g.planes && ofx_g.planes->clipGetImagePlane;
     ofx_g.flow = flow_opencv_provider(); /* NULL without OpenCV: nothing is derived */
     ofx_find_data_dir();
     return kOfxStatOK;

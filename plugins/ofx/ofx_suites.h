@@ -25,6 +25,10 @@ typedef struct ofx_suites {
     /* The host's kOfxImageEffectPropTemporalClipAccess: 0 means images at other times cannot be
      * had (MLT gives the current frame instead), so nodes get no fetch and say so. */
     int temporal;
+    /* The Foundry's plane suite where the host says it is multi-planar (kFnOfxImageEffectProp-
+     * MultiPlanar): a clip then carries a render's layers (ofx_look_render.c); else NULL, 0. */
+    const FnOfxImageEffectPlaneSuiteV1 *planes;
+    int multiplanar;
     /* The flow node's solver (OpenCV's DIS), NULL in a build without one: without it no input is
      * derived from Source (ofx_derive.c) and the footage nodes keep their clips. */
     const nprfx_flow_provider *flow;

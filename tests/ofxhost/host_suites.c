@@ -135,5 +135,7 @@ const void *internal_fetch_suite(OfxPropertySetHandle host, const char *name, in
     if (!strcmp(name, kOfxParameterSuite)) return &internal_parameter_suite;
     if (!strcmp(name, kOfxMultiThreadSuite)) return &multithread_suite;
     if (!strcmp(name, kOfxMemorySuite)) return &memory_suite;
+    if (!strcmp(name, kFnOfxImageEffectPlaneSuite) && internal_g_host->profile->planes)
+        return &internal_plane_suite;
     return NULL;
 }

@@ -223,10 +223,10 @@ static void image_props(himage *im, const node_inst *ni, const char *comps, void
  * Alpha for a 1-channel main input (see inst_create, render.c), in the profile's depth. Rows are
  * laid out top-down in memory, padded by one pixel, so rowBytes is negative and wider than the
  * row: the adapter must cope with both, as with hosts that do this. */
-static himage *pack_input(node_inst *ni, int k, const nprfx_image *v, double time)
+static himage *pack_image(node_inst *ni, int f, const nprfx_image *v, int nc, const char *comps,
+                          const char *id)
 {
     int w = nprfx_rect_width(v->bounds), hgt = nprfx_rect_height(v->bounds);
-    int f = input_flip(ni, k, v), nc = ni->in_comps[k];
     hdepth depth = ni->h->profile->depth;
     size_t es = internal_depth_size(depth);
     himage *im = calloc(1, sizeof *im);
@@ -249,11 +249,48 @@ static himage *pack_input(node_inst *ni, int k, const nprfx_image *v, double tim
     OfxRectI b = internal_ofx_rect(v->bounds, f);
     /* OFX data points at the bottom row (y1), the last one in memory */
     char *data = (char *)im->pixels + (size_t)(hgt > 0 ? hgt - 1 : 0) * stride * es;
+    image_props(im, ni, comps, data, b, -(int)(stride * es), id);
+    return im;
+}
+
+/* The host image of an nprfx view: RGBA with the channels in R, G, B, A order and the rest 0, or
+ * Alpha for a 1-channel main input (see inst_create, render.c), in the profile's depth. Rows are
+ * laid out top-down in memory, padded by one pixel, so rowBytes is negative and wider than the
+ * row: the adapter must cope with both, as with hosts that do this. */
+static himage *pack_input(node_inst *ni, int k, const nprfx_image *v, double time)
+{
     char id[64];
     snprintf(id, sizeof id, "input%d@%g", k, time);
-    image_props(im, ni, nc == 1 ? kOfxImageComponentAlpha : kOfxImageComponentRGBA, data, b,
-                -(int)(stride * es), id);
-    return im;
+    int nc = ni->in_comps[k];
+    return pack_image(ni, input_flip(ni, k, v), v, nc,
+                      nc == 1 ? kOfxImageComponentAlpha : kOfxImageComponentRGBA, id);
+}
+
+/* A fetch of input k at time other than the render's must be declared, and possible in this
+ * host; every fetch is recorded (frames.c). Called with the host's lock held. */
+static OfxStatus fetch_allowed(node_inst *ni, const hclip *c, int k, double time)
+{
+    nprfx_ofx_host *h = ni->h;
+    const nprfx_render_args *a = ni->args;
+    if (time != a->time) {
+        if (!h->profile->temporal) {
+            snprintf(ni->host_error, sizeof ni->host_error,
+                     "clip %s fetched at frame %g while rendering frame %g: this host (%s) has no "
+                     "temporal clip access",
+                     c->name, time, a->time, h->profile->like);
+            return kOfxStatFailed;
+        }
+        if (!ni->analyzing && !internal_frames_allows(&ni->frames[k], time)) {
+            snprintf(ni->host_error, sizeof ni->host_error,
+                     "clip %s fetched at frame %g, outside the frames that getFramesNeeded "
+                     "declared",
+                     c->name, time);
+            return kOfxStatFailed;
+        }
+    }
+    /* The render time counts as fetched too: a clip the plug-in reads only at other frames must
+     * not declare the current one (frames.c). */
+    return internal_frames_fetched(&ni->frames[k], time) ? kOfxStatOK : kOfxStatErrMemory;
 }
 
 static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const OfxRectD *region,
@@ -281,31 +318,14 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
     int k = c->input;
     if (k < 0 || !a->inputs[k].data) return kOfxStatFailed;
     pthread_mutex_lock(&h->lock);
-    OfxStatus st = kOfxStatOK;
     nprfx_image view = a->inputs[k];
-    hframes *fr = &ni->frames[k];
-    if (time != a->time) {
-        if (!h->profile->temporal) {
-            snprintf(ni->host_error, sizeof ni->host_error,
-                     "clip %s fetched at frame %g while rendering frame %g: this host (%s) has no "
-                     "temporal clip access",
-                     c->name, time, a->time, h->profile->like);
-            st = kOfxStatFailed;
-        } else if (!ni->analyzing && !internal_frames_allows(fr, time)) {
-            snprintf(ni->host_error, sizeof ni->host_error,
-                     "clip %s fetched at frame %g, outside the frames that getFramesNeeded "
-                     "declared",
-                     c->name, time);
-            st = kOfxStatFailed;
-        } else if (!a->fetch || a->fetch(a->fetch_user, k, time, &view) != NPRFX_OK) {
-            snprintf(ni->host_error, sizeof ni->host_error, "clip %s: no image at frame %g: %s",
-                     c->name, time, cli_message(a->ctx));
-            st = kOfxStatFailed;
-        }
+    OfxStatus st = fetch_allowed(ni, c, k, time);
+    if (st == kOfxStatOK && time != a->time &&
+        (!a->fetch || a->fetch(a->fetch_user, k, time, &view) != NPRFX_OK)) {
+        snprintf(ni->host_error, sizeof ni->host_error, "clip %s: no image at frame %g: %s",
+                 c->name, time, cli_message(a->ctx));
+        st = kOfxStatFailed;
     }
-    /* The render time counts as fetched too: a clip the plug-in reads only at other frames must
-     * not declare the current one (frames.c). */
-    if (st == kOfxStatOK && !internal_frames_fetched(fr, time)) st = kOfxStatErrMemory;
     himage *im = NULL;
     if (st == kOfxStatOK && !(im = pack_input(ni, k, &view, time))) st = kOfxStatErrMemory;
     pthread_mutex_unlock(&h->lock);
@@ -314,6 +334,51 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
     *out = (OfxPropertySetHandle)&im->props;
     return kOfxStatOK;
 }
+
+/* The plane suite (profile planes): the colour plane as clipGetImage gives it; another layer of
+ * the main input from the plane source (look.c), with the frame checks of any fetch. */
+static OfxStatus fx_clip_get_image_plane(OfxImageClipHandle clip, OfxTime time, const char *plane,
+                                         OfxRectD *region, OfxPropertySetHandle *out)
+{
+    if (!plane || !out) return kOfxStatErrBadHandle;
+    if (!strcmp(plane, kFnOfxImagePlaneColour)) return fx_clip_get_image(clip, time, region, out);
+    hclip *c = clip_of(clip);
+    if (!c) return kOfxStatErrBadHandle;
+    node_inst *ni = c->fx->ni;
+    if (!ni || !ni->args) return kOfxStatFailed;
+    nprfx_ofx_host *h = ni->h;
+    int k = c->input, listed = 0;
+    for (int i = 0; i < h->nplanes; i++)
+        listed |= !strcmp(h->planes[i], plane);
+    if (k < 0 || k != ofx_names_main_input(ni->desc) || !listed || !h->plane_fetch) {
+        snprintf(ni->host_error, sizeof ni->host_error,
+                 "clip %s has no plane '%s' (kFnOfxImageEffectPropComponentsPresent lists what "
+                 "it has)",
+                 c->name, plane);
+        return kOfxStatFailed;
+    }
+    pthread_mutex_lock(&h->lock);
+    OfxStatus st = fetch_allowed(ni, c, k, time);
+    nprfx_image view;
+    memset(&view, 0, sizeof view);
+    if (st == kOfxStatOK && h->plane_fetch(h->plane_user, time, plane, &view) != NPRFX_OK) {
+        snprintf(ni->host_error, sizeof ni->host_error, "clip %s: no plane '%s' at frame %g",
+                 c->name, plane, time);
+        st = kOfxStatFailed;
+    }
+    himage *im = NULL;
+    char id[300];
+    snprintf(id, sizeof id, "plane %.200s@%g", plane, time);
+    if (st == kOfxStatOK && !(im = pack_image(ni, ni->frame_flip, &view, view.channels, plane, id)))
+        st = kOfxStatErrMemory;
+    pthread_mutex_unlock(&h->lock);
+    if (st != kOfxStatOK) return st;
+    __atomic_add_fetch(&ni->images, 1, __ATOMIC_RELAXED);
+    *out = (OfxPropertySetHandle)&im->props;
+    return kOfxStatOK;
+}
+
+const FnOfxImageEffectPlaneSuiteV1 internal_plane_suite = {fx_clip_get_image_plane};
 
 static OfxStatus fx_clip_release_image(OfxPropertySetHandle image)
 {

@@ -1,12 +1,13 @@
 /* nprfx OpenFX test host — a look plug-in driven as a host drives it:
  * `nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames SPEC] [--scramble]
- * [--set KNOB=VALUE] [--channels R,G,B] [-o DIR]` renders the look plug-in of GRAPH (found through
- * NPRFX_LOOK_PATH, set to the graph's folder) frame by frame, its clips fed with the AOVs of the
- * graph's own plates as the engine reads them (nprfx_graph_eval_aov: nprfx's conventions, what a
- * compositor's shuffles would give), and writes its Output as DIR/STEM.####.exr (RGBA float).
- * tests/cli/ofx_looks.sh compares them with `nprfx run GRAPH`. The look stands as a node of the
- * render hook (render.c) whose inputs are the look's clips, so every check of the hook holds:
- * frames declared equal frames fetched on the first render, images released, messages not empty. */
+ * [--shot SPEC] [--set KNOB=VALUE] [--channels R,G,B] [-o DIR]` renders the look plug-in of GRAPH
+ * (found through NPRFX_LOOK_PATH, set to the graph's folder) frame by frame, its clips fed with the
+ * AOVs of the graph's own plates as the engine reads them (nprfx_graph_eval_aov: nprfx's
+ * conventions, what a compositor's shuffles would give), and writes its Output as DIR/STEM.####.exr
+ * (RGBA float). tests/cli/ofx_looks.sh compares them with `nprfx run GRAPH`. The look stands as a
+ * node of the render hook (render.c) whose inputs are the look's clips, so every check of the hook
+ * holds: frames declared equal frames fetched on the first render, images released, messages not
+ * empty. */
 #define _POSIX_C_SOURCE 200809L /* setenv, strdup */
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,7 +33,108 @@ typedef struct look_run {
     int nparams;
     nprfx_image ring[LOOK_RING]; /* fetched frames of this render */
     int nring;
+    /* a multi-plane host (profile planes): the main read's file as layers */
+    int planar, main_node;
+    char *planes[64];
+    int nplanes;
+    nprfx_plate plate; /* the last frame read, and which */
+    int plate_frame, have_plate;
 } look_run;
+
+/* The main read's file at frame, every channel (a multi-plane host's Read gives them all). */
+static nprfx_result main_plate(look_run *lr, int frame)
+{
+    if (lr->have_plate && lr->plate_frame == frame) return NPRFX_OK;
+    nprfx_plate_free(&lr->plate);
+    lr->have_plate = 0;
+    nprfx_graph_node_info ni = {sizeof ni};
+    nprfx_result r = nprfx_graph_node(lr->g, lr->main_node, &ni);
+    if (r) return r;
+    char file[4096];
+    nprfx_graph_resolve_path(lr->g, nprfx_graph_base_dir(lr->g), ni.path, frame, file, sizeof file);
+    if ((r = nprfx_io_oiio()->read(lr->ctx, file, NULL, &lr->plate))) return r;
+    lr->plate_frame = frame;
+    lr->have_plate = 1;
+    return NPRFX_OK;
+}
+
+/* The layers of a plate as a multi-plane host names them: LAYER.CHANNEL channels grouped by
+ * LAYER, up to 4 a plane; channels without a layer are the colour plane's. plane[i] gets the
+ * plane string, chan[i] its channels' indices. Returns how many. */
+static int plate_layers(const nprfx_plate *p, char **plane, int (*chan)[4], int *nch, int max)
+{
+    int n = 0;
+    for (int c = 0; c < p->nchannels; c++) {
+        const char *dot = strrchr(p->names[c], '.');
+        if (!dot) continue;
+        size_t len = (size_t)(dot - p->names[c]);
+        int found = -1;
+        for (int i = 0; i < n && found < 0; i++) {
+            size_t pl = strlen(kNatronOfxImageComponentsPlane);
+            if (nch[i] < 4 && !strncmp(plane[i] + pl, p->names[c], len) &&
+                !strncmp(plane[i] + pl + len, kNatronOfxImageComponentsPlaneChannel,
+                         strlen(kNatronOfxImageComponentsPlaneChannel)))
+                found = i;
+        }
+        if (found < 0) {
+            if (n == max) break;
+            found = n++;
+            nch[found] = 0;
+            if (plane) {
+                plane[found] = calloc(1, 1024);
+                if (!plane[found]) return -1;
+                snprintf(plane[found], 1024, "%s%.*s", kNatronOfxImageComponentsPlane, (int)len,
+                         p->names[c]);
+            }
+        }
+        chan[found][nch[found]++] = c;
+        size_t at = strlen(plane[found]);
+        snprintf(plane[found] + at, 1024 - at, "%s%s", kNatronOfxImageComponentsPlaneChannel,
+                 dot + 1);
+    }
+    return n;
+}
+
+/* The plane source of the test host: one layer of the main read's file at time. */
+static nprfx_result look_plane(void *user, double time, const char *plane, nprfx_image *out)
+{
+    look_run *lr = user;
+    int frame = (int)(time >= 0 ? time + 0.5 : time - 0.5);
+    nprfx_result r = main_plate(lr, frame);
+    if (r) return r;
+    char *names[64];
+    int chan[64][4], nch[64];
+    int n = plate_layers(&lr->plate, names, chan, nch, 64);
+    int found = -1;
+    for (int i = 0; i < n; i++) {
+        if (found < 0 && !strcmp(names[i], plane)) found = i;
+    }
+    if (found >= 0 && lr->nring == LOOK_RING) {
+        nprfx_image_free(&lr->ring[0]);
+        memmove(lr->ring, lr->ring + 1, (LOOK_RING - 1) * sizeof *lr->ring);
+        lr->nring--;
+    }
+    if (found >= 0 &&
+        !(r = nprfx_image_alloc(lr->ctx, lr->plate.bounds, nch[found], &lr->ring[lr->nring]))) {
+        /* the plate's channels interleaved, rows of its width (more than a view may have) */
+        const nprfx_plate *pl = &lr->plate;
+        size_t w = (size_t)nprfx_rect_width(pl->bounds), nc = (size_t)pl->nchannels;
+        nprfx_image *im = &lr->ring[lr->nring++];
+        for (int y = im->bounds.y0; y < im->bounds.y1; y++)
+            for (int x = im->bounds.x0; x < im->bounds.x1; x++) {
+                const float *s =
+                    pl->pixels +
+                    ((size_t)(y - pl->bounds.y0) * w + (size_t)(x - pl->bounds.x0)) * nc;
+                for (int k = 0; k < nch[found]; k++)
+                    nprfx_image_at(im, x, y)[k] = s[chan[found][k]];
+            }
+        *out = *im;
+    }
+    for (int i = 0; i < n; i++)
+        free(names[i]);
+    if (!r && found < 0) r = nprfx_error(lr->ctx, NPRFX_ERR_MISSING_INPUT, "no plane %s", plane);
+    return r;
+}
 
 /* Input k at frame: an AOV of a plate, or a map's plate; allocated. */
 static nprfx_result look_image(look_run *lr, int k, int frame, nprfx_image *out)
@@ -66,13 +168,16 @@ static nprfx_result look_fetch(void *user, int input, double time, nprfx_image *
 
 static void usage(void)
 {
-    fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
-                    "SPEC] [--scramble] [--set NODE.PARAM=VALUE] [--channels R,G,B] [-o DIR]\n");
+    fprintf(
+        stderr,
+        "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
+        "SPEC] [--scramble] [--shot SPEC] [--set NODE.PARAM=VALUE] [--channels R,G,B] [-o DIR]\n");
 }
 
 int internal_look_main(int argc, char **argv)
 {
     const char *graph = NULL, *bundle = NULL, *profile = NULL, *frames = NULL, *dir = ".";
+    const char *shot = NULL;
     const char *channels = "R,G,B,A";
     const char *sets[16];
     int nsets = 0;
@@ -87,6 +192,8 @@ int internal_look_main(int argc, char **argv)
             profile = argv[++i];
         else if (next && !strcmp(a, "--frames"))
             frames = argv[++i];
+        else if (next && !strcmp(a, "--shot"))
+            shot = argv[++i];
         else if (next && !strcmp(a, "--set") && nsets < 16)
             sets[nsets++] = argv[++i];
         else if (next && !strcmp(a, "--channels"))
@@ -146,6 +253,7 @@ int internal_look_main(int argc, char **argv)
     if ((r = nprfx_graph_load(lr.ctx, graph, &opt, &lr.g))) goto done;
     for (int i = 0; i < nsets && !r; i++)
         r = nprfx_graph_set(lr.g, sets[i]);
+    if (!r && shot) r = nprfx_graph_set_shot(lr.g, shot); /* the host's frame range */
     if (r || (r = nprfx_graph_frames(lr.g, frames, &list))) goto done;
     /* the knobs as the look's params: the host sets each to the graph's value (after --set),
      * as a user turning it */
@@ -166,6 +274,7 @@ int internal_look_main(int argc, char **argv)
         goto done;
     }
     if ((r = nprfx_ofx_host_open(lr.ctx, bundle, profile, &h))) goto done;
+    lr.planar = h->profile->planes;
     /* the look's clips, as the plug-in derives them (ofx_look.c): per read node in graph order,
      * a sequence's AOVs but coverage, a map's whole plate */
     int first_seq = -1, main_input = -1;
@@ -176,6 +285,8 @@ int internal_look_main(int argc, char **argv)
         if (is_main) first_seq = s.node;
         for (int aov = s.sequence ? 0 : -1; aov < (s.sequence ? NPRFX_AOV_COUNT : 0); aov++) {
             if (aov >= 0 && (!(s.aovs & (1u << aov)) || aov == NPRFX_AOV_COVERAGE)) continue;
+            /* a multi-plane host: the main read's AOVs are layers of Source */
+            if (lr.planar && is_main && aov != NPRFX_AOV_BEAUTY) continue;
             if (lr.n == LOOK_INPUTS) break;
             int k = lr.n++;
             lr.node[k] = s.node;
@@ -194,6 +305,23 @@ int internal_look_main(int argc, char **argv)
     if (main_input < 0) {
         r = nprfx_error(lr.ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s reads no frame sequence", graph);
         goto done;
+    }
+    if (lr.planar) {
+        /* Source carries the colour plane and every layer of the file */
+        lr.main_node = first_seq;
+        if ((r = main_plate(&lr, list.frames[0]))) goto done;
+        int chan[63][4], nch[63];
+        lr.planes[0] = strdup(kOfxImageComponentRGBA);
+        int n = plate_layers(&lr.plate, lr.planes + 1, chan, nch, 63);
+        if (n < 0 || !lr.planes[0]) {
+            r = nprfx_error(lr.ctx, NPRFX_ERR_OUT_OF_MEMORY, "out of memory");
+            goto done;
+        }
+        lr.nplanes = 1 + n;
+        h->planes = lr.planes;
+        h->nplanes = lr.nplanes;
+        h->plane_fetch = look_plane;
+        h->plane_user = &lr;
     }
     desc.id = id;
     desc.label = stem;
@@ -282,6 +410,9 @@ done:
     }
     if (slot) internal_hook_release(h, &desc, slot);
     nprfx_seq_frames_free(&list);
+    for (int i = 0; i < lr.nplanes; i++)
+        free(lr.planes[i]);
+    nprfx_plate_free(&lr.plate);
     nprfx_graph_free(lr.g);
     nprfx_ofx_host_close(h);
     nprfx_context_destroy(lr.ctx);

@@ -134,6 +134,7 @@ hparam *internal_param_add(heffect *e, const char *type, const char *name);
 OfxRectI internal_ofx_rect(nprfx_rect r, int f);
 
 extern const OfxImageEffectSuiteV1 internal_image_effect_suite;
+extern const FnOfxImageEffectPlaneSuiteV1 internal_plane_suite;
 
 /* ---- parameter suite (params.c) -------------------------------------------------------------- */
 
@@ -160,6 +161,7 @@ typedef struct hprofile {
     hdepth depth;            /* every image handed out has this depth, whatever the plug-in asked */
     int message_v2;          /* offers kOfxMessageSuite version 2 */
     int lossy_messages;      /* formats messages without their arguments (Natron 2.5) */
+    int planes;              /* multi-plane: the plane suite, clips carrying several layers */
 } hprofile;
 
 /* The profile called name, or NULL; the names, for messages ("strict, natron, ..."). */
@@ -205,6 +207,13 @@ struct nprfx_ofx_host {
      * Filter context on the flow node's picture (render.c). */
     int footage;
     int analyze; /* --analyze-shot (render.c) */
+    /* Multi-plane (profile planes): the layers a main input carries, as the plane strings a
+     * clip lists (kFnOfxImageEffectPropComponentsPresent), and how to serve one at a time
+     * (look.c sets both; NULL: the clip carries its colour plane only). */
+    char **planes;
+    int nplanes;
+    nprfx_result (*plane_fetch)(void *user, double time, const char *plane, nprfx_image *out);
+    void *plane_user;
 };
 
 /* Suite functions get no user pointer: they reach the host through this, and one host per

@@ -7,7 +7,9 @@
  *   natron  Natron 2.5: the General context always (named clips even where Filter would fit),
  *           float images, render scale 1, temporal clip access, message suites 1 and 2 whose
  *           formatting loses the variadic arguments (Natron forwards its va_list into a second
- *           variadic formatter: "%s" comes out empty, "%%" as "%").
+ *           variadic formatter: "%s" comes out empty, "%%" as "%"), multi-plane (The Foundry's
+ *           plane suite with Natron's layers: a Read's clip carries every layer of a
+ *           multilayer EXR; look.c serves them).
  *   mlt     MLT 7's OpenFX module (Kdenlive, Shotcut): the Filter context only (Source clip
  *           only), no temporal clip access, 8-bit RGBA images whatever getClipPreferences asked,
  *           message suite 1 only, formatting correctly.
@@ -20,11 +22,11 @@
 #include "ofx_host_internal.h"
 
 static const hprofile profiles[] = {
-    /* name, like, general, filter, temporal, multires, alpha, depth, message_v2, lossy */
-    {"strict", "the strict test host", 1, 1, 1, 1, 1, HD_FLOAT, 1, 0},
-    {"natron", "Natron 2.5", 1, 0, 1, 0, 1, HD_FLOAT, 1, 1},
-    {"mlt", "MLT 7 (8-bit)", 0, 1, 0, 0, 0, HD_BYTE, 0, 0},
-    {"mlt16", "MLT 7 (16-bit)", 0, 1, 0, 0, 0, HD_SHORT, 0, 0},
+    /* name, like, general, filter, temporal, multires, alpha, depth, message_v2, lossy, planes */
+    {"strict", "the strict test host", 1, 1, 1, 1, 1, HD_FLOAT, 1, 0, 0},
+    {"natron", "Natron 2.5", 1, 0, 1, 0, 1, HD_FLOAT, 1, 1, 1},
+    {"mlt", "MLT 7 (8-bit)", 0, 1, 0, 0, 0, HD_BYTE, 0, 0, 0},
+    {"mlt16", "MLT 7 (16-bit)", 0, 1, 0, 0, 0, HD_SHORT, 0, 0, 0},
 };
 
 const hprofile *internal_profile_find(const char *name)
@@ -50,6 +52,7 @@ void internal_profile_host_props(const hprofile *pf, OfxPropertySetHandle p)
                             kOfxImageEffectContextFilter);
     internal_set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, pf->temporal);
     internal_set_int(p, kOfxImageEffectPropSupportsMultiResolution, 0, pf->multires);
+    internal_set_int(p, kFnOfxImageEffectPropMultiPlanar, 0, pf->planes);
     n = 0;
     internal_set_string(p, kOfxImageEffectPropSupportedComponents, n++, kOfxImageComponentRGBA);
     if (pf->alpha)

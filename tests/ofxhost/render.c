@@ -165,6 +165,10 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, i
         internal_set_double(cp, kOfxImageEffectPropUnmappedFrameRange, 0, a->first_frame);
         internal_set_double(cp, kOfxImageEffectPropUnmappedFrameRange, 1, a->last_frame);
         internal_set_string(cp, kOfxImageClipPropFieldOrder, 0, kOfxImageFieldNone);
+        /* a multi-plane host's main input carries the layers look.c serves */
+        if (pf->planes && h->nplanes && c->input >= 0 && c->input == ofx_names_main_input(d))
+            for (int pl = 0; pl < h->nplanes; pl++)
+                internal_set_string(cp, kFnOfxImageEffectPropComponentsPresent, pl, h->planes[pl]);
         internal_set_int(cp, kOfxImageClipPropContinuousSamples, 0, 0);
     }
     for (int i = 0; st == kOfxStatOK && i < src->nparams; i++) {
@@ -657,6 +661,43 @@ nprfx_result internal_hook_render(void *user, const nprfx_render_args *a, void *
     return r;
 }
 
+/* A multi-plane host asks a multi-planar plug-in which planes it needs of each clip before it
+ * renders: each must be one the clip carries. */
+static nprfx_result check_clip_components(node_inst *ni, const nprfx_render_args *a)
+{
+    nprfx_ofx_host *h = ni->h;
+    if (!h->profile->planes || !h->nplanes ||
+        !internal_pint(&ni->pl->descriptor->props, kFnOfxImageEffectPropMultiPlanar, 0, 0))
+        return NPRFX_OK;
+    hprops in, out;
+    internal_props_init(&in, K_PLAIN);
+    internal_props_init(&out, K_PLAIN);
+    internal_set_double((OfxPropertySetHandle)&in, kOfxPropTime, 0, a->time);
+    OfxStatus st =
+        internal_call(ni->pl, kFnOfxImageEffectActionGetClipComponents, ni->fx, &in, &out);
+    nprfx_result r = NPRFX_OK;
+    char key[NPRFX_OFX_NAME_MAX + 64], name[NPRFX_OFX_NAME_MAX];
+    ofx_names_clip_name(ni->desc, ofx_names_main_input(ni->desc), name, sizeof name);
+    snprintf(key, sizeof key, "%s%s", kFnOfxImageEffectActionGetClipComponentsPropString, name);
+    int n = st == kOfxStatOK ? internal_pdim(&out, key) : 0;
+    if (st != kOfxStatOK && st != kOfxStatReplyDefault)
+        r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL, "%s: getClipComponents failed (%d)",
+                        ni->pl->p->pluginIdentifier, st);
+    for (int i = 0; i < n && !r; i++) {
+        const char *want = internal_pstr(&out, key, i, "");
+        int have = !strcmp(want, kOfxImageComponentRGBA) || !strcmp(want, kOfxImageComponentAlpha);
+        for (int p = 0; p < h->nplanes; p++)
+            have |= !strcmp(want, h->planes[p]);
+        if (!have)
+            r = nprfx_error(a->ctx, NPRFX_ERR_INTERNAL,
+                            "%s: getClipComponents asks %s for '%s', which it does not carry",
+                            ni->pl->p->pluginIdentifier, name, want);
+    }
+    internal_props_free(&in);
+    internal_props_free(&out);
+    return r;
+}
+
 static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, void **slot,
                                 int footage)
 {
@@ -676,7 +717,7 @@ static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, v
     for (int k = 0; k < ni->desc->num_inputs; k++)
         ni->frames[k].nfetched = 0;
     if ((r = sync_params(ni, a, first)) || (first && h->analyze && (r = press_analyze(ni, a))) ||
-        (r = query_regions(ni, a)))
+        (r = check_clip_components(ni, a)) || (r = query_regions(ni, a)))
         goto done;
     double s = internal_host_scale(a);
     if (s != 1.0 && !h->profile->multires) {
