@@ -96,7 +96,7 @@ static void init_plugins(void)
     int looks = ofx_looks_discover(MAX_PLUGINS - n);
     for (int i = 0; i < looks; i++) {
         OfxPlugin *p = &plugins[n + i];
-        snprintf(plugin_ids[n + i], sizeof plugin_ids[n + i], "%s", ofx_look_at(i)->id);
+        snprintf(plugin_ids[n + i], sizeof plugin_ids[n + i], "%s", ofx_look_at(i)->d.id);
         p->pluginApi = kOfxImageEffectPluginApi;
         p->apiVersion = kOfxImageEffectPluginApiVersion;
         p->pluginIdentifier = plugin_ids[n + i];

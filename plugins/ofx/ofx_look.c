@@ -12,131 +12,12 @@
 #include "ofx_messages.h"
 #include "ofx_suites.h"
 
-static ofx_look *looks;
+static ofx_look **looks;
 static int nlooks;
 
 const ofx_look *ofx_look_at(int i)
 {
-    return i >= 0 && i < nlooks ? &looks[i] : NULL;
-}
-
-static char *dup_text(const char *s)
-{
-    if (!s) return NULL;
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d) memcpy(d, s, n);
-    return d;
-}
-
-static int add_clip(ofx_look *lk, const char *read, int node, int aov, int main)
-{
-    if (lk->nclips >= LOOK_MAX_CLIPS) return 0;
-    look_clip *c = &lk->clips[lk->nclips++];
-    ofx_names_look_clip(read, main, aov >= 0 ? nprfx_aov_name(aov) : NULL, c->name, sizeof c->name);
-    c->node = node;
-    c->aov = aov;
-    c->main = main;
-    return 1;
-}
-
-/* What of graph g makes a look: its clips, knobs, outputs; 0 with a reason when it is none. */
-static int describe_graph(nprfx_graph *g, ofx_look *lk, char *why, size_t n)
-{
-    int nsrc = nprfx_graph_source_count(g), main = -1;
-    for (int i = 0; i < nsrc; i++) {
-        nprfx_graph_source_info s = {sizeof s};
-        if (nprfx_graph_source(g, i, &s)) continue;
-        if (s.raw) {
-            snprintf(why, n,
-                     "read node '%s' is read by channel names ('%s'), which only the renderer's "
-                     "own files have: name the AOV instead (docs/graphs.md)",
-                     s.name, s.raw);
-            return 0;
-        }
-        int is_main = s.sequence && main < 0;
-        if (is_main) main = s.node;
-        if (!s.sequence) {
-            add_clip(lk, s.name, s.node, -1, 0);
-            continue;
-        }
-        for (int aov = 0; aov < NPRFX_AOV_COUNT; aov++)
-            if ((s.aovs & (1u << aov)) && aov != NPRFX_AOV_COVERAGE)
-                add_clip(lk, s.name, s.node, aov, is_main);
-    }
-    if (main < 0) {
-        snprintf(why, n, "it reads no frame sequence (a look's Source is the render's plates)");
-        return 0;
-    }
-    lk->filter = lk->nclips == 1;
-    for (int i = 0; i < lk->nclips; i++)
-        if (lk->clips[i].main && lk->clips[i].aov == NPRFX_AOV_BEAUTY) lk->source = i;
-    int count = nprfx_graph_node_count(g);
-    for (int i = 0; i < count; i++) {
-        nprfx_graph_node_info ni = {sizeof ni};
-        if (nprfx_graph_node(g, i, &ni)) continue;
-        if (ni.kind == NPRFX_GRAPH_NODE && ni.desc &&
-            (ni.desc->flags & (NPRFX_NODE_TEMPORAL | NPRFX_NODE_STATEFUL)))
-            lk->temporal = 1;
-        if (ni.kind == NPRFX_GRAPH_WRITE && ni.ninputs > 0 && ni.inputs[0].src >= 0) {
-            char **o = realloc(lk->outputs, (size_t)(lk->noutputs + 1) * sizeof *o);
-            char **l =
-                o ? realloc(lk->output_labels, (size_t)(lk->noutputs + 1) * sizeof *l) : NULL;
-            if (o) lk->outputs = o;
-            if (l) lk->output_labels = l;
-            if (!o || !l) return 0;
-            lk->outputs[lk->noutputs] = dup_text(ni.inputs[0].text);
-            lk->output_labels[lk->noutputs] = dup_text(ni.name);
-            lk->noutputs++;
-        }
-    }
-    if (!lk->noutputs) {
-        snprintf(why, n, "it has no write node (the image a look makes is what its write writes)");
-        return 0;
-    }
-    lk->measures = nprfx_graph_measuring_nodes(g);
-    lk->design_width = nprfx_graph_design_width(g);
-    lk->comment = dup_text(nprfx_graph_comment(g));
-    int nk = nprfx_graph_knob_count(g);
-    lk->knobs = calloc((size_t)(nk > 0 ? nk : 1), sizeof *lk->knobs);
-    if (!lk->knobs) return 0;
-    for (int i = 0; i < nk; i++) {
-        nprfx_graph_knob_info k = {sizeof k};
-        if (nprfx_graph_knob(g, i, &k)) continue;
-        look_knob *o = &lk->knobs[lk->nknobs++];
-        o->name = dup_text(k.name);
-        ofx_names_look_knob(k.name, o->param, sizeof o->param);
-        o->help = dup_text(k.help);
-        o->p = k.param;
-        o->def = *k.value;
-        o->def_string = dup_text(k.value->s);
-        o->def.s = o->def_string;
-        /* "ink.width" reads "ink width"; the param's own label when the node is the look's
-         * only one of its kind would lose which node it is */
-        o->label = dup_text(k.name);
-        for (char *c = o->label; c && *c; c++)
-            if (*c == '.' || *c == '_') *c = ' ';
-    }
-    return 1;
-}
-
-static void look_free(ofx_look *lk)
-{
-    free(lk->comment);
-    for (int i = 0; i < lk->nknobs; i++) {
-        free(lk->knobs[i].name);
-        free(lk->knobs[i].label);
-        free(lk->knobs[i].help);
-        free(lk->knobs[i].def_string);
-    }
-    free(lk->knobs);
-    for (int i = 0; i < lk->noutputs; i++) {
-        free(lk->outputs[i]);
-        free(lk->output_labels[i]);
-    }
-    free(lk->outputs);
-    free(lk->output_labels);
-    memset(lk, 0, sizeof *lk);
+    return i >= 0 && i < nlooks ? looks[i] : NULL;
 }
 
 static int json_file(const struct dirent *e)
@@ -155,20 +36,16 @@ static void scan_folder(const char *dir, int max)
         ofx_names_look_id(stem, id, sizeof id);
         int seen = 0;
         for (int k = 0; k < nlooks; k++)
-            seen |= !strcmp(looks[k].id, id);
-        if (seen || nlooks >= max) {
+            seen |= !strcmp(looks[k]->d.id, id);
+        ofx_look *lk = seen || nlooks >= max ? NULL : calloc(1, sizeof *lk);
+        ofx_look **grown = lk ? realloc(looks, (size_t)(nlooks + 1) * sizeof *grown) : NULL;
+        if (grown) looks = grown;
+        if (!grown) {
+            free(lk);
             free(list[i]);
             continue;
         }
-        ofx_look lk;
-        memset(&lk, 0, sizeof lk);
-        snprintf(lk.path, sizeof lk.path, "%s/%s", dir, list[i]->d_name);
-        snprintf(lk.id, sizeof lk.id, "%s", id);
-        /* "cross_hatching" -> "Cross hatching" */
-        snprintf(lk.label, sizeof lk.label, "%.100s", stem);
-        for (char *c = lk.label; *c; c++)
-            if (*c == '_' || *c == '-') *c = ' ';
-        if (lk.label[0] >= 'a' && lk.label[0] <= 'z') lk.label[0] = (char)(lk.label[0] - 32);
+        snprintf(lk->path, sizeof lk->path, "%s/%s", dir, list[i]->d_name);
         nprfx_context *ctx = NULL;
         nprfx_graph *g = NULL;
         char why[1024] = "";
@@ -176,26 +53,37 @@ static void scan_folder(const char *dir, int max)
         memset(&opt, 0, sizeof opt);
         opt.size = sizeof opt;
         int ok = nprfx_context_create(NULL, &ctx) == NPRFX_OK &&
-                 nprfx_graph_load(ctx, lk.path, &opt, &g) == NPRFX_OK;
+                 nprfx_graph_load(ctx, lk->path, &opt, &g) == NPRFX_OK;
         if (!ok && ctx) nprfx_context_last_error(ctx, why, sizeof why);
-        if (ok) ok = describe_graph(g, &lk, why, sizeof why);
+        if (ok) ok = look_desc_build(g, stem, &lk->d, why, sizeof why) == NPRFX_OK;
         if (ok) {
-            ofx_look *grown = realloc(looks, (size_t)(nlooks + 1) * sizeof *grown);
-            if (grown) {
-                looks = grown;
-                looks[nlooks++] = lk;
-            } else {
-                look_free(&lk);
-            }
+            looks[nlooks++] = lk;
         } else {
-            fprintf(stderr, "nprfx.ofx: %s is no look: %s\n", lk.path, why[0] ? why : "?");
-            look_free(&lk);
+            fprintf(stderr, "nprfx.ofx: %s is no look: %s\n", lk->path, why[0] ? why : "?");
+            look_desc_free(&lk->d);
+            free(lk);
         }
         nprfx_graph_free(g);
         nprfx_context_destroy(ctx);
         free(list[i]);
     }
     free(list);
+}
+
+/* The table lives as long as the module: freed when the host unloads the bundle. */
+#if defined(__GNUC__)
+__attribute__((destructor))
+#endif
+static void
+looks_free(void)
+{
+    for (int i = 0; i < nlooks; i++) {
+        look_desc_free(&looks[i]->d);
+        free(looks[i]);
+    }
+    free(looks);
+    looks = NULL;
+    nlooks = 0;
 }
 
 int ofx_looks_discover(int max)
@@ -225,27 +113,28 @@ int ofx_looks_discover(int max)
 
 static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
 {
-    if (lk->temporal && !ofx_g.temporal) {
+    const look_desc *d = &lk->d;
+    if (d->temporal && !ofx_g.temporal) {
         char why[512];
         snprintf(why, sizeof why,
                  "nprfx: the look %s is not available in this host: its nodes read other frames "
                  "of the plates, and the host offers no temporal clip access "
                  "(kOfxImageEffectPropTemporalClipAccess = 0)",
-                 lk->label);
+                 d->label);
         ofx_post(fx, kOfxMessageLog, why);
         return kOfxStatErrMissingHostFeature;
     }
     OfxPropertySetHandle p;
     if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
-    ofx_set_str(p, kOfxPropLabel, 0, lk->label);
-    ofx_set_str(p, kOfxPropShortLabel, 0, lk->label);
-    ofx_set_str(p, kOfxPropLongLabel, 0, lk->label);
+    ofx_set_str(p, kOfxPropLabel, 0, d->label);
+    ofx_set_str(p, kOfxPropShortLabel, 0, d->label);
+    ofx_set_str(p, kOfxPropLongLabel, 0, d->label);
     static const char how[] =
         "\n\nA look: the graph file %s evaluated as `nprfx run` evaluates it, on the clips: "
         "Source is the render's picture (its alpha the coverage), each other clip one AOV in "
         "nprfx's conventions (depth as camera z, motion in pixels with y down, object ids as "
         "numbers). A clip left unconnected is as a plate without that AOV.";
-    const char *comment = lk->comment ? lk->comment : "";
+    const char *comment = d->comment ? d->comment : "";
     size_t len = strlen(comment) + sizeof how + strlen(lk->path);
     char *text = malloc(len);
     if (text) {
@@ -253,14 +142,14 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
         size_t k = strlen(text);
         snprintf(text + k, len - k, how, lk->path);
     }
-    ofx_set_str(p, kOfxPropPluginDescription, 0, text ? text : lk->label);
+    ofx_set_str(p, kOfxPropPluginDescription, 0, text ? text : d->label);
     free(text);
     ofx_set_str(p, kOfxImageEffectPluginPropGrouping, 0, "NPR/Looks");
     ofx_set_int(p, kOfxPropVersion, 0, 1);
     ofx_set_int(p, kOfxPropVersion, 1, 0);
     int nctx = 0;
     ofx_set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextGeneral);
-    if (lk->filter)
+    if (ofx_look_filter(lk, ofx_g.multiplanar))
         ofx_set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextFilter);
     ofx_set_str(p, kOfxImageEffectPropSupportedPixelDepths, 0, kOfxBitDepthFloat);
     ofx_set_str(p, kOfxImageEffectPropSupportedPixelDepths, 1, kOfxBitDepthShort);
@@ -271,11 +160,11 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
     ofx_set_int(p, kOfxImageEffectPluginPropHostFrameThreading, 0, 0);
     ofx_set_int(p, kOfxImageEffectPropSupportsMultiResolution, 0, 0);
     ofx_set_int(p, kOfxImageEffectPropSupportsTiles, 0, 0);
-    ofx_set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, lk->temporal && ofx_g.temporal);
+    ofx_set_int(p, kOfxImageEffectPropTemporalClipAccess, 0, d->temporal && ofx_g.temporal);
     ofx_set_int(p, kOfxImageEffectPropSupportsMultipleClipDepths, 0, 0);
     ofx_set_int(p, kOfxImageEffectPropSupportsMultipleClipPARs, 0, 0);
     ofx_set_int(p, kOfxImageEffectPluginPropFieldRenderTwiceAlways, 0, 0);
-    ofx_set_int(p, kOfxImageEffectInstancePropSequentialRender, 0, lk->temporal ? 2 : 0);
+    ofx_set_int(p, kOfxImageEffectInstancePropSequentialRender, 0, d->temporal ? 2 : 0);
     /* a multi-plane host gives the render's layers on Source: no clip per AOV */
     if (ofx_g.multiplanar) {
         ofx_set_int(p, kFnOfxImageEffectPropMultiPlanar, 0, 1);
@@ -321,33 +210,34 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     if (ofx_g.prop->propGetString(in_args, kOfxImageEffectPropContext, 0, &context) != kOfxStatOK ||
         !context)
         return kOfxStatErrValue;
+    const look_desc *d = &lk->d;
     int general = !strcmp(context, kOfxImageEffectContextGeneral);
-    if (!general && !(lk->filter && !strcmp(context, kOfxImageEffectContextFilter)))
+    if (!general &&
+        !(ofx_look_filter(lk, ofx_g.multiplanar) && !strcmp(context, kOfxImageEffectContextFilter)))
         return kOfxStatErrUnsupported;
     OfxPropertySetHandle cp = NULL;
     if (ofx_g.fx->clipDefine(fx, NPRFX_OFX_OUTPUT_CLIP, &cp) != kOfxStatOK) return kOfxStatFailed;
     ofx_set_str(cp, kOfxImageEffectPropSupportedComponents, 0, kOfxImageComponentRGBA);
-    for (int i = 0; i < lk->nclips; i++) {
-        const look_clip *c = &lk->clips[i];
-        if (ofx_g.multiplanar && c->main && c->aov != NPRFX_AOV_BEAUTY) continue;
-        if (ofx_g.fx->clipDefine(fx, c->name, &cp) != kOfxStatOK) return kOfxStatFailed;
+    for (int i = 0; i < d->desc.num_inputs; i++) {
+        if (!look_desc_has_clip(d, i, ofx_g.multiplanar)) continue;
+        if (ofx_g.fx->clipDefine(fx, d->clip[i], &cp) != kOfxStatOK) return kOfxStatFailed;
         ofx_set_str(cp, kOfxImageEffectPropSupportedComponents, 0, kOfxImageComponentRGBA);
         ofx_set_str(cp, kOfxImageEffectPropSupportedComponents, 1, kOfxImageComponentAlpha);
-        ofx_set_int(cp, kOfxImageClipPropOptional, 0, strcmp(c->name, NPRFX_OFX_SOURCE_CLIP) != 0);
-        ofx_set_int(cp, kOfxImageEffectPropTemporalClipAccess, 0, lk->temporal && ofx_g.temporal);
+        ofx_set_int(cp, kOfxImageClipPropOptional, 0, i != d->source);
+        ofx_set_int(cp, kOfxImageEffectPropTemporalClipAccess, 0, d->temporal && ofx_g.temporal);
         ofx_set_int(cp, kOfxImageEffectPropSupportsTiles, 0, 0);
         ofx_set_int(cp, kOfxImageClipPropIsMask, 0, 0);
         char hint[512];
-        if (c->aov >= 0)
-            snprintf(hint, sizeof hint, "%s%s%s", c->main ? "" : c->name, c->main ? "" : ": ",
-                     aov_help(c->aov));
+        if (d->aov[i] >= 0)
+            snprintf(hint, sizeof hint, "%s%s%s", d->main[i] ? "" : d->clip[i],
+                     d->main[i] ? "" : ": ", aov_help(d->aov[i]));
         else
             snprintf(hint, sizeof hint,
                      "the image the look's read node reads from one file (a "
                      "map): connect a Read of it");
         ofx_set_str(cp, kOfxParamPropHint, 0, hint);
         if (!general) break; /* Filter: Source alone */
-        if (c->main && ofx_g.multiplanar)
+        if (i == d->source && ofx_g.multiplanar)
             ofx_set_str(cp, kOfxParamPropHint, 0,
                         "the render: every layer of a multilayer EXR; the look finds each AOV "
                         "it reads among them by the renderer's names (Renderer)");
@@ -355,19 +245,19 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     OfxParamSetHandle ps;
     if (ofx_g.fx->getParamSet(fx, &ps) != kOfxStatOK) return kOfxStatErrBadHandle;
     OfxStatus st;
-    for (int i = 0; i < lk->nknobs; i++) {
-        const look_knob *k = &lk->knobs[i];
-        if ((st = ofx_define_param(ps, k->p, k->param, k->label, k->help, &k->def)) != kOfxStatOK)
+    for (int i = 0; i < d->desc.num_params; i++) {
+        const nprfx_param_desc *p = &d->params[i];
+        if ((st = ofx_define_param(ps, p, p->name, p->label, d->knob_help[i], NULL)) != kOfxStatOK)
             return st;
     }
     OfxPropertySetHandle pp;
-    if (lk->noutputs > 1) {
+    if (d->noutputs > 1) {
         if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "output", &pp)) != kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Output");
         ofx_set_str(pp, kOfxParamPropHint, 0, "Which of the graph's write nodes' images to show");
-        for (int i = 0; i < lk->noutputs; i++)
-            ofx_set_str(pp, kOfxParamPropChoiceOption, i, lk->output_labels[i]);
+        for (int i = 0; i < d->noutputs; i++)
+            ofx_set_str(pp, kOfxParamPropChoiceOption, i, d->output_label[i]);
         ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
     }
@@ -391,7 +281,7 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
                 "The plate width in pixels the look's sizes were set for: on a plate W pixels "
                 "wide every size in pixels is multiplied by W / this (0: sizes in the plate's "
                 "own pixels). Proxy renders follow from it.");
-    ofx_set_dbl(pp, kOfxParamPropDefault, 0, lk->design_width);
+    ofx_set_dbl(pp, kOfxParamPropDefault, 0, d->design_width);
     ofx_set_dbl(pp, kOfxParamPropMin, 0, 0);
     ofx_set_dbl(pp, kOfxParamPropMax, 0, 1000000);
     ofx_set_dbl(pp, kOfxParamPropDisplayMin, 0, 0);

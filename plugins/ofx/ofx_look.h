@@ -9,45 +9,23 @@
 #include "nprfx/graph.h"
 #include "nprfx/nprfx.h"
 #include "ofx_api.h"
+#include "look_desc.h"
 #include "ofx_names.h"
 
-/* Where a look's clips come from: one AOV of a read node, or a map's whole file (aov -1). */
-typedef struct look_clip {
-    char name[64];
-    int node; /* the read node's index in the graph */
-    int aov;  /* nprfx_aov, -1: the whole file */
-    int main; /* of the look's first frame sequence (Source and its AOVs) */
-} look_clip;
-
-/* One knob: a param of one or more graph nodes ("ink.width", "strokes*.radius"). */
-typedef struct look_knob {
-    char *name;                     /* as the graph gives it: what nprfx_graph_set takes */
-    char param[NPRFX_OFX_NAME_MAX]; /* the OFX param's name */
-    char *label, *help;
-    const nprfx_param_desc *p; /* the node param's descriptor (the registry's) */
-    nprfx_value def;           /* the graph's value */
-    char *def_string;
-} look_knob;
-
-#define LOOK_MAX_CLIPS 32
-
+/* One look: its graph file and what it makes of it (look_desc.h: clips, knobs, outputs). */
 typedef struct ofx_look {
     char path[4096];
-    char id[NPRFX_OFX_NAME_MAX], label[NPRFX_OFX_NAME_MAX];
-    char *comment;
-    look_clip clips[LOOK_MAX_CLIPS];
-    int nclips;
-    int source; /* the Source clip's index in clips */
-    look_knob *knobs;
-    int nknobs;
-    char **outputs;       /* the nodes its write nodes write, evaluated by the plug-in */
-    char **output_labels; /* the write nodes' names */
-    int noutputs;
-    int temporal; /* a node reads other frames, or keeps state between them */
-    int measures; /* nodes that measure over the shot (tone's range) */
-    double design_width;
-    int filter; /* reads nothing but its Source picture: offered in the Filter context */
+    look_desc d;
 } ofx_look;
+
+/* Whether the look reads nothing but its Source picture: offered in the Filter context. */
+static inline int ofx_look_filter(const ofx_look *lk, int planar)
+{
+    int clips = 0;
+    for (int k = 0; k < lk->d.desc.num_inputs; k++)
+        clips += look_desc_has_clip(&lk->d, k, planar);
+    return clips == 1;
+}
 
 /* Find the looks: every graph file in the folders of NPRFX_LOOK_PATH (':' between them), then
  * in the bundle's Contents/Resources/looks; a name seen first wins, so a studio's look of the

@@ -26,7 +26,7 @@ typedef struct look_inst {
     const ofx_look *look;
     OfxImageEffectHandle fx;
     OfxImageClipHandle output;
-    OfxImageClipHandle clips[LOOK_MAX_CLIPS]; /* NULL: not defined in this context */
+    OfxImageClipHandle clips[LOOK_MAX_INPUTS]; /* NULL: not defined in this context */
     OfxParamHandle *knobs, output_choice, design;
     pthread_mutex_t lock; /* the graph and the render in flight */
     nprfx_context *ctx;
@@ -56,7 +56,7 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
 {
     look_inst *li = calloc(1, sizeof *li);
     if (!li) return kOfxStatErrMemory;
-    li->knobs = calloc((size_t)look->nknobs + 1, sizeof *li->knobs);
+    li->knobs = calloc((size_t)look->d.desc.num_params + 1, sizeof *li->knobs);
     if (!li->knobs) {
         free(li);
         return kOfxStatErrMemory;
@@ -65,14 +65,14 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
     li->fx = fx;
     li->planar = ofx_g.multiplanar;
     (void)ofx_g.fx->clipGetHandle(fx, NPRFX_OFX_OUTPUT_CLIP, &li->output, NULL);
-    for (int i = 0; i < look->nclips; i++)
-        if (ofx_g.fx->clipGetHandle(fx, look->clips[i].name, &li->clips[i], NULL) != kOfxStatOK)
+    for (int i = 0; i < look->d.desc.num_inputs; i++)
+        if (ofx_g.fx->clipGetHandle(fx, look->d.clip[i], &li->clips[i], NULL) != kOfxStatOK)
             li->clips[i] = NULL;
     OfxParamSetHandle ps;
     if (ofx_g.fx->getParamSet(fx, &ps) == kOfxStatOK) {
-        for (int i = 0; i < look->nknobs; i++)
-            (void)ofx_g.param->paramGetHandle(ps, look->knobs[i].param, &li->knobs[i], NULL);
-        if (look->noutputs > 1)
+        for (int i = 0; i < look->d.desc.num_params; i++)
+            (void)ofx_g.param->paramGetHandle(ps, look->d.param_name[i], &li->knobs[i], NULL);
+        if (look->d.noutputs > 1)
             (void)ofx_g.param->paramGetHandle(ps, "output", &li->output_choice, NULL);
         (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
         if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "renderer", &li->renderer, NULL);
@@ -130,11 +130,11 @@ static int parse_plate(const look_inst *li, const char *path, int *node, int *fr
     size_t len = dot ? (size_t)(dot - name) : strlen(name);
     *frame = (int)floor(li->time + 0.5);
     if (dot) *frame = (int)strtol(dot + 1, NULL, 10);
-    for (int i = 0; i < li->look->nclips; i++) {
+    for (int i = 0; i < li->look->d.desc.num_inputs; i++) {
         nprfx_graph_node_info ni = {sizeof ni};
-        if (nprfx_graph_node(li->g, li->look->clips[i].node, &ni)) continue;
+        if (nprfx_graph_node(li->g, li->look->d.node[i], &ni)) continue;
         if (strlen(ni.name) == len && !strncmp(ni.name, name, len)) {
-            *node = li->look->clips[i].node;
+            *node = li->look->d.node[i];
             return 1;
         }
     }
@@ -188,7 +188,7 @@ static int standard_components(const char *s)
 static void planes_present(const look_inst *li, plate_planes *pp)
 {
     pp->n = 0;
-    OfxPropertySetHandle cp = ofx_clip_props(li->clips[li->look->source]);
+    OfxPropertySetHandle cp = ofx_clip_props(li->clips[li->look->d.source]);
     for (int i = 0; cp && i < 64; i++) {
         char *s = NULL;
         if (ofx_g.prop->propGetString(cp, kFnOfxImageEffectPropComponentsPresent, i, &s) !=
@@ -204,7 +204,7 @@ static int plate_channels(const look_inst *li, int node, plate_chan *out, int ma
     int n = 0;
     pp->n = 0;
     const ofx_look *lk = li->look;
-    if (li->planar && node == lk->clips[lk->source].node) {
+    if (li->planar && node == lk->d.node[lk->d.source]) {
         planes_present(li, pp);
         int colour = 0;
         for (int p = 0; p < pp->n; p++) {
@@ -217,14 +217,14 @@ static int plate_channels(const look_inst *li, int node, plate_chan *out, int ma
                 colour = 1;
                 for (int k = 0; k < count && n < max; k++, n++) {
                     snprintf(out[n].name, sizeof out[n].name, "%s", rgba[first + k]);
-                    out[n].clip = lk->source, out[n].comp = k, out[n].plane = p;
+                    out[n].clip = lk->d.source, out[n].comp = k, out[n].plane = p;
                 }
                 continue;
             }
             count = natron_layer(pp->plane[p], layer, sizeof layer, ch);
             for (int k = 0; k < count && n < max; k++, n++) {
                 snprintf(out[n].name, sizeof out[n].name, "%s.%s", layer, ch[k]);
-                out[n].clip = lk->source, out[n].comp = k, out[n].plane = p;
+                out[n].clip = lk->d.source, out[n].comp = k, out[n].plane = p;
             }
         }
         /* a host that lists nothing: its colour plane */
@@ -232,22 +232,21 @@ static int plate_channels(const look_inst *li, int node, plate_chan *out, int ma
             static const char *const rgba[] = {"R", "G", "B", "A"};
             for (int k = 0; k < 4 && n < max; k++, n++) {
                 snprintf(out[n].name, sizeof out[n].name, "%s", rgba[k]);
-                out[n].clip = lk->source, out[n].comp = k, out[n].plane = -1;
+                out[n].clip = lk->d.source, out[n].comp = k, out[n].plane = -1;
             }
         }
         return n;
     }
-    for (int i = 0; i < lk->nclips; i++) {
-        const look_clip *c = &lk->clips[i];
-        if (c->node != node || !ofx_clip_connected(li->clips[i])) continue;
-        int count = 4;
+    for (int i = 0; i < lk->d.desc.num_inputs; i++) {
+        if (lk->d.node[i] != node || !ofx_clip_connected(li->clips[i])) continue;
+        int aov = lk->d.aov[i], count = 4;
         static const char *const rgba[] = {"R", "G", "B", "A"};
-        const char *const *names = c->aov >= 0 ? aov_channels(c->aov, &count) : rgba;
+        const char *const *names = aov >= 0 ? aov_channels(aov, &count) : rgba;
         /* a picture the host calls opaque has no alpha to read (RGB footage): none, so the
          * graph falls back as on a plate without one */
         char *premult = NULL;
         OfxPropertySetHandle cp = ofx_clip_props(li->clips[i]);
-        if (c->aov == NPRFX_AOV_BEAUTY && cp &&
+        if (aov == NPRFX_AOV_BEAUTY && cp &&
             ofx_g.prop->propGetString(cp, kOfxImageEffectPropPreMultiplication, 0, &premult) ==
                 kOfxStatOK &&
             premult && !strcmp(premult, kOfxImageOpaque))
@@ -276,10 +275,10 @@ static OfxRectI to_pixels(OfxRectD r, double s)
 static nprfx_result plate_rect(nprfx_context *ctx, const look_inst *li, int node, int frame,
                                OfxRectI *r)
 {
-    for (int i = 0; i < li->look->nclips; i++) {
-        const look_clip *c = &li->look->clips[i];
-        if (c->node != node) continue;
-        if (c->aov >= 0) {
+    for (int i = 0; i < li->look->d.desc.num_inputs; i++) {
+        const look_desc *d = &li->look->d;
+        if (d->node[i] != node) continue;
+        if (d->aov[i] >= 0) {
             *r = li->frame;
             return NPRFX_OK;
         }
@@ -287,10 +286,10 @@ static nprfx_result plate_rect(nprfx_context *ctx, const look_inst *li, int node
         if (!ofx_clip_connected(li->clips[i]))
             return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
                                "the %s clip is not connected: the look reads a map from it",
-                               c->name);
+                               d->clip[i]);
         if (ofx_g.fx->clipGetRegionOfDefinition(li->clips[i], frame, &rod) != kOfxStatOK)
             return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
-                               "the host gives no region of definition for clip %s", c->name);
+                               "the host gives no region of definition for clip %s", d->clip[i]);
         *r = to_pixels(rod, li->scale);
         return NPRFX_OK;
     }
@@ -409,7 +408,8 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
     for (int c0 = 0; c0 < np; c0++) {
         if (done[c0]) continue;
         const plate_chan *src = &all[pick[c0]];
-        const look_clip *lc = &li->look->clips[src->clip];
+        const look_desc *ld = &li->look->d;
+        int src_aov = ld->aov[src->clip];
         ofx_img img;
         OfxStatus st = src->plane >= 0 && pp.n
                            ? ofx_img_fetch_plane(li->clips[src->clip], frame,
@@ -422,7 +422,7 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
             nprfx_plate_free(out);
             return nprfx_error(ctx, NPRFX_ERR_MISSING_INPUT,
                                "the host gave no image of clip %s%s%s at frame %d (OFX status %d)",
-                               lc->name, src->plane >= 0 ? ", layer of " : "",
+                               ld->clip[src->clip], src->plane >= 0 ? ", layer of " : "",
                                src->plane >= 0 ? src->name : "", frame, st);
         }
         nprfx_image v;
@@ -434,7 +434,7 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
         }
         /* an AOV clip's motion comes in pixels at full resolution */
         double k =
-            src->plane < 0 && (lc->aov == NPRFX_AOV_MOTION_PREV || lc->aov == NPRFX_AOV_MOTION_NEXT)
+            src->plane < 0 && (src_aov == NPRFX_AOV_MOTION_PREV || src_aov == NPRFX_AOV_MOTION_NEXT)
                 ? li->scale
                 : 1.0;
         nprfx_rect in = nprfx_rect_intersect(b, v.bounds);
@@ -497,14 +497,14 @@ static char *settings_at(const look_inst *li, double time, double scale)
     const ofx_look *lk = li->look;
     char *buf = NULL, line[4300];
     size_t len = 0, cap = 0;
-    for (int i = 0; i < lk->nknobs; i++) {
-        const look_knob *k = &lk->knobs[i];
+    for (int i = 0; i < lk->d.desc.num_params; i++) {
+        const nprfx_param_desc *kp = &lk->d.params[i];
         OfxParamHandle h = li->knobs[i];
-        nprfx_value v = k->def;
+        nprfx_value v = lk->d.values[i];
         char text[4096];
         int iv = 0;
         char *s = NULL;
-        if (h) switch (k->p->type) {
+        if (h) switch (kp->type) {
             case NPRFX_PARAM_DOUBLE:
                 (void)ofx_g.param->paramGetValueAtTime(h, time, &v.v[0]);
                 break;
@@ -523,28 +523,28 @@ static char *settings_at(const look_inst *li, double time, double scale)
         /* A knob at the graph's value sets nothing: a knob over several nodes ("pattern*.sigma")
          * shows the first one's value, and the others keep their own until it is turned. */
         char def[4096];
-        format_value(k->p, &v, text, sizeof text);
-        format_value(k->p, &k->def, def, sizeof def);
+        format_value(kp, &v, text, sizeof text);
+        format_value(kp, &lk->d.values[i], def, sizeof def);
         if (!strcmp(text, def)) continue;
-        snprintf(line, sizeof line, "%s=%s", k->name, text);
+        snprintf(line, sizeof line, "%s=%s", lk->d.knob[i], text);
         append(&buf, &len, &cap, line);
     }
     int out = 0;
-    double design = lk->design_width;
+    double design = lk->d.design_width;
     if (li->output_choice) (void)ofx_g.param->paramGetValue(li->output_choice, &out);
     if (li->design) (void)ofx_g.param->paramGetValue(li->design, &design);
     int renderer = 0;
     if (li->renderer) (void)ofx_g.param->paramGetValue(li->renderer, &renderer);
     double range[2] = {0, -1};
-    OfxPropertySetHandle sp = ofx_clip_props(li->clips[lk->source]);
+    OfxPropertySetHandle sp = ofx_clip_props(li->clips[lk->d.source]);
     if (!sp ||
         ofx_g.prop->propGetDoubleN(sp, kOfxImageEffectPropFrameRange, 2, range) != kOfxStatOK)
         range[0] = 0, range[1] = -1;
     unsigned long long connected = 0;
-    for (int i = 0; i < lk->nclips; i++)
+    for (int i = 0; i < lk->d.desc.num_inputs; i++)
         if (ofx_clip_connected(li->clips[i])) connected |= 1ull << i;
     snprintf(line, sizeof line, "#output %d\n#design %.17g\n#scale %.17g\n#shot %d %d\n#clips %llx",
-             out < 0 || out >= lk->noutputs ? 0 : out, design, scale, (int)floor(range[0] + 0.5),
+             out < 0 || out >= lk->d.noutputs ? 0 : out, design, scale, (int)floor(range[0] + 0.5),
              (int)floor(range[1] + 0.5), connected);
     append(&buf, &len, &cap, line);
     return buf;
@@ -562,7 +562,7 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
     ci.data_dir = ofx_g.data_dir[0] ? ofx_g.data_dir : NULL;
     ci.flow = flow_opencv_provider();
     if (nprfx_context_create(&ci, &li->ctx) != NPRFX_OK) {
-        snprintf(err, errn, "%s: out of memory", lk->label);
+        snprintf(err, errn, "%s: out of memory", lk->d.label);
         return NPRFX_ERR_OUT_OF_MEMORY;
     }
     nprfx_context_set_front_end(li->ctx, li);
@@ -577,19 +577,18 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
     char line[4400];
     const char *rs = strstr(settings, "#renderer ");
     li->profile = rs ? atoi(rs + strlen("#renderer ")) : 0;
-    for (int i = 0; !r && i < lk->nclips; i++) {
-        const look_clip *c = &lk->clips[i];
+    for (int i = 0; !r && i < lk->d.desc.num_inputs; i++) {
         nprfx_graph_node_info ni = {sizeof ni};
-        if ((r = nprfx_graph_node(li->g, c->node, &ni))) break;
+        if ((r = nprfx_graph_node(li->g, lk->d.node[i], &ni))) break;
         const char *name = ni.name;
-        if (c->aov < 0) {
+        if (lk->d.aov[i] < 0) {
             snprintf(line, sizeof line, "%s.path=" LOOK_PLATES "%s", name, name);
             r = nprfx_graph_set(li->g, line);
             continue;
         }
         snprintf(line, sizeof line, "%s.path=" LOOK_PLATES "%s.####.exr", name, name);
         if (!r) r = nprfx_graph_set(li->g, line);
-        if (li->planar && c->main) {
+        if (li->planar && lk->d.main[i]) {
             /* the render's own layers: its profile as detected (or as the user names it), and
              * the graph's motion convention */
             if (!r && li->profile > 0) {
@@ -626,11 +625,11 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
         snprintf(line, sizeof line, "%d-%d", first, last);
         r = nprfx_graph_set_shot(li->g, line);
     }
-    li->out_node = nprfx_graph_node_index(li->g, lk->outputs[out < lk->noutputs ? out : 0]);
+    li->out_node = nprfx_graph_node_index(li->g, lk->d.output[out < lk->d.noutputs ? out : 0]);
     if (r) {
         char msg[1024];
         nprfx_context_last_error(li->ctx, msg, sizeof msg);
-        snprintf(err, errn, "%s (%.600s): %.1000s", lk->label, lk->path, msg);
+        snprintf(err, errn, "%s (%.600s): %.1000s", lk->d.label, lk->path, msg);
         drop_graph(li);
         return r;
     }
@@ -641,7 +640,7 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
 /* The frame in host pixels at the render scale: Source's region of definition. */
 static OfxStatus frame_rod(const look_inst *li, double time, OfxRectD *rod)
 {
-    OfxImageClipHandle src = li->clips[li->look->source];
+    OfxImageClipHandle src = li->clips[li->look->d.source];
     if (!ofx_clip_connected(src)) return kOfxStatFailed;
     return ofx_g.fx->clipGetRegionOfDefinition(src, time, rod);
 }
@@ -668,7 +667,7 @@ static OfxStatus render(look_inst *li, OfxPropertySetHandle in_args)
     if (frame_rod(li, time, &rod) != kOfxStatOK) {
         snprintf(msg, sizeof msg,
                  "%s: the Source clip is not connected: it is the render's picture",
-                 li->look->label);
+                 li->look->d.label);
         return fail(li, msg);
     }
     char *settings = settings_at(li, time, scale[0]);
@@ -689,19 +688,19 @@ static OfxStatus render(look_inst *li, OfxPropertySetHandle in_args)
     const char *const *names = NULL;
     nprfx_graph_node_info ni = {sizeof ni};
     if (li->out_node < 0 || nprfx_graph_node(li->g, li->out_node, &ni)) {
-        snprintf(msg, sizeof msg, "%s: the graph has no output node", li->look->label);
+        snprintf(msg, sizeof msg, "%s: the graph has no output node", li->look->d.label);
         r = NPRFX_ERR_INTERNAL;
         goto done;
     }
     if ((r = nprfx_graph_eval(li->g, ni.name, frame, &im, &names))) {
         char e[1500];
         nprfx_context_last_error(li->ctx, e, sizeof e);
-        snprintf(msg, sizeof msg, "%s: %s", li->look->label, e);
+        snprintf(msg, sizeof msg, "%s: %s", li->look->d.label, e);
         goto done;
     }
     OfxStatus st = ofx_img_fetch(li->output, time, 0, &out);
     if (st != kOfxStatOK) {
-        snprintf(msg, sizeof msg, "%s: the host gave no output image (%d)", li->look->label, st);
+        snprintf(msg, sizeof msg, "%s: the host gave no output image (%d)", li->look->d.label, st);
         r = NPRFX_ERR_INTERNAL;
         status = st;
         goto done;
@@ -752,7 +751,7 @@ static unsigned planar_present(const look_inst *li)
 {
     plate_chan ch[64];
     plate_planes pp;
-    int n = plate_channels(li, li->look->clips[li->look->source].node, ch, 64, &pp);
+    int n = plate_channels(li, li->look->d.node[li->look->d.source], ch, 64, &pp);
     const char *names[64];
     for (int i = 0; i < n; i++)
         names[i] = ch[i].name;
@@ -792,30 +791,30 @@ static OfxStatus frames_needed(look_inst *li, OfxPropertySetHandle in_args,
     int locked = settings && pthread_mutex_trylock(&li->lock) == 0;
     int ok = locked && ensure_graph(li, settings, msg, sizeof msg) == NPRFX_OK;
     free(settings);
-    unsigned present[LOOK_MAX_CLIPS];
+    unsigned present[LOOK_MAX_INPUTS];
     memset(present, 0, sizeof present);
     unsigned planar_aovs = li->planar ? planar_present(li) : 0;
-    for (int i = 0; i < lk->nclips; i++)
-        if (li->planar && lk->clips[i].main) present[i] = planar_aovs;
-    for (int i = 0; i < lk->nclips; i++)
-        for (int j = 0; j < lk->nclips && !(li->planar && lk->clips[i].main); j++)
-            if (lk->clips[j].node == lk->clips[i].node && lk->clips[j].aov >= 0 &&
+    for (int i = 0; i < lk->d.desc.num_inputs; i++)
+        if (li->planar && lk->d.main[i]) present[i] = planar_aovs;
+    for (int i = 0; i < lk->d.desc.num_inputs; i++)
+        for (int j = 0; j < lk->d.desc.num_inputs && !(li->planar && lk->d.main[i]); j++)
+            if (lk->d.node[j] == lk->d.node[i] && lk->d.aov[j] >= 0 &&
                 ofx_clip_connected(li->clips[j])) {
-                present[i] |= 1u << lk->clips[j].aov;
-                if (lk->clips[j].aov == NPRFX_AOV_BEAUTY) present[i] |= 1u << NPRFX_AOV_COVERAGE;
+                present[i] |= 1u << lk->d.aov[j];
+                if (lk->d.aov[j] == NPRFX_AOV_BEAUTY) present[i] |= 1u << NPRFX_AOV_COVERAGE;
             }
-    for (int i = 0; i < lk->nclips; i++) {
+    for (int i = 0; i < lk->d.desc.num_inputs; i++) {
         if (!ofx_clip_connected(li->clips[i])) continue;
         double v[2 * 8];
         int n = 0;
-        if (!ofx_g.temporal || !lk->temporal || lk->clips[i].aov < 0) {
+        if (!ofx_g.temporal || !lk->d.temporal || lk->d.aov[i] < 0) {
             v[0] = v[1] = time;
             n = 1;
         } else if (ok) {
             nprfx_frame_range r[8];
             /* a plate is read whole (every AOV the graph wants) at each frame any is read */
-            if (nprfx_graph_frames_read(li->g, li->out_node, frame, lk->clips[i].node, -1,
-                                        present[i], r, 8, &n) != NPRFX_OK)
+            if (nprfx_graph_frames_read(li->g, li->out_node, frame, lk->d.node[i], -1, present[i],
+                                        r, 8, &n) != NPRFX_OK)
                 n = 0;
             for (int k = 0; k < n; k++)
                 v[2 * k] = r[k].first, v[2 * k + 1] = r[k].last;
@@ -828,7 +827,7 @@ static OfxStatus frames_needed(look_inst *li, OfxPropertySetHandle in_args,
             v[1] = range[1] > time ? range[1] : time;
             n = 1;
         }
-        set_clip_prop(out_args, kOfxImageClipPropFrameRangePrefix, lk->clips[i].name, 2 * n, v);
+        set_clip_prop(out_args, kOfxImageClipPropFrameRangePrefix, lk->d.clip[i], 2 * n, v);
     }
     if (locked) pthread_mutex_unlock(&li->lock);
     return kOfxStatOK;
@@ -848,12 +847,12 @@ static OfxStatus clip_components(look_inst *li, OfxPropertySetHandle out_args)
 {
     const ofx_look *lk = li->look;
     char name[256];
-    for (int i = 0; i < lk->nclips; i++) {
+    for (int i = 0; i < lk->d.desc.num_inputs; i++) {
         if (!li->clips[i]) continue;
         snprintf(name, sizeof name, "%s%s", kFnOfxImageEffectActionGetClipComponentsPropString,
-                 lk->clips[i].name);
+                 lk->d.clip[i]);
         plate_planes pp = {0};
-        if (i == lk->source) planes_present(li, &pp);
+        if (i == lk->d.source) planes_present(li, &pp);
         if (!pp.n) {
             (void)ofx_g.prop->propSetString(out_args, name, 0, kOfxImageComponentRGBA);
             continue;
@@ -873,9 +872,9 @@ static OfxStatus clip_preferences(look_inst *li, OfxPropertySetHandle out_args)
     set_clip_str(out_args, kOfxImageClipPropComponentsPrefix, NPRFX_OFX_OUTPUT_CLIP,
                  kOfxImageComponentRGBA);
     set_clip_str(out_args, kOfxImageClipPropDepthPrefix, NPRFX_OFX_OUTPUT_CLIP, kOfxBitDepthFloat);
-    for (int i = 0; i < li->look->nclips; i++)
+    for (int i = 0; i < li->look->d.desc.num_inputs; i++)
         if (li->clips[i])
-            set_clip_str(out_args, kOfxImageClipPropDepthPrefix, li->look->clips[i].name,
+            set_clip_str(out_args, kOfxImageClipPropDepthPrefix, li->look->d.clip[i],
                          kOfxBitDepthFloat);
     (void)ofx_g.prop->propSetString(out_args, kOfxImageEffectPropPreMultiplication, 0,
                                     kOfxImageUnPreMultiplied);
@@ -888,13 +887,13 @@ static OfxStatus regions_of_interest(look_inst *li, OfxPropertySetHandle in_args
 {
     double t = 0;
     (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &t);
-    for (int i = 0; i < li->look->nclips; i++) {
+    for (int i = 0; i < li->look->d.desc.num_inputs; i++) {
         OfxRectD rod;
         if (!ofx_clip_connected(li->clips[i]) ||
             ofx_g.fx->clipGetRegionOfDefinition(li->clips[i], t, &rod) != kOfxStatOK)
             continue;
         double v[4] = {rod.x1, rod.y1, rod.x2, rod.y2};
-        set_clip_prop(out_args, kOfxImageClipPropRoIPrefix, li->look->clips[i].name, 4, v);
+        set_clip_prop(out_args, kOfxImageClipPropRoIPrefix, li->look->d.clip[i], 4, v);
     }
     return kOfxStatOK;
 }

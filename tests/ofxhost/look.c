@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "nprfx/aov.h"
+#include "look_desc.h"
 #include "nprfx/io_oiio.h"
 #include "ofx_host_internal.h"
 
@@ -23,14 +24,11 @@
 typedef struct look_run {
     nprfx_context *ctx;
     nprfx_graph *g;
+    look_desc look; /* the look as the plug-in derives it (look_desc.h), after --set */
+    /* the inputs this host has clips for: all of the look's, or (multi-plane) Source and maps */
     int n;
     int node[LOOK_INPUTS], aov[LOOK_INPUTS]; /* aov -1: a map's whole plate */
     nprfx_input_desc in[LOOK_INPUTS];
-    char names[LOOK_INPUTS][64];
-    nprfx_param_desc params[LOOK_INPUTS]; /* the knobs, under their OFX names */
-    char pnames[LOOK_INPUTS][NPRFX_OFX_NAME_MAX];
-    nprfx_value values[LOOK_INPUTS];
-    int nparams;
     nprfx_image ring[LOOK_RING]; /* fetched frames of this render */
     int nring;
     /* a multi-plane host (profile planes): the main read's file as layers */
@@ -255,56 +253,27 @@ int internal_look_main(int argc, char **argv)
         r = nprfx_graph_set(lr.g, sets[i]);
     if (!r && shot) r = nprfx_graph_set_shot(lr.g, shot); /* the host's frame range */
     if (r || (r = nprfx_graph_frames(lr.g, frames, &list))) goto done;
-    /* the knobs as the look's params: the host sets each to the graph's value (after --set),
-     * as a user turning it */
-    int nk = nprfx_graph_knob_count(lr.g);
-    if (nk > LOOK_INPUTS) nk = LOOK_INPUTS;
-    for (int i = 0; i < nk && !r; i++) {
-        nprfx_graph_knob_info k = {sizeof k};
-        if ((r = nprfx_graph_knob(lr.g, i, &k))) break;
-        lr.params[i] = *k.param;
-        ofx_names_look_knob(k.name, lr.pnames[i], sizeof lr.pnames[i]);
-        lr.params[i].name = lr.pnames[i];
-        lr.values[i] = *k.value;
-        lr.nparams++;
-    }
-    if (r) goto done;
     if (list.count < 1) {
         r = nprfx_error(lr.ctx, NPRFX_ERR_INVALID_ARGUMENT, "no frames to render");
         goto done;
     }
     if ((r = nprfx_ofx_host_open(lr.ctx, bundle, profile, &h))) goto done;
     lr.planar = h->profile->planes;
-    /* the look's clips, as the plug-in derives them (ofx_look.c): per read node in graph order,
-     * a sequence's AOVs but coverage, a map's whole plate */
-    int first_seq = -1, main_input = -1;
-    for (int i = 0; i < nprfx_graph_source_count(lr.g); i++) {
-        nprfx_graph_source_info s = {sizeof s};
-        if ((r = nprfx_graph_source(lr.g, i, &s))) goto done;
-        int is_main = s.sequence && first_seq < 0;
-        if (is_main) first_seq = s.node;
-        for (int aov = s.sequence ? 0 : -1; aov < (s.sequence ? NPRFX_AOV_COUNT : 0); aov++) {
-            if (aov >= 0 && (!(s.aovs & (1u << aov)) || aov == NPRFX_AOV_COVERAGE)) continue;
-            /* a multi-plane host: the main read's AOVs are layers of Source */
-            if (lr.planar && is_main && aov != NPRFX_AOV_BEAUTY) continue;
-            if (lr.n == LOOK_INPUTS) break;
-            int k = lr.n++;
-            lr.node[k] = s.node;
-            lr.aov[k] = aov;
-            ofx_names_look_clip(s.name, is_main, aov >= 0 ? nprfx_aov_name(aov) : NULL, lr.names[k],
-                                sizeof lr.names[k]);
-            lr.in[k].name = lr.names[k];
-            lr.in[k].label = lr.names[k];
-            lr.in[k].flags = NPRFX_INPUT_OPTIONAL | (aov < 0 ? NPRFX_INPUT_UNALIGNED : 0);
-            if (is_main && aov == NPRFX_AOV_BEAUTY) {
-                lr.in[k].flags |= NPRFX_INPUT_MAIN;
-                main_input = k;
-            }
-        }
-    }
-    if (main_input < 0) {
-        r = nprfx_error(lr.ctx, NPRFX_ERR_INVALID_ARGUMENT, "%s reads no frame sequence", graph);
+    /* the look as the plug-in derives it, with the knobs' values after --set: the host sets each
+     * param to its value, as a user turning it */
+    char why[1024] = "";
+    if ((r = look_desc_build(lr.g, stem, &lr.look, why, sizeof why))) {
+        r = nprfx_error(lr.ctx, r, "%s is no look: %s", graph, why);
         goto done;
+    }
+    int first_seq = lr.look.node[lr.look.source], main_input = -1;
+    for (int k = 0; k < lr.look.desc.num_inputs; k++) {
+        if (!look_desc_has_clip(&lr.look, k, lr.planar)) continue;
+        int i = lr.n++;
+        lr.in[i] = lr.look.in[k];
+        lr.node[i] = lr.look.node[k];
+        lr.aov[i] = lr.look.aov[k];
+        if (k == lr.look.source) main_input = i;
     }
     if (lr.planar) {
         /* Source carries the colour plane and every layer of the file */
@@ -323,13 +292,10 @@ int internal_look_main(int argc, char **argv)
         h->plane_fetch = look_plane;
         h->plane_user = &lr;
     }
-    desc.id = id;
-    desc.label = stem;
+    desc = lr.look.desc;
     desc.num_inputs = lr.n;
     desc.inputs = lr.in;
     desc.flags = NPRFX_NODE_TEMPORAL;
-    desc.num_params = lr.nparams;
-    desc.params = lr.params;
     int first = list.frames[0], last = list.frames[list.count - 1];
     (void)nprfx_graph_shot(lr.g, &first, &last);
     for (int fi = 0; fi < list.count; fi++) {
@@ -343,8 +309,8 @@ int internal_look_main(int argc, char **argv)
         memset(&out, 0, sizeof out);
         for (int k = 0; k < lr.n && !r; k++) {
             r = look_image(&lr, k, frame, &inputs[k]);
-            /* the clip's channel count, from the first frame: RGBA or fewer */
-            if (!r && !lr.in[k].channels) lr.in[k].channels = inputs[k].channels;
+            /* the clip's channel count, from the first frame: RGBA or fewer (RGB footage) */
+            if (!r && fi == 0) lr.in[k].channels = inputs[k].channels;
         }
         nprfx_render_args a;
         memset(&a, 0, sizeof a);
@@ -359,7 +325,7 @@ int internal_look_main(int argc, char **argv)
             a.first_frame = first;
             a.last_frame = last;
             a.inputs = inputs;
-            a.params = lr.values;
+            a.params = lr.look.values;
             a.output = &out;
             a.fetch = look_fetch;
             a.fetch_user = &lr;
@@ -413,6 +379,7 @@ done:
     for (int i = 0; i < lr.nplanes; i++)
         free(lr.planes[i]);
     nprfx_plate_free(&lr.plate);
+    look_desc_free(&lr.look);
     nprfx_graph_free(lr.g);
     nprfx_ofx_host_close(h);
     nprfx_context_destroy(lr.ctx);
