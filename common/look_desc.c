@@ -23,6 +23,20 @@ void look_desc_free(look_desc *l)
     memset(l, 0, sizeof *l);
 }
 
+void look_desc_values(look_desc *l, const nprfx_graph *g)
+{
+    for (int p = 0, i = 0; p < l->desc.num_params; p++) {
+        if (!l->knob[p][0]) continue; /* the output choice */
+        nprfx_graph_knob_info k = {sizeof k};
+        if (nprfx_graph_knob(g, i++, &k)) continue;
+        l->values[p] = *k.value;
+        if (k.value->s) {
+            snprintf(l->value_text[p], sizeof l->value_text[p], "%s", k.value->s);
+            l->values[p].s = l->value_text[p];
+        }
+    }
+}
+
 nprfx_result look_desc_build(nprfx_graph *g, const char *stem, look_desc *l, char *why, size_t n)
 {
     memset(l, 0, sizeof *l);
@@ -113,6 +127,22 @@ nprfx_result look_desc_build(nprfx_graph *g, const char *stem, look_desc *l, cha
         /* the graph's value is the default a host shows and resets to */
         memcpy(l->params[p].def, k.value->v, sizeof l->params[p].def);
         if (k.param->type == NPRFX_PARAM_STRING) l->params[p].def_string = l->values[p].s;
+    }
+    /* several write nodes: which one's image the effect shows */
+    l->output_param = -1;
+    if (l->noutputs > 1 && np < LOOK_MAX_KNOBS) {
+        int p = l->output_param = np++;
+        for (int o = 0; o < l->noutputs; o++)
+            l->output_choices[o] = l->output_label[o];
+        nprfx_param_desc *d = &l->params[p];
+        snprintf(l->param_name[p], sizeof l->param_name[p], "output");
+        snprintf(l->param_label[p], sizeof l->param_label[p], "Output");
+        d->name = l->param_name[p];
+        d->label = l->param_label[p];
+        d->help = "Which of the graph's write nodes' images the effect shows.";
+        d->type = NPRFX_PARAM_CHOICE;
+        d->choices = l->output_choices;
+        d->hard_max = d->soft_max = l->noutputs - 1;
     }
     l->desc.size = sizeof l->desc;
     l->desc.id = l->id;

@@ -37,6 +37,10 @@ typedef struct look_desc {
     /* the images it makes: the nodes its write nodes write, and the write nodes' names */
     char output[LOOK_MAX_OUTPUTS][128], output_label[LOOK_MAX_OUTPUTS][128];
     int noutputs;
+    /* with several outputs, the last param is "output", a choice among the write nodes (its
+     * knob[] is empty: no graph param), and this is its index; else -1 */
+    int output_param;
+    const char *output_choices[LOOK_MAX_OUTPUTS + 1];
     int temporal;        /* a node reads other frames or keeps state between them */
     int measures;        /* nodes that measure over the shot (tone's range) */
     double design_width; /* the graph's "design_width" (0: none) */
@@ -49,6 +53,9 @@ typedef struct look_desc {
  * (g may go), and points into itself: do not copy it. Free with look_desc_free. */
 nprfx_result look_desc_build(nprfx_graph *g, const char *stem, look_desc *out, char *why, size_t n);
 void look_desc_free(look_desc *l);
+/* Take the knobs' values from g again (after nprfx_graph_set: what a user turned), leaving the
+ * defaults at what the graph file says. g is the graph l was built from. */
+void look_desc_values(look_desc *l, const nprfx_graph *g);
 
 /* Whether input k is a clip in a host of that kind: a multi-plane host carries the main read's
  * AOVs as layers of Source, so only Source and the maps are clips there. */

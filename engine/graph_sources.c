@@ -102,17 +102,13 @@ nprfx_result nprfx_graph_source(const nprfx_graph *g, int i, nprfx_graph_source_
     return NPRFX_OK;
 }
 
-nprfx_result nprfx_graph_eval_aov(nprfx_graph *g, int node, int aov, int frame, nprfx_image *out)
+nprfx_result nprfx_graph_aov_channels(nprfx_graph *g, int node, int aov, const char *const *names,
+                                      int nc, int *idx, int *count)
 {
-    memset(out, 0, sizeof *out);
     if (node < 0 || node >= g->count || g->nodes[node].kind != GK_READ || !nprfx_aov_name(aov))
         return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
-                           "nprfx_graph_eval_aov: node %d is no read node, or AOV %d is none", node,
-                           aov);
-    nprfx_image im;
-    const char *const *names = NULL;
-    nprfx_result r = nprfx_graph_eval(g, g->nodes[node].name, frame, &im, &names);
-    if (r) return r;
+                           "nprfx_graph_aov_channels: node %d is no read node, or AOV %d is none",
+                           node, aov);
     /* A reader of the AOV by name: a write node's input, which takes what the selection says. */
     gref ref;
     memset(&ref, 0, sizeof ref);
@@ -125,9 +121,22 @@ nprfx_result nprfx_graph_eval_aov(nprfx_graph *g, int node, int aov, int frame, 
     reader.kind = GK_WRITE;
     reader.ninputs = 1;
     reader.inputs = &ref;
+    return internal_graph_input_channels(g, &reader, 0, names, nc, idx, count);
+}
+
+nprfx_result nprfx_graph_eval_aov(nprfx_graph *g, int node, int aov, int frame, nprfx_image *out)
+{
+    memset(out, 0, sizeof *out);
+    if (node < 0 || node >= g->count || g->nodes[node].kind != GK_READ || !nprfx_aov_name(aov))
+        return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "nprfx_graph_eval_aov: node %d is no read node, or AOV %d is none", node,
+                           aov);
+    nprfx_image im;
+    const char *const *names = NULL;
+    nprfx_result r = nprfx_graph_eval(g, g->nodes[node].name, frame, &im, &names);
+    if (r) return r;
     int idx[256], count = 0;
-    if ((r = internal_graph_input_channels(g, &reader, 0, names, im.channels, idx, &count)))
-        return r;
+    if ((r = nprfx_graph_aov_channels(g, node, aov, names, im.channels, idx, &count))) return r;
     if ((r = nprfx_image_alloc(g->ctx, im.bounds, count, out))) return r;
     for (int y = im.bounds.y0; y < im.bounds.y1; y++)
         for (int x = im.bounds.x0; x < im.bounds.x1; x++) {

@@ -328,7 +328,7 @@ static void ofx_node(ntp *w, const host_project *hp, const host_node *hn)
     int knobs = design > 0;
     for (int i = 0; i < d->num_params; i++)
         knobs += host_param_changed(n, i);
-    for (int k = 0; k < d->num_inputs; k++)
+    for (int k = 0; k < d->num_inputs && !hn->look; k++) /* a look's clips: no selectors */
         knobs += hn->links[k].src != NULL;
     node_begin(w, hn->name, hn->plugin_id, d->version_major, d->version_minor, knobs);
     for (int i = 0; i < d->num_params; i++)
@@ -346,8 +346,9 @@ static void ofx_node(ntp *w, const host_project *hp, const host_node *hn)
         if (!hn->links[k].src) continue;
         char sel[NPRFX_OFX_NAME_MAX];
         ofx_names_selector_name(d, k, sel, sizeof sel);
-        knob_int(w, sel, "Choice", 0, hn->links[k].option,
-                 ofx_names_selector_default(&d->inputs[k]), hn->links[k].label);
+        if (!hn->look)
+            knob_int(w, sel, "Choice", 0, hn->links[k].option,
+                     ofx_names_selector_default(&d->inputs[k]), hn->links[k].label);
         /* Natron names inputs after the clip's label, which the adapter takes from the input */
         ofx_names_clip_name(d, k, clip[nin], sizeof clip[nin]);
         labels[nin] = d->inputs[k].label ? d->inputs[k].label : clip[nin];

@@ -194,8 +194,9 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
             ofx_names_selector_name(d, k, sel, sizeof sel);
             fprintf(f, "    connect(n_%s, \"%s\", n_%s)\n", hn->name,
                     d->inputs[k].label ? d->inputs[k].label : clip, hn->links[k].src);
-            fprintf(f, "    choose(n_%s.getParam(\"%s\"), \"%s\")\n", hn->name, sel,
-                    hn->links[k].label);
+            if (!hn->look) /* a look's clips carry their AOVs whole */
+                fprintf(f, "    choose(n_%s.getParam(\"%s\"), \"%s\")\n", hn->name, sel,
+                        hn->links[k].label);
         }
         for (int p = 0; p < d->num_params; p++)
             if (host_param_changed(n, p)) param_line(f, n, hn->name, p);

@@ -153,7 +153,7 @@ nprfx_result host_write_nuke(const host_project *hp, FILE *f)
             ofx_names_extra_param(d, "designWidth", name, sizeof name);
             fprintf(f, " %s %d\n", name, host_design_width(hp, d));
         }
-        for (int c = 0; c <= last; c++) {
+        for (int c = 0; c <= last && !hn->look; c++) { /* a look's clips: no selectors */
             int k = hn->clips[c];
             if (!hn->links[k].src) continue;
             char sel[NPRFX_OFX_NAME_MAX];

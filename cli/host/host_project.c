@@ -34,6 +34,8 @@ char *host_double(double v, char *buf, size_t n)
 
 int host_design_width(const host_project *hp, const nprfx_node_desc *d)
 {
+    /* a look's design width is its graph's, the plug-in's default */
+    if (!strncmp(d->id, NPRFX_OFX_LOOK_PREFIX, strlen(NPRFX_OFX_LOOK_PREFIX))) return 0;
     return ofx_names_has_pixel_params(d) ? hp->design_width : 0;
 }
 
@@ -409,8 +411,84 @@ static void relative_to(const char *from, const char *target, char *buf, size_t 
     if (k < n) snprintf(buf + k, n - k, "%s", leaf);
 }
 
+/* The look's nodes, one per output: clips linked to the reads (Source whole where planar) or to
+ * Shuffles of their AOVs; then the write nodes. */
+static nprfx_result build_look(builder *b, const look_desc *look, int planar)
+{
+    host_project *hp = b->hp;
+    nprfx_graph *g = b->g;
+    const nprfx_node_desc *d = &look->desc;
+    int np = d->num_params, ni = d->num_inputs;
+    int set_of[LOOK_MAX_INPUTS];
+    nprfx_result r = NPRFX_OK;
+    hp->look_nodes = calloc((size_t)look->noutputs + 1, sizeof *hp->look_nodes);
+    hp->look_values = calloc((size_t)(look->noutputs * (np + 1)) + 1, sizeof *hp->look_values);
+    hp->nodes = calloc((size_t)look->noutputs + 1, sizeof *hp->nodes);
+    if (!hp->look_nodes || !hp->look_values || !hp->nodes) return oom(b);
+    for (int k = 0; k < ni && !r; k++) {
+        set_of[k] = -1;
+        if (!look_desc_has_clip(look, k, planar)) continue;
+        if ((r = visit(b, look->node[k]))) break;
+        if (look->aov[k] < 0 || (planar && k == look->source)) continue; /* the read whole */
+        src_info *s = &b->info[look->node[k]];
+        int idx[256], count = 0;
+        const host_chanset *cs;
+        if ((r = nprfx_graph_aov_channels(g, look->node[k], look->aov[k],
+                                          (const char *const *)s->names, s->nc, idx, &count)) ||
+            (r = add_set(b, look->node[k], s, idx, count, &cs)))
+            break;
+        set_of[k] = (int)(cs - hp->sets);
+    }
+    for (int i = 0; i < hp->nsets; i++)
+        hp->sets[i].out = hp->sets[i].has_sign ? hp->sets[i].multiply : hp->sets[i].shuffle;
+    for (int o = 0; o < look->noutputs && !r; o++) {
+        nprfx_graph_node_info *n = &hp->look_nodes[o];
+        nprfx_value *values = hp->look_values + (size_t)o * (size_t)(np + 1);
+        memcpy(values, look->values, sizeof *values * (size_t)np);
+        if (look->output_param >= 0) values[look->output_param].v[0] = o;
+        n->size = sizeof *n;
+        n->name = look->output_label[o];
+        n->kind = NPRFX_GRAPH_NODE;
+        n->desc = d;
+        n->params = values;
+        host_node *hn = &hp->nodes[hp->nnodes++];
+        hn->n = n;
+        hn->look = 1;
+        snprintf(hn->plugin_id, sizeof hn->plugin_id, "%.90s", look->id);
+        host_name(hn->name, sizeof hn->name, look->label,
+                  look->noutputs > 1 ? look->output_label[o] : NULL);
+        if (!(hn->links = calloc((size_t)ni + 1, sizeof *hn->links))) return oom(b);
+        hn->clips[hn->nclips++] = look->source;
+        for (int k = 0; k < ni && hn->nclips < 32; k++)
+            if (k != look->source && look_desc_has_clip(look, k, planar))
+                hn->clips[hn->nclips++] = k;
+        for (int k = 0; k < ni; k++) {
+            if (!look_desc_has_clip(look, k, planar)) continue;
+            if (set_of[k] >= 0) {
+                hn->links[k].src = hp->sets[set_of[k]].out;
+                continue;
+            }
+            for (int i = 0; i < hp->nreads; i++)
+                if (hp->reads[i].n == &hp->info[look->node[k]])
+                    hn->links[k].src = hp->reads[i].name;
+        }
+        /* the write of this output */
+        for (int i = 0; i < nprfx_graph_node_count(g); i++) {
+            const nprfx_graph_node_info *w = &hp->info[i];
+            if (w->kind != NPRFX_GRAPH_WRITE || strcmp(w->name, look->output_label[o])) continue;
+            host_write *hw = &hp->writes[hp->nwrites++];
+            hw->n = w;
+            hw->path = w->path;
+            host_name(hw->name, sizeof hw->name, w->name, NULL);
+            hw->src = hn->name;
+        }
+    }
+    return r;
+}
+
 nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const char *out_dir,
-                                const char *out_file, host_project *hp)
+                                const char *out_file, const look_desc *look, int planar,
+                                host_project *hp)
 {
     memset(hp, 0, sizeof *hp);
     hp->g = g;
@@ -465,6 +543,10 @@ nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const ch
             snprintf(rd->path, sizeof rd->path, "%s", full);
         else
             relative_to(out_dir, full, rd->path, sizeof rd->path);
+    }
+    if (look) {
+        r = build_look(&b, look, planar);
+        goto done;
     }
     for (int i = 0; i < count && !r; i++) {
         const nprfx_graph_node_info *n = &hp->info[i];
@@ -531,6 +613,8 @@ done:
 
 void host_project_free(host_project *hp)
 {
+    free(hp->look_nodes);
+    free(hp->look_values);
     for (int i = 0; i < hp->nnodes; i++)
         free(hp->nodes[i].links);
     free(hp->nodes);

@@ -8,7 +8,7 @@
 
 #include <stdio.h>
 
-#include "nprfx/graph.h"
+#include "look_desc.h"
 #include "nprfx/graph.h"
 
 #define NPRFX_HOST_NAME_MAX 96
@@ -43,6 +43,7 @@ typedef struct host_node {
     int clips[32]; /* input indices in the order hosts number the clips */
     int nclips;
     host_link *links; /* per descriptor input */
+    int look;         /* a look plug-in (look_desc.h): no channel selectors, no design width */
 } host_node;
 
 typedef struct host_read {
@@ -74,12 +75,20 @@ typedef struct host_project {
     int nnodes;
     host_write *writes;
     int nwrites;
+    /* a look project (host_project_build with a look): per output, the look node's view of
+     * itself and its params' values */
+    nprfx_graph_node_info *look_nodes;
+    nprfx_value *look_values;
 } host_project;
 
 /* Build the host view of graph g (loaded from graph_path) for a project file written into
- * out_dir; errors (raised on g's context) name the node the hosts cannot express. */
+ * out_dir; errors (raised on g's context) name the node the hosts cannot express. With a look
+ * (look_desc.h: g's, with its knobs' values), the project is the graph's reads and one look node
+ * per output instead of the graph's nodes: a multi-plane host's Source takes the read whole
+ * (planar), else every AOV clip gets its Shuffle of the read. */
 nprfx_result host_project_build(nprfx_graph *g, const char *graph_path, const char *out_dir,
-                                const char *out_file, host_project *hp);
+                                const char *out_file, const look_desc *look, int planar,
+                                host_project *hp);
 void host_project_free(host_project *hp);
 
 /* The designWidth knob node d gets: the graph's design width where d has params in pixels, else 0

@@ -356,6 +356,12 @@ typedef struct nprfx_graph_source_info {
 NPRFX_API int nprfx_graph_source_count(const nprfx_graph *g);
 NPRFX_API nprfx_result nprfx_graph_source(const nprfx_graph *g, int i,
                                           nprfx_graph_source_info *out);
+/* The channels (indices into names, nc of them: a plate of read node `node` with the channels
+ * its read appends) that AOV `aov` is read from, as an input selecting it by name takes them;
+ * *count receives how many (idx has room for 256). An error names the AOV and the profile. */
+NPRFX_API nprfx_result nprfx_graph_aov_channels(nprfx_graph *g, int node, int aov,
+                                                const char *const *names, int nc, int *idx,
+                                                int *count);
 /* AOV `aov` of read node `node`'s plate at `frame`, as an input that selects it by name receives
  * it: in nprfx's conventions (motion in pixels, y down; ids decoded; depth as z), fallbacks
  * applied. *out is allocated (free with nprfx_image_free). */

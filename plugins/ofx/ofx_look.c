@@ -251,16 +251,6 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
             return st;
     }
     OfxPropertySetHandle pp;
-    if (d->noutputs > 1) {
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "output", &pp)) != kOfxStatOK)
-            return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Output");
-        ofx_set_str(pp, kOfxParamPropHint, 0, "Which of the graph's write nodes' images to show");
-        for (int i = 0; i < d->noutputs; i++)
-            ofx_set_str(pp, kOfxParamPropChoiceOption, i, d->output_label[i]);
-        ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
-        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
-    }
     if (ofx_g.multiplanar) {
         if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "renderer", &pp)) != kOfxStatOK)
             return st;

@@ -498,6 +498,7 @@ static char *settings_at(const look_inst *li, double time, double scale)
     char *buf = NULL, line[4300];
     size_t len = 0, cap = 0;
     for (int i = 0; i < lk->d.desc.num_params; i++) {
+        if (!lk->d.knob[i][0]) continue; /* the output choice: below */
         const nprfx_param_desc *kp = &lk->d.params[i];
         OfxParamHandle h = li->knobs[i];
         nprfx_value v = lk->d.values[i];

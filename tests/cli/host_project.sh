@@ -2,13 +2,16 @@
 # nprfx host-project: the sample host files in samples/hosts are what the command writes from
 # samples/graphs/main.json (no drift), the Natron project holds the graph's nodes, non-default
 # params, connections, format and frames, the Natron script sets the same params and does not
-# need __file__, and graphs hosts cannot express fail with the node's name.
+# need __file__, and graphs hosts cannot express fail with the node's name. With --look the
+# graph is one look node per output on a Read (samples/hosts/*_look.*, no drift either); with
+# --look-clips each AOV the look reads is a Shuffle into its own clip.
 set -u
 NPRFX=$1; SRC=$2; W=$3
 rm -rf "$W"; mkdir -p "$W/samples/graphs" "$W/samples/hosts"; cd "$W"
 fails=0
 fail() { echo "FAIL: $*"; fails=$((fails+1)); }
 REGEN="nprfx host-project samples/graphs/main.json --natron samples/hosts/nprfx_crossing.ntp --natron-script samples/hosts/nprfx_crossing_natron.py --nuke samples/hosts/nprfx_crossing.nk"
+REGEN_LOOK="nprfx host-project samples/graphs/main.json --look --natron samples/hosts/nprfx_crossing_look.ntp --natron-script samples/hosts/nprfx_crossing_look_natron.py --nuke samples/hosts/nprfx_crossing_look.nk"
 
 # (1) the same layout as the sources, so relative paths come out the same
 cp "$SRC/samples/graphs/main.json" samples/graphs/
@@ -21,6 +24,13 @@ cp "$SRC/samples/plates/crossing/crossing.0001.exr" samples/plates/crossing/
 for f in nprfx_crossing.ntp nprfx_crossing_natron.py nprfx_crossing.nk; do
     cmp -s "samples/hosts/$f" "$SRC/samples/hosts/$f" ||
         fail "samples/hosts/$f differs from what the graph gives; regenerate from the source folder: $REGEN"
+done
+"$NPRFX" host-project samples/graphs/main.json --look --natron samples/hosts/nprfx_crossing_look.ntp \
+    --natron-script samples/hosts/nprfx_crossing_look_natron.py \
+    --nuke samples/hosts/nprfx_crossing_look.nk || fail "host-project --look exited $?"
+for f in nprfx_crossing_look.ntp nprfx_crossing_look_natron.py nprfx_crossing_look.nk; do
+    cmp -s "samples/hosts/$f" "$SRC/samples/hosts/$f" ||
+        fail "samples/hosts/$f differs from what the graph gives; regenerate from the source folder: $REGEN_LOOK"
 done
 NTP=${NTP:-samples/hosts/nprfx_crossing.ntp}
 PY=${PY:-samples/hosts/nprfx_crossing_natron.py}
@@ -134,7 +144,39 @@ awk '/<Name>output[RGB]</ { k = $0; gsub(/.*<Name>|<\/Name>.*/, "", k) }
 printf 'outputR 0 A.r\noutputG 1 A.g\noutputB 2 A.b\n' | diff - plain.txt > plain.diff ||
     { fail "plain/hosts/plain.ntp: the Shuffle's options are not the A input's RGB:"; cat plain.diff; }
 
-# (5) graphs hosts cannot express
+# (5) looks: main.json's two outputs are two look nodes on the Read (the second showing w_noise),
+# each feeding its write; in the script too, under the Natron stand-in. toon.json with its clips:
+# a Shuffle per AOV into the clips, a turned knob set by its param name.
+LNTP=samples/hosts/nprfx_crossing_look.ntp
+awk '/<Plugin_script_name>/ { gsub(/.*<Plugin_script_name>|<\/Plugin_script_name>.*/, ""); node = $0 }
+     /<Plugin_id>/ { look = index($0, "org.nprfx.look.Main") > 0 }
+     /<first>/ { gsub(/.*<first>|<\/first>.*/, ""); first = $0 }
+     /<second>/ { gsub(/.*<second>|<\/second>.*/, ""); print "input", node, first, $0 }
+     look && /<Name>output</ { o = 1 }
+     o && /<ChoiceLabel>/ { gsub(/.*<ChoiceLabel>|<\/ChoiceLabel>.*/, ""); print "choice", node, "output", $0; o = 0 }' \
+    "$LNTP" | sort > look.txt
+printf '%s\n' "choice Main_w_noise output w_noise" "input Main_w_noise Source plate" \
+    "input Main_w_pencil Source plate" "input Viewer1 1 Main_w_pencil" "input w_noise Source Main_w_noise" \
+    "input w_pencil Source Main_w_pencil" | sort > want_look.txt
+diff want_look.txt look.txt > look.diff || { fail "$LNTP: not one look node per output on the Read:"; cat look.diff; }
+[ "$(grep -c 'org.nprfx.look.Main' "$LNTP")" -eq 2 ] || fail "$LNTP: not two look nodes"
+grep -c "Shuffle" "$LNTP" | grep -qx 0 || fail "$LNTP (layers): Shuffles where Source takes the Read whole"
+stub . samples/hosts/nprfx_crossing_look_natron.py
+grep -q "^node org.nprfx.look.Main$" stub.out || { fail "the look script makes no look node:"; cat stub.out; }
+cp "$SRC/samples/graphs/toon.json" samples/graphs/
+"$NPRFX" host-project samples/graphs/toon.json --look-clips --nuke toon_clips.nk --set ink.width=3 2>err.txt ||
+    { fail "host-project --look-clips of toon.json failed:"; cat err.txt; }
+grep -q "^ ink_width 3$" toon_clips.nk || fail "toon_clips.nk: the turned knob ink.width is not set"
+grep -q "inputs: 0 Source 1 Albedo 2 Depth 3 Normal 4 ID 5 MotionPrev" toon_clips.nk ||
+    { fail "toon_clips.nk: the look's clips are not connected:"; grep -A4 OFXorg toon_clips.nk; }
+grep -q "label \"ViewLayer.Depth.Z\"" toon_clips.nk || fail "toon_clips.nk: no Shuffle of the depth AOV"
+grep -q "^ bands_bands " toon_clips.nk && fail "toon_clips.nk sets a knob --set left alone"
+printf '{"frames": "1", "nodes": {"s": {"node": "synth", "scene": "orbit", "size": "32x24"}, "w": {"node": "write", "inputs": {"image": "s"}, "path": "o/x.####.exr"}}}\n' > synth_look.json
+"$NPRFX" host-project synth_look.json --look --nuke bad.nk 2>err.txt && fail "a graph that is no look was accepted by --look"
+grep -q "synth_look.json is no look: it reads no frame sequence" err.txt ||
+    { fail "--look on a graph that is no look says not why:"; cat err.txt; }
+
+# (6) graphs hosts cannot express
 printf '{"frames": "1-2", "nodes": {"s": {"node": "synth", "scene": "orbit", "size": "32x24"}, "b": {"node": "blend", "inputs": {"base": "s", "layer": "s"}}, "w": {"node": "write", "inputs": {"image": "b"}, "path": "o/x.####.exr"}}}\n' > synth.json
 "$NPRFX" host-project synth.json --natron bad.ntp 2> err.txt && fail "a synth graph was accepted"
 grep -q "synth.json.*node 's'" err.txt || { fail "the synth error names no file and node:"; cat err.txt; }

@@ -249,8 +249,16 @@ int internal_look_main(int argc, char **argv)
     opt.size = sizeof opt;
     opt.io = nprfx_io_oiio();
     if ((r = nprfx_graph_load(lr.ctx, graph, &opt, &lr.g))) goto done;
+    /* the look as the plug-in derives it from the file; the knobs' values after --set, which the
+     * host sets each param to, as a user turning it */
+    char why[1024] = "";
+    if ((r = look_desc_build(lr.g, stem, &lr.look, why, sizeof why))) {
+        r = nprfx_error(lr.ctx, r, "%s is no look: %s", graph, why);
+        goto done;
+    }
     for (int i = 0; i < nsets && !r; i++)
         r = nprfx_graph_set(lr.g, sets[i]);
+    if (!r) look_desc_values(&lr.look, lr.g);
     if (!r && shot) r = nprfx_graph_set_shot(lr.g, shot); /* the host's frame range */
     if (r || (r = nprfx_graph_frames(lr.g, frames, &list))) goto done;
     if (list.count < 1) {
@@ -259,13 +267,6 @@ int internal_look_main(int argc, char **argv)
     }
     if ((r = nprfx_ofx_host_open(lr.ctx, bundle, profile, &h))) goto done;
     lr.planar = h->profile->planes;
-    /* the look as the plug-in derives it, with the knobs' values after --set: the host sets each
-     * param to its value, as a user turning it */
-    char why[1024] = "";
-    if ((r = look_desc_build(lr.g, stem, &lr.look, why, sizeof why))) {
-        r = nprfx_error(lr.ctx, r, "%s is no look: %s", graph, why);
-        goto done;
-    }
     int first_seq = lr.look.node[lr.look.source], main_input = -1;
     for (int k = 0; k < lr.look.desc.num_inputs; k++) {
         if (!look_desc_has_clip(&lr.look, k, lr.planar)) continue;
