@@ -346,6 +346,35 @@ nprfx_result nprfx_graph_analysis_load(nprfx_graph *g, const char *path, int *se
     return NPRFX_OK;
 }
 
+nprfx_result nprfx_graph_node_measured(nprfx_graph *g, int node, char **text)
+{
+    *text = NULL;
+    if (node < 0 || node >= g->count || !measures(&g->nodes[node]))
+        return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "node %d measures nothing over the shot", node);
+    gnode *n = &g->nodes[node];
+    return nprfx_node_state_save(n->ctx, n->desc, n->state, text);
+}
+
+nprfx_result nprfx_graph_node_seed(nprfx_graph *g, int node, const char *text)
+{
+    if (node < 0 || node >= g->count || !measures(&g->nodes[node]))
+        return nprfx_error(g->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "node %d measures nothing over the shot", node);
+    gnode *n = &g->nodes[node];
+    nprfx_result r = nprfx_node_state_load(n->ctx, n->desc, &n->state, text);
+    /* what the state says of itself: the text a render that changes nothing leaves alone, and
+     * which a render that finds its frame otherwise measures again (internal_graph_analysis_check)
+     */
+    char *canon = NULL;
+    if (!r) r = nprfx_node_state_save(n->ctx, n->desc, n->state, &canon);
+    if (!r) {
+        free(n->seeded);
+        n->seeded = canon;
+    }
+    return r;
+}
+
 void internal_graph_analysis_check(nprfx_graph *g, gnode *n, int frame)
 {
     if (!n->seeded) return;

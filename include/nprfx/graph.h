@@ -185,6 +185,12 @@ NPRFX_API nprfx_result nprfx_graph_eval(nprfx_graph *g, const char *name, int fr
  * at the shot's first frame, so that each state holds its measurement; *measured (may be NULL)
  * receives how many hold one. The graph needs a shot ("frames" or nprfx_graph_set_shot). */
 NPRFX_API nprfx_result nprfx_graph_analyze(nprfx_graph *g, int *measured);
+/* One measuring node's measurement, for a front end that keeps it elsewhere than in a file (a
+ * plug-in's hidden param): its state as text (*text malloc'd; NULL while it has measured
+ * nothing), and a node seeded from such text, which still measures again when its rendered frame
+ * differs. Errors: a node that measures nothing, unreadable text. */
+NPRFX_API nprfx_result nprfx_graph_node_measured(nprfx_graph *g, int node, char **text);
+NPRFX_API nprfx_result nprfx_graph_node_seed(nprfx_graph *g, int node, const char *text);
 /* How many of the graph's nodes measure over the shot (nprfx_node_measures_shot): 0 means an
  * analysis has nothing to store or seed. */
 NPRFX_API int nprfx_graph_measuring_nodes(const nprfx_graph *g);

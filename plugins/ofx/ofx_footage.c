@@ -7,6 +7,7 @@
 
 #include "ofx_fetch.h"
 #include "ofx_footage.h"
+#include "ofx_handover.h"
 #include "ofx_image.h"
 #include "ofx_instance.h"
 #include "ofx_names.h"
@@ -186,9 +187,19 @@ nprfx_result ofx_footage_fetch(void *user, int input, double time, nprfx_image *
  * params) restarts the effect at t as at a cut: the node's cache and the kept frames go, and
  * the node and the flow see a shot that starts at t, so its first frame has zero motion and
  * zero confidence and nothing from before the jump shows. Held: inst->lock. */
-void ofx_footage_continue(ofx_render_call *rc, int t)
+nprfx_result ofx_footage_continue(ofx_render_call *rc, int t, unsigned long long key)
 {
     ofx_instance *inst = rc->inst;
+    inst->footage_key = key;
+    /* a fresh instance: what the instance before it kept, where the host makes one per frame */
+    int left = inst->kept ? 0 : ofx_handover_take(inst, key, t, &rc->src);
+    if (left > 1)
+        return nprfx_error(rc->ctx, NPRFX_ERR_UNSUPPORTED,
+                           "%s: this host makes a new instance for every frame and gives no other "
+                           "frame, and %d effects with these params on footage of this size kept "
+                           "frame %d: the plug-in cannot tell which is this one's. Give each a "
+                           "seed of its own",
+                           inst->desc->id, left, t - 1);
     int follows = inst->kept && (inst->kept_frame == t || inst->kept_frame == t - 1) &&
                   nprfx_rect_equal(inst->kept_src.bounds, rc->src.bounds) &&
                   inst->kept_src.channels == rc->src.channels;
@@ -199,6 +210,7 @@ void ofx_footage_continue(ofx_render_call *rc, int t)
         inst->seg_start = t;
     }
     if (inst->seg_start > rc->first_frame) rc->first_frame = inst->seg_start;
+    return NPRFX_OK;
 }
 
 /* After a render without temporal access: keep Source and the flow at t for the next frame. */

@@ -9,9 +9,11 @@
 #include "ofx_fetch.h"
 
 /* Without temporal clip access, before the render of frame t: whether t continues what the
- * instance kept (the frame after it, or the same again); anything else restarts the effect at t
- * as at a cut (the node's cache and the kept frames go, and the shot starts at t). */
-void ofx_footage_continue(ofx_render_call *rc, int t);
+ * instance kept (the frame after it, or the same again), or, for a fresh instance, what the
+ * instance before it left (key: ofx_handover_key; a host that makes one per frame); anything
+ * else restarts the effect at t as at a cut (the node's cache and the kept frames go, and the
+ * shot starts at t). An error when several effects left what this one could continue. */
+nprfx_result ofx_footage_continue(ofx_render_call *rc, int t, unsigned long long key);
 
 /* The derived inputs at the render time (frame t) into rc->inputs, their channel counts into
  * in_ch and rc->count. */

@@ -40,6 +40,9 @@ typedef struct ofx_instance {
     void *flow_state;
     nprfx_image kept_src, kept_flow;
     int kept, kept_frame, seg_start;
+    /* what tells this effect from another for a hand-over to the next instance (ofx_handover.h;
+     * 0: none yet) */
+    unsigned long long footage_key;
 } ofx_instance;
 
 /* The instance the host holds for effect fx (its kOfxPropInstanceData); NULL if none. */

@@ -36,6 +36,7 @@ typedef struct look_inst {
     int planar;     /* a multi-plane host: the look's plates are Source's layers */
     int profile;    /* there, the renderer profile the layers are read with (0: detected) */
     OfxParamHandle renderer;
+    OfxParamHandle analysis; /* what Analyze Shot measured (NULL: the look measures nothing) */
     int persistent;
     /* the render in flight: its time, render scale and the frame in host pixels */
     double time, scale;
@@ -76,6 +77,9 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
             (void)ofx_g.param->paramGetHandle(ps, "output", &li->output_choice, NULL);
         (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
         if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "renderer", &li->renderer, NULL);
+        char name[NPRFX_OFX_NAME_MAX];
+        ofx_names_extra_param(&look->d.desc, "analysis", name, sizeof name);
+        if (look->d.measures) (void)ofx_g.param->paramGetHandle(ps, name, &li->analysis, NULL);
     }
     pthread_mutex_init(&li->lock, NULL);
     OfxPropertySetHandle p;
@@ -544,11 +548,111 @@ static char *settings_at(const look_inst *li, double time, double scale)
     unsigned long long connected = 0;
     for (int i = 0; i < lk->d.desc.num_inputs; i++)
         if (ofx_clip_connected(li->clips[i])) connected |= 1ull << i;
-    snprintf(line, sizeof line, "#output %d\n#design %.17g\n#scale %.17g\n#shot %d %d\n#clips %llx",
+    /* in a multi-plane host, the layers Source carries; and what Analyze Shot measured */
+    unsigned long long more = 1469598103934665603ull;
+    if (li->planar) {
+        plate_planes pp;
+        planes_present(li, &pp);
+        for (int i = 0; i < pp.n; i++)
+            for (const char *c = pp.plane[i]; *c; c++)
+                more = (more ^ (unsigned char)*c) * 1099511628211ull;
+    }
+    char *analysis = NULL;
+    if (li->analysis && ofx_g.param->paramGetValue(li->analysis, &analysis) == kOfxStatOK &&
+        analysis)
+        for (const char *c = analysis; *c; c++)
+            more = (more ^ (unsigned char)*c) * 1099511628211ull;
+    snprintf(line, sizeof line,
+             "#output %d\n#design %.17g\n#scale %.17g\n#shot %d %d\n#clips %llx\n#renderer "
+             "%d\n#layers %llx",
              out < 0 || out >= lk->d.noutputs ? 0 : out, design, scale, (int)floor(range[0] + 0.5),
-             (int)floor(range[1] + 0.5), connected);
+             (int)floor(range[1] + 0.5), connected, renderer, more);
     append(&buf, &len, &cap, line);
     return buf;
+}
+
+static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err, size_t errn);
+static OfxStatus frame_rod(const look_inst *li, double time, OfxRectD *rod);
+static OfxStatus fail(look_inst *li, const char *msg);
+
+/* What Analyze Shot measured, into the graph's measuring nodes: "node NAME", the node's lines,
+ * "end", for each. A node seeded so still measures again when its frame differs; text that does
+ * not read is as none. */
+static void seed_analysis(look_inst *li)
+{
+    char *text = NULL;
+    if (!li->analysis || ofx_g.param->paramGetValue(li->analysis, &text) != kOfxStatOK || !text)
+        return;
+    const char *s = text;
+    while (s && !strncmp(s, "node ", 5)) {
+        const char *nl = strchr(s, '\n'), *end = strstr(s, "\nend\n");
+        if (!nl || !end || end < nl) break;
+        char name[256], *lines = NULL;
+        snprintf(name, sizeof name, "%.*s", (int)(nl - s - 5 < 255 ? nl - s - 5 : 255), s + 5);
+        size_t n = (size_t)(end - nl); /* the lines, with their last newline */
+        if ((lines = malloc(n + 1))) {
+            memcpy(lines, nl + 1, n);
+            lines[n] = 0;
+            int i = nprfx_graph_node_index(li->g, name);
+            if (i >= 0) (void)nprfx_graph_node_seed(li->g, i, lines);
+            free(lines);
+        }
+        s = end + 5;
+    }
+}
+
+/* Analyze Shot: the look's measuring nodes rendered once at the shot's first frame (each reads
+ * the frames it measures), and what they measured kept in the hidden param. */
+static OfxStatus analyze(look_inst *li, OfxPropertySetHandle in_args)
+{
+    double time = 0;
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &time);
+    /* measured afresh: what the param held goes first */
+    if (ofx_g.param->paramSetValue(li->analysis, "") != kOfxStatOK) return kOfxStatFailed;
+    OfxRectD rod;
+    char msg[2048];
+    if (frame_rod(li, time, &rod) != kOfxStatOK) {
+        snprintf(msg, sizeof msg, "%s: the Source clip is not connected", li->look->d.label);
+        return fail(li, msg);
+    }
+    char *settings = settings_at(li, time, 1);
+    if (!settings) return kOfxStatErrMemory;
+    pthread_mutex_lock(&li->lock);
+    nprfx_result r = ensure_graph(li, settings, msg, sizeof msg);
+    free(settings);
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    if (!r) {
+        li->time = time;
+        li->scale = 1;
+        li->frame = to_pixels(rod, 1);
+        int measured = 0;
+        if ((r = nprfx_graph_analyze(li->g, &measured))) {
+            char e[1500];
+            nprfx_context_last_error(li->ctx, e, sizeof e);
+            snprintf(msg, sizeof msg, "%s: Analyze Shot: %s", li->look->d.label, e);
+        }
+        for (int i = 0; !r && i < nprfx_graph_node_count(li->g); i++) {
+            nprfx_graph_node_info ni = {sizeof ni};
+            char *t = NULL, line[300];
+            if (nprfx_graph_node(li->g, i, &ni) || ni.kind != NPRFX_GRAPH_NODE ||
+                !nprfx_node_measures_shot(ni.desc) || nprfx_graph_node_measured(li->g, i, &t) || !t)
+                continue;
+            snprintf(line, sizeof line, "node %s", ni.name);
+            append(&text, &len, &cap, line);
+            size_t tl = strlen(t);
+            if (tl && t[tl - 1] == '\n') t[tl - 1] = 0; /* append ends each with one */
+            append(&text, &len, &cap, t);
+            append(&text, &len, &cap, "end");
+            free(t);
+        }
+    }
+    pthread_mutex_unlock(&li->lock);
+    if (r) return fail(li, msg);
+    OfxStatus st = ofx_g.param->paramSetValue(li->analysis, text ? text : "");
+    free(text);
+    /* the graph reloads with the measurement on the next render (the settings changed) */
+    return st == kOfxStatOK ? kOfxStatOK : kOfxStatFailed;
 }
 
 /* The graph for these settings: the one loaded when they are the same, else loaded afresh from
@@ -627,6 +731,7 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
         r = nprfx_graph_set_shot(li->g, line);
     }
     li->out_node = nprfx_graph_node_index(li->g, lk->d.output[out < lk->d.noutputs ? out : 0]);
+    if (!r) seed_analysis(li);
     if (r) {
         char msg[1024];
         nprfx_context_last_error(li->ctx, msg, sizeof msg);
@@ -899,6 +1004,18 @@ static OfxStatus regions_of_interest(look_inst *li, OfxPropertySetHandle in_args
     return kOfxStatOK;
 }
 
+/* Whether an instance-changed action is the Analyze Shot button's. */
+static int is_analyze(const look_inst *li, OfxPropertySetHandle in_args)
+{
+    char *type = NULL, *name = NULL, want[NPRFX_OFX_NAME_MAX];
+    if (ofx_g.prop->propGetString(in_args, kOfxPropType, 0, &type) != kOfxStatOK ||
+        ofx_g.prop->propGetString(in_args, kOfxPropName, 0, &name) != kOfxStatOK || !type ||
+        !name || strcmp(type, kOfxTypeParameter))
+        return 0;
+    ofx_names_extra_param(&li->look->d.desc, "analyze", want, sizeof want);
+    return !strcmp(name, want);
+}
+
 OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
                                    OfxImageEffectHandle fx, OfxPropertySetHandle in_args,
                                    OfxPropertySetHandle out_args)
@@ -939,6 +1056,8 @@ OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
         pthread_mutex_unlock(&li->lock);
         return kOfxStatOK;
     }
+    if (!strcmp(action, kOfxActionInstanceChanged) && li->analysis && is_analyze(li, in_args))
+        return analyze(li, in_args);
     if (!strcmp(action, kOfxActionInstanceChanged) ||
         !strcmp(action, kOfxImageEffectActionBeginSequenceRender) ||
         !strcmp(action, kOfxImageEffectActionEndSequenceRender) ||

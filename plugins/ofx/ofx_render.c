@@ -14,6 +14,7 @@
 #include "ofx_export.h"
 #include "ofx_fetch.h"
 #include "ofx_footage.h"
+#include "ofx_handover.h"
 #include "ofx_image.h"
 #include "ofx_messages.h"
 #include "ofx_mix.h"
@@ -223,7 +224,9 @@ static OfxStatus render_at(ofx_instance *inst, double time, double *scale, const
         rc.scale = param_scale;
         rc.vector_scale = scale[0];
         rc.frame = frame;
-        if (!ofx_g.temporal) ofx_footage_continue(&rc, ofx_round_frame(time));
+        if (!ofx_g.temporal && (r = ofx_footage_continue(&rc, ofx_round_frame(time),
+                                                         ofx_handover_key(d, values, &rc.src))))
+            goto done;
         if ((r = ofx_footage_inputs(&rc, ofx_round_frame(time), in_ch))) goto done;
     }
 

@@ -9,11 +9,13 @@
 #     derived; also with noise = input, Source feeding the flow and the node) and advect; the
 #     host checks on each first render that the Source frames fetched are exactly those that
 #     getFramesNeeded declared.
-#  2. mlt (Filter only, 8-bit, no temporal clip access: the plug-in keeps the previous Source
-#     frame and its flow; the flow to the next frame cannot be had, so coherent-noise's confidence
-#     is confidence.prev): rendered in order, equal to the runner within half an 8-bit level
-#     (0.002): the output's rounding. The footage is 8-bit, so the host's 8-bit Source loses
-#     nothing and the flow is the runner's.
+#  2. mlt (Filter only, 8-bit, no temporal clip access, a new instance for every frame as melt
+#     makes them: the plug-in keeps the previous Source frame and its flow, and an instance that
+#     goes hands them to the next; the flow to the next frame cannot be had, so coherent-noise's
+#     confidence is confidence.prev): rendered in order, equal to the runner within half an 8-bit
+#     level (0.002): the output's rounding. The footage is 8-bit, so the host's 8-bit Source
+#     loses nothing and the flow is the runner's. Two coherent-noise effects of different seeds
+#     on the same footage each continue their own; two alike are refused, saying why.
 #  3. mlt, out of order (frames 1-5, then 7-9): a jump is a cut: frames 7-9 equal (0.002) the
 #     runner's render of a shot that starts at 7 (zero motion and confidence there, nodes
 #     restart), and differ from the in-order result; never the flow against the wrong previous
@@ -87,6 +89,42 @@ for g in cn cn_input advect; do against_run $g strict 0 --tile 37 --threads 2; d
 
 # --- 2. mlt, in order: within the output's rounding ----------------------------------------------
 for g in cn_mlt advect; do against_run $g mlt 0.002 --profile mlt; done
+
+# two effects on the footage, each with its own instances: told apart by their params
+cat > "$W/cn_two.json" <<G
+{"frames": "1-6", "nodes": {
+ "plate": {"node": "read", "path": "$SRC/samples/footage/dolly/dolly.####.png"},
+ "flow": {"node": "flow", "inputs": {"image": "plate:R,G,B"}},
+ "a": {"node": "coherent-noise", "inputs": {"motion_prev": "flow", "confidence": "flow:confidence.prev"},
+       "params": {"alpha": 0.9, "output": "unit01", "contrast": 0.05, "seed": 1}},
+ "b": {"node": "coherent-noise", "inputs": {"motion_prev": "flow", "confidence": "flow:confidence.prev"},
+       "params": {"alpha": 0.9, "output": "unit01", "contrast": 0.05, "seed": SEED}},
+ "wa": {"node": "write", "inputs": {"image": "a"}, "path": "two_a.####.exr"},
+ "wb": {"node": "write", "inputs": {"image": "b"}, "path": "two_b.####.exr"}}}
+G
+sed -i 's/SEED/2/' "$W/cn_two.json"
+against_run cn_two mlt 0.002 --profile mlt
+if within "$W/cn_two/direct/two_b.####.exr" "$W/cn_two/mlt/two_b.####.exr" 0.002; then pass
+else fail "cn_two under mlt: the second effect differs from nprfx run:"; tail -n 5 "$W/diff.log"; fi
+# two alike effects (same params) on footage of one size but other pixels (the dolly footage and
+# the crossing shot's beauty): the frame after cannot tell whose it is, so it is refused
+cat > "$W/cn_alike.json" <<G
+{"frames": "1-6", "nodes": {
+ "plate": {"node": "read", "path": "$SRC/samples/footage/dolly/dolly.####.png"},
+ "plate2": {"node": "read", "path": "$SRC/samples/plates/crossing/crossing.####.exr"},
+ "flow": {"node": "flow", "inputs": {"image": "plate:R,G,B"}},
+ "flow2": {"node": "flow", "inputs": {"image": "plate2:beauty.RGB"}},
+ "a": {"node": "coherent-noise", "inputs": {"motion_prev": "flow", "confidence": "flow:confidence.prev"},
+       "params": {"alpha": 0.9, "output": "unit01", "contrast": 0.05, "seed": 1}},
+ "b": {"node": "coherent-noise", "inputs": {"motion_prev": "flow2", "confidence": "flow2:confidence.prev"},
+       "params": {"alpha": 0.9, "output": "unit01", "contrast": 0.05, "seed": 1}},
+ "wa": {"node": "write", "inputs": {"image": "a"}, "path": "alike_a.####.exr"},
+ "wb": {"node": "write", "inputs": {"image": "b"}, "path": "alike_b.####.exr"}}}
+G
+if ofx "$W/cn_alike.json" --output-dir "$W/alike" --profile mlt 2> "$W/alike.log"; then
+  fail "two alike effects on other footage under mlt rendered: one may have continued the other's frames"
+elif grep -q "cannot tell which" "$W/alike.log"; then pass
+else fail "two alike effects under mlt: refused without the reason: $(tail -n 2 "$W/alike.log" | tr '\n' ' ')"; fi
 
 # --- 3. mlt, out of order: a jump restarts --------------------------------------------------------
 for g in cn_mlt advect; do

@@ -17,6 +17,9 @@
 #     and t only (tone's range kept from the first frame, coherent-noise stepping on), not the
 #     shot.
 #  5. mlt (no temporal clip access): the looks are unavailable, with the reason.
+#  6. Analyze Shot (toon measures its light over the shot): pressed before the first render, the
+#     render of frame 3 declares what coherent-noise's recursion reads (1-3), not the shot, and
+#     frames 3-5 equal the runner's.
 #
 # usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx_looks.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
@@ -109,6 +112,18 @@ else fail "toon under natron 1-8: $(tail -n 2 "$W/inorder.log" 2>/dev/null | tr 
 if look mlt "$T" 1 "$W/mlt"; then fail "toon rendered in a host without temporal clip access"
 elif grep -q "not available in this host.*temporal clip access" "$W/mlt.log"; then pass
 else fail "toon under mlt: no reason given ($(tail -n 1 "$W/mlt.log"))"; fi
+
+# 6 -----------------------------------------------------------------------------------------------
+rm -f "$W/analyze.log"
+if (export NPRFX_OFXTEST_FRAMES_LOG="$W/analyze.log"; look natron "$T" 3-5 "$W/analyzed" --analyze-shot); then
+  wide=$(awk '$3 == 3 && ($4 < 1 || $5 > 3)' "$W/analyze.log" | head -n 2)
+  if [ -z "$wide" ] && [ -s "$W/analyze.log" ]; then pass
+  else fail "toon after Analyze Shot: frame 3 declares more than 1-3 ($wide)"; fi
+  mkdir -p "$W/analyzed_runner"
+  pat=$(runner "$T" 3-5 "$W/analyzed_runner") && pat="$W/analyzed_runner/$pat"
+  if same_frames "$pat" "$W/analyzed" toon 3 4 5; then pass
+  else fail "toon after Analyze Shot differs from nprfx run"; fi
+else fail "toon with Analyze Shot: $(tail -n 2 "$W/analyzed.log" | tr '\n' ' ')"; fi
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ] && [ $passes -gt 0 ]

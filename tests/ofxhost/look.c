@@ -166,10 +166,10 @@ static nprfx_result look_fetch(void *user, int input, double time, nprfx_image *
 
 static void usage(void)
 {
-    fprintf(
-        stderr,
-        "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
-        "SPEC] [--scramble] [--shot SPEC] [--set NODE.PARAM=VALUE] [--channels R,G,B] [-o DIR]\n");
+    fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
+                    "SPEC] [--scramble] [--analyze-shot] [--shot SPEC] [--set NODE.PARAM=VALUE] "
+                    "[--channels R,G,B] "
+                    "[-o DIR]\n");
 }
 
 int internal_look_main(int argc, char **argv)
@@ -179,11 +179,13 @@ int internal_look_main(int argc, char **argv)
     const char *channels = "R,G,B,A";
     const char *sets[16];
     int nsets = 0;
-    int scramble = 0;
+    int scramble = 0, analyze = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *next = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--scramble"))
             scramble = 1;
+        else if (!strcmp(a, "--analyze-shot"))
+            analyze = 1;
         else if (next && !strcmp(a, "--ofx"))
             bundle = argv[++i];
         else if (next && !strcmp(a, "--profile"))
@@ -267,6 +269,7 @@ int internal_look_main(int argc, char **argv)
     }
     if ((r = nprfx_ofx_host_open(lr.ctx, bundle, profile, &h))) goto done;
     lr.planar = h->profile->planes;
+    nprfx_ofx_host_set_analyze(h, analyze); /* Analyze Shot pressed before the first render */
     int first_seq = lr.look.node[lr.look.source], main_input = -1;
     for (int k = 0; k < lr.look.desc.num_inputs; k++) {
         if (!look_desc_has_clip(&lr.look, k, lr.planar)) continue;

@@ -78,7 +78,8 @@ static void usage(FILE *f)
             "usage: nprfx-ofxtest run GRAPH.json --ofx BUNDLE [--profile NAME] [options of nprfx "
             "run]\n"
             "       nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames SPEC] "
-            "[--scramble] [--shot SPEC] [--set NODE.PARAM=VALUE] [--channels R,G,B] [-o DIR]\n"
+            "[--scramble] [--analyze-shot] [--shot SPEC] [--set NODE.PARAM=VALUE]\n"
+            "       [--channels R,G,B] [-o DIR]\n"
             "       (the look plug-in of GRAPH, its clips fed with GRAPH's plates' AOVs)\n\n"
             "'nprfx-ofxtest run --help' lists the options.\n");
 }

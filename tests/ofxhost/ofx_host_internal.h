@@ -162,6 +162,7 @@ typedef struct hprofile {
     int message_v2;          /* offers kOfxMessageSuite version 2 */
     int lossy_messages;      /* formats messages without their arguments (Natron 2.5) */
     int planes;              /* multi-plane: the plane suite, clips carrying several layers */
+    int instance_per_frame;  /* an instance made for each render and destroyed after it (melt) */
 } hprofile;
 
 /* The profile called name, or NULL; the names, for messages ("strict, natron, ..."). */

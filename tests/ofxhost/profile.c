@@ -12,7 +12,9 @@
  *           multilayer EXR; look.c serves them).
  *   mlt     MLT 7's OpenFX module (Kdenlive, Shotcut): the Filter context only (Source clip
  *           only), no temporal clip access, 8-bit RGBA images whatever getClipPreferences asked,
- *           message suite 1 only, formatting correctly.
+ *           message suite 1 only, formatting correctly, and an instance of the effect made for
+ *           every render and destroyed after it, as melt does: what an instance keeps does not
+ *           survive it.
  *   mlt16   mlt with 16-bit images.
  *
  * The strict checks (frames needed equal to frames fetched, non-empty error messages, ...) hold
@@ -22,11 +24,12 @@
 #include "ofx_host_internal.h"
 
 static const hprofile profiles[] = {
-    /* name, like, general, filter, temporal, multires, alpha, depth, message_v2, lossy, planes */
-    {"strict", "the strict test host", 1, 1, 1, 1, 1, HD_FLOAT, 1, 0, 0},
-    {"natron", "Natron 2.5", 1, 0, 1, 0, 1, HD_FLOAT, 1, 1, 1},
-    {"mlt", "MLT 7 (8-bit)", 0, 1, 0, 0, 0, HD_BYTE, 0, 0, 0},
-    {"mlt16", "MLT 7 (16-bit)", 0, 1, 0, 0, 0, HD_SHORT, 0, 0, 0},
+    /* name, like, general, filter, temporal, multires, alpha, depth, message_v2, lossy, planes,
+     * instance_per_frame */
+    {"strict", "the strict test host", 1, 1, 1, 1, 1, HD_FLOAT, 1, 0, 0, 0},
+    {"natron", "Natron 2.5", 1, 0, 1, 0, 1, HD_FLOAT, 1, 1, 1, 0},
+    {"mlt", "MLT 7 (8-bit)", 0, 1, 0, 0, 0, HD_BYTE, 0, 0, 0, 1},
+    {"mlt16", "MLT 7 (16-bit)", 0, 1, 0, 0, 0, HD_SHORT, 0, 0, 0, 1},
 };
 
 const hprofile *internal_profile_find(const char *name)

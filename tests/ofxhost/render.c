@@ -796,6 +796,11 @@ done:
     free(ni->out_pixels);
     ni->out_pixels = NULL;
     ni->args = NULL;
+    /* melt: the instance goes with its render; the next render makes another */
+    if (h->profile->instance_per_frame) {
+        internal_hook_release(h, a->node, ni);
+        *slot = NULL;
+    }
     return r;
 }
 
