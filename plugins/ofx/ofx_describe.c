@@ -262,6 +262,36 @@ OfxStatus ofx_define_param(OfxParamSetHandle ps, const nprfx_param_desc *p, cons
     return kOfxStatOK;
 }
 
+OfxStatus ofx_define_analyze(OfxParamSetHandle ps, const nprfx_node_desc *d, const char *what,
+                             char *name, size_t n)
+{
+    /* as trackers do: a button that measures, and what it measured kept in the project */
+    OfxPropertySetHandle pp;
+    ofx_names_extra_param(d, "analyze", name, n);
+    OfxStatus st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, name, &pp);
+    if (st != kOfxStatOK) return st;
+    ofx_set_str(pp, kOfxPropLabel, 0, "Analyze Shot");
+    char hint[1024];
+    snprintf(hint, sizeof hint,
+             "Measure what %s now, once, reading every frame of the shot, and keep it with the "
+             "project (as nprfx analyze does for the runner): renders then read only the frames "
+             "they show. The pixels are the same as without it. Press it again after the plates "
+             "change; a frame that differs from what was measured measures the shot again.",
+             what);
+    ofx_set_str(pp, kOfxParamPropHint, 0, hint);
+    char button[NPRFX_OFX_NAME_MAX];
+    snprintf(button, sizeof button, "%s", name);
+    if ((st = define_extra(ps, d, kOfxParamTypeString, "analysis", "Analysis",
+                           "What Analyze Shot measured, kept with the project. Empty: the first "
+                           "render measures the shot.",
+                           name, n, &pp)) != kOfxStatOK)
+        return st;
+    ofx_set_str(pp, kOfxParamPropDefault, 0, "");
+    ofx_set_int(pp, kOfxParamPropSecret, 0, 1);
+    snprintf(name, n, "%s", button); /* the button's, for the page */
+    return kOfxStatOK;
+}
+
 static OfxStatus define_selector(OfxParamSetHandle ps, const nprfx_node_desc *d, int k,
                                  const char *clip, char *name, size_t name_size)
 {
@@ -401,26 +431,12 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
         add_page_child(page, &nchildren, name);
     }
     if (nprfx_node_measures_shot(d)) {
-        /* as trackers do: a button that measures, and what it measured kept in the project */
-        ofx_names_extra_param(d, "analyze", name, sizeof name);
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, name, &pp)) != kOfxStatOK)
+        if ((st = ofx_define_analyze(ps, d,
+                                     "this node measures over the whole shot (the tone "
+                                     "range)",
+                                     name, sizeof name)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Analyze Shot");
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "Measure what this node measures over the whole shot (the tone range) now, "
-                    "once, reading every frame of its inputs, and keep it with the project "
-                    "(as nprfx analyze does for the runner): renders then read only their own "
-                    "frame. The pixels are the same as without it. Press it again after the "
-                    "plates change; a frame that differs from what was measured measures the "
-                    "shot again.");
         add_page_child(page, &nchildren, name);
-        if ((st = define_extra(ps, d, kOfxParamTypeString, "analysis", "Analysis",
-                               "What Analyze Shot measured, kept with the project. Empty: the "
-                               "first render measures the shot.",
-                               name, sizeof name, &pp)) != kOfxStatOK)
-            return st;
-        ofx_set_str(pp, kOfxParamPropDefault, 0, "");
-        ofx_set_int(pp, kOfxParamPropSecret, 0, 1);
     }
     for (int k = 0; k < d->num_inputs; k++) {
         if (!general && k != main) continue;

@@ -22,4 +22,10 @@ OfxStatus ofx_describe_in_context(const nprfx_node_desc *d, OfxImageEffectHandle
 OfxStatus ofx_define_param(OfxParamSetHandle ps, const nprfx_param_desc *p, const char *name,
                            const char *label, const char *lead, const nprfx_value *def);
 
+/* Analyze Shot: the push button and the hidden string param that keeps what it measured, for d
+ * (a node that measures over its shot, or a look); `what` completes "Measure what ..." in the
+ * hint. name receives the button's name. */
+OfxStatus ofx_define_analyze(OfxParamSetHandle ps, const nprfx_node_desc *d, const char *what,
+                             char *name, size_t n);
+
 #endif

@@ -265,25 +265,11 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
     }
     if (d->measures) {
-        /* what the look's nodes measure over the shot (tone's range), once, kept with the
-         * project: renders then read their own frames only */
         char name[NPRFX_OFX_NAME_MAX];
-        ofx_names_extra_param(&d->desc, "analyze", name, sizeof name);
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, name, &pp)) != kOfxStatOK)
+        if ((st = ofx_define_analyze(ps, &d->desc,
+                                     "the look measures over the whole shot (the light's range)",
+                                     name, sizeof name)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Analyze Shot");
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "Measure what the look measures over the whole shot (the light's range) "
-                    "once and keep it with the project: renders then read their own frames only. "
-                    "The pixels are the same; press it again after the plates change.");
-        ofx_names_extra_param(&d->desc, "analysis", name, sizeof name);
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeString, name, &pp)) != kOfxStatOK)
-            return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Analysis");
-        ofx_set_str(pp, kOfxParamPropHint, 0, "What Analyze Shot measured (empty: nothing yet).");
-        ofx_set_int(pp, kOfxParamPropSecret, 0, 1);
-        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
-        ofx_set_str(pp, kOfxParamPropDefault, 0, "");
     }
     if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeDouble, "designWidth", &pp)) != kOfxStatOK)
         return st;
