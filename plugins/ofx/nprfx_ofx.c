@@ -15,6 +15,7 @@
 #include "ofx_actions.h"
 #include "ofx_api.h"
 #include "ofx_describe.h"
+#include "ofx_handover.h"
 #include "ofx_instance.h"
 #include "ofx_look.h"
 #include "ofx_names.h"
@@ -143,7 +144,11 @@ static OfxStatus main_entry(int index, const char *action, const void *handle,
     if (!strcmp(action, kOfxActionCreateInstance)) return ofx_instance_create(d, fx);
     ofx_instance *inst = ofx_instance_get(fx);
     if (!inst) return kOfxStatErrBadHandle;
-    if (!strcmp(action, kOfxActionDestroyInstance)) return ofx_instance_destroy(fx);
+    if (!strcmp(action, kOfxActionDestroyInstance)) {
+        /* a host that makes an instance per frame finds what this one kept in the next */
+        if (!ofx_g.temporal) ofx_handover_leave(inst);
+        return ofx_instance_destroy(fx);
+    }
     if (!strcmp(action, kOfxImageEffectActionRender)) return ofx_render(inst, in_args);
     if (!strcmp(action, kOfxImageEffectActionGetRegionOfDefinition))
         return ofx_region_of_definition(inst, in_args, out_args);

@@ -3,7 +3,6 @@
 #include <string.h>
 
 #include "ofx_derive.h"
-#include "ofx_handover.h"
 #include "ofx_instance.h"
 #include "ofx_names.h"
 #include "ofx_suites.h"
@@ -23,8 +22,6 @@ ofx_instance *ofx_instance_get(OfxImageEffectHandle fx)
 static void instance_free(ofx_instance *inst)
 {
     if (!inst) return;
-    /* a host that makes an instance per frame finds what this one kept in the next */
-    if (!ofx_g.temporal) ofx_handover_leave(inst);
     if (inst->state && inst->desc->state_free) inst->desc->state_free(inst->state);
     ofx_instance_forget_footage(inst);
     pthread_mutex_destroy(&inst->lock);
