@@ -459,6 +459,21 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
         ofx_free(scratch);
         ofx_img_release(&img);
     }
+    /* A render's own motion vectors among the layers are in pixels at full resolution: at a
+     * render scale, the channels the read's convention takes them from are scaled with the
+     * plate (the AOV clips' motion is, above). */
+    int mv[4];
+    double sign[4];
+    if (li->planar && li->scale != 1.0 && pp.n && nprfx_graph_read_vectors(li->g, node) &&
+        nprfx_graph_motion_sources(li->g, node, path, names, na, mv, sign) == NPRFX_OK)
+        for (int c = 0; c < np; c++) {
+            int motion = 0;
+            for (int m = 0; m < 4; m++)
+                motion |= mv[m] == pick[c];
+            if (!motion) continue;
+            for (size_t i = 0; i < w * h; i++)
+                out->pixels[i * (size_t)np + (size_t)c] *= (float)li->scale;
+        }
     return NPRFX_OK;
 }
 
