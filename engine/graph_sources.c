@@ -90,9 +90,12 @@ nprfx_result nprfx_graph_source(const nprfx_graph *g, int i, nprfx_graph_source_
     }
     if (s.sequence) {
         /* What stands in for an AOV a plate lacks (graph_aovs.c) is read too: the picture (for
-         * albedo, light, and optical flow for motion), depth (a position for rest, uv and
-         * position). Coverage is the picture's alpha. */
+         * albedo, light, and optical flow for motion); uv and position for rest, position for
+         * uv, and depth (a camera position) for all three. Coverage is the picture's alpha. */
         s.aovs |= 1u << NPRFX_AOV_BEAUTY;
+        if (s.aovs & (1u << NPRFX_AOV_REST)) s.aovs |= 1u << NPRFX_AOV_UV;
+        if (s.aovs & ((1u << NPRFX_AOV_REST) | (1u << NPRFX_AOV_UV)))
+            s.aovs |= 1u << NPRFX_AOV_POSITION;
         if (s.aovs & ((1u << NPRFX_AOV_REST) | (1u << NPRFX_AOV_UV) | (1u << NPRFX_AOV_POSITION)))
             s.aovs |= 1u << NPRFX_AOV_DEPTH;
     }

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "look_desc.h"
 #include "nprfx/graph.h"
 #include "nprfx/io_oiio.h"
 #include "nprfx/nprfx.h"
@@ -247,6 +248,27 @@ static int print_graph(const char *path)
         if (k.help) print_wrapped(stdout, k.help, 27, 96);
         if (k.param->help) print_wrapped(stdout, k.param->help, 27, 96);
     }
+    /* the same graph as one effect in compositing hosts (look_desc.h) */
+    char stem[256], why[1024] = "";
+    const char *leaf = strrchr(path, '/');
+    snprintf(stem, sizeof stem, "%s", leaf ? leaf + 1 : path);
+    if (strlen(stem) > 5) stem[strlen(stem) - 5] = 0; /* ".json" */
+    look_desc *ld = calloc(1, sizeof *ld);
+    if (ld && look_desc_build(g, stem, ld, why, sizeof why) == NPRFX_OK) {
+        printf("\nIn compositing hosts: NPR/Looks > %s (%s), one node:\n    clips:", ld->label,
+               ld->id);
+        for (int k = 0; k < ld->desc.num_inputs; k++)
+            printf(" %s%s", ld->clip[k], look_desc_has_clip(ld, k, 1) ? "" : "*");
+        printf("\n    (* a clip only in hosts without layers; with layers, Source carries it)\n"
+               "    params:");
+        for (int p = 0; p < ld->desc.num_params; p++)
+            printf(" %s", ld->params[p].name);
+        printf("\n");
+    } else if (ld) {
+        printf("\nNot a look for compositing hosts: %s\n", why);
+    }
+    if (ld) look_desc_free(ld);
+    free(ld);
     nprfx_graph_free(g);
     cli_env_free(&env);
     return 0;

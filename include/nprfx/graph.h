@@ -350,8 +350,8 @@ typedef struct nprfx_graph_source_info {
     int sequence;     /* 1: its path has frame tokens (the render's plates); 0: one file (a map) */
     /* A bit (1u << aov) for every canonical AOV (nprfx/aov.h) the graph's inputs read from it,
      * by selection ("plate:depth", "plate:beauty.RGB") or by their AOV hint; for a sequence also
-     * what stands in for a missing one (beauty always; depth for rest, uv and position). An
-     * input that takes the whole plate counts as beauty. */
+     * what stands in for a missing one (beauty always; uv and position for rest, position for
+     * uv, depth for all three). An input that takes the whole plate counts as beauty. */
     unsigned aovs;
     /* The first selection that names plate channels rather than an AOV ("plate:Vector.XY"):
      * what only the renderer's own files can give; NULL when none. */

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # A graph's knobs (docs/design.md §3.6): every shipped style graph lists its params worth turning
-# and `nprfx help GRAPH.json` shows them with values, ranges and the graph's words; a knob that
+# and `nprfx help GRAPH.json` shows them with values, ranges and the graph's words (and the look
+# plug-in the graph is in hosts, with its clips and params); a knob that
 # names no such param, or a malformed entry, is refused at load with its reason; --set with a *
 # sets every matching node that has the param, the same as setting each.
 set -u
@@ -24,6 +25,10 @@ has last.out "strokes*.frequency"
 has last.out "(2 nodes)"
 has last.out "stroke spacing"
 has last.out "Shot: frames 1-24; params set for plates 1280 pixels wide"
+# the same graph as one effect in hosts: its plug-in, clips and params (look_desc.h)
+has last.out "In compositing hosts: NPR/Looks > Cross hatching (org.nprfx.look.CrossHatching)"
+has last.out "clips: Source"
+has last.out " strokes_frequency"
 
 # Refusals, each with its reason.
 graph() { # KNOBS_JSON: a two-layer gabor graph with those knobs
