@@ -13,7 +13,12 @@
 int internal_aov_map_named(const char *aovs)
 {
     size_t n = aovs ? strlen(aovs) : 0;
-    return n > 5 && !strcmp(aovs + n - 5, ".json");
+    return (n > 5 && !strcmp(aovs + n - 5, ".json")) || internal_aov_map_inline(aovs);
+}
+
+int internal_aov_map_inline(const char *aovs)
+{
+    return aovs && aovs[0] == '{';
 }
 
 void internal_aov_map_free(internal_aov_map *m)
@@ -108,19 +113,16 @@ static nprfx_result fill(nprfx_context *ctx, const char *path, const internal_js
     return NPRFX_OK;
 }
 
-nprfx_result internal_aov_map_load(nprfx_context *ctx, const char *path, internal_aov_map **out)
+nprfx_result internal_aov_map_parse(nprfx_context *ctx, const char *text, const char *label,
+                                    internal_aov_map **out)
 {
     *out = NULL;
-    /* a mapping names a dozen AOVs: anything near a megabyte is not one */
-    char *text = engine_read_text(ctx, path, "AOV mapping", 1L << 20);
-    if (!text) return NPRFX_ERR_IO;
     nprfx_result r;
     internal_json *root = NULL;
-    nprfx_context *fctx = NULL; /* a JSON error names the file first */
-    r = nprfx_context_create_scoped(ctx, path, &fctx);
+    nprfx_context *fctx = NULL; /* a JSON error names the file (or the read) first */
+    r = nprfx_context_create_scoped(ctx, label, &fctx);
     if (!r) r = internal_json_parse(fctx, text, &root);
     nprfx_context_destroy(fctx);
-    free(text);
     if (r) return r;
     internal_aov_map *m = calloc(1, sizeof *m);
     if (!m) {
@@ -129,9 +131,9 @@ nprfx_result internal_aov_map_load(nprfx_context *ctx, const char *path, interna
     }
     m->base = NPRFX_PROFILE_GENERIC;
     m->depth = -1;
-    const char *slash = strrchr(path, '/');
-    m->label = engine_strdup(slash ? slash + 1 : path);
-    r = fill(ctx, path, root, m);
+    const char *slash = strrchr(label, '/');
+    m->label = engine_strdup(slash ? slash + 1 : label);
+    r = fill(ctx, label, root, m);
     internal_json_free(root);
     if (r) {
         internal_aov_map_free(m);
@@ -139,4 +141,15 @@ nprfx_result internal_aov_map_load(nprfx_context *ctx, const char *path, interna
     }
     *out = m;
     return NPRFX_OK;
+}
+
+nprfx_result internal_aov_map_load(nprfx_context *ctx, const char *path, internal_aov_map **out)
+{
+    *out = NULL;
+    /* a mapping names a dozen AOVs: anything near a megabyte is not one */
+    char *text = engine_read_text(ctx, path, "AOV mapping", 1L << 20);
+    if (!text) return NPRFX_ERR_IO;
+    nprfx_result r = internal_aov_map_parse(ctx, text, path, out);
+    free(text);
+    return r;
 }

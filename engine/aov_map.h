@@ -23,8 +23,14 @@ typedef struct internal_aov_map {
     int depth;                    /* NPRFX_DEPTH_*, or -1: the base's */
 } internal_aov_map;
 
-/* Whether an "aovs" value names a mapping file rather than a profile (it ends in ".json"). */
+/* Whether an "aovs" value is a mapping rather than a profile: a file's name (it ends in ".json")
+ * or the mapping itself, inline (it begins with '{': what a front end sets, e.g. a plug-in's
+ * AOV layers). */
 int internal_aov_map_named(const char *aovs);
+int internal_aov_map_inline(const char *aovs);
+/* A mapping from its text; label names it in errors. */
+nprfx_result internal_aov_map_parse(nprfx_context *ctx, const char *text, const char *label,
+                                    internal_aov_map **out);
 
 /* Read the mapping file at path; errors name the file and the key. */
 nprfx_result internal_aov_map_load(nprfx_context *ctx, const char *path, internal_aov_map **out);

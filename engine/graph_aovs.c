@@ -134,7 +134,10 @@ static nprfx_result settle_read(nprfx_graph *g, int i, const nprfx_file_info *in
             snprintf(path, sizeof path, "%s", n->aovs);
         else
             snprintf(path, sizeof path, "%s/%s", g->base_dir, n->aovs);
-        nprfx_result r = internal_aov_map_load(n->ctx, path, &n->aov_map);
+        nprfx_result r =
+            internal_aov_map_inline(n->aovs)
+                ? internal_aov_map_parse(n->ctx, n->aovs, "the read's aovs", &n->aov_map)
+                : internal_aov_map_load(n->ctx, path, &n->aov_map);
         if (r) return r;
     }
     const internal_aov_map *map = n->aov_map;

@@ -252,6 +252,27 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     }
     OfxPropertySetHandle pp;
     if (ofx_g.multiplanar) {
+        /* which layer feeds each AOV: found on request, shown, and the user's to change */
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, "findLayers", &pp)) !=
+            kOfxStatOK)
+            return st;
+        ofx_set_str(pp, kOfxPropLabel, 0, "Find AOV Layers");
+        ofx_set_str(pp, kOfxParamPropHint, 0,
+                    "Fill AOV Layers with the layers the look reads each AOV from, as it finds "
+                    "them among Source's layers now, to check them or change one.");
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeString, "aovLayers", &pp)) !=
+            kOfxStatOK)
+            return st;
+        ofx_set_str(pp, kOfxPropLabel, 0, "AOV Layers");
+        ofx_set_str(pp, kOfxParamPropHint, 0,
+                    "One line per AOV the look reads from another layer than it would find: "
+                    "AOV = CHANNELS, e.g. depth = ViewLayer.Depth.Z or normal = N.X,N.Y,N.Z "
+                    "(AOVs: beauty, albedo, diffuse_light, depth, normal, position, rest, uv, id, "
+                    "coverage). Empty: each AOV by the renderer's names (Renderer). Motion "
+                    "vectors follow the renderer's convention.");
+        ofx_set_str(pp, kOfxParamPropStringMode, 0, kOfxParamStringIsMultiLine);
+        ofx_set_str(pp, kOfxParamPropDefault, 0, "");
+        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
         if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "renderer", &pp)) != kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Renderer");

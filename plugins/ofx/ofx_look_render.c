@@ -36,7 +36,8 @@ typedef struct look_inst {
     int planar;     /* a multi-plane host: the look's plates are Source's layers */
     int profile;    /* there, the renderer profile the layers are read with (0: detected) */
     OfxParamHandle renderer;
-    OfxParamHandle analysis; /* what Analyze Shot measured (NULL: the look measures nothing) */
+    OfxParamHandle analysis;   /* what Analyze Shot measured (NULL: the look measures nothing) */
+    OfxParamHandle aov_layers; /* multi-plane: the user's layer for an AOV, lines AOV = CHANNELS */
     int persistent;
     /* the render in flight: its time, render scale and the frame in host pixels */
     double time, scale;
@@ -77,6 +78,7 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
             (void)ofx_g.param->paramGetHandle(ps, "output", &li->output_choice, NULL);
         (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
         if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "renderer", &li->renderer, NULL);
+        if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "aovLayers", &li->aov_layers, NULL);
         char name[NPRFX_OFX_NAME_MAX];
         ofx_names_extra_param(&look->d.desc, "analysis", name, sizeof name);
         if (look->d.measures) (void)ofx_g.param->paramGetHandle(ps, name, &li->analysis, NULL);
@@ -263,6 +265,17 @@ static int plate_channels(const look_inst *li, int node, plate_chan *out, int ma
         }
     }
     return n;
+}
+
+/* Source's layers as channel names (into ch and names, 64 at most; *n how many) and the profile
+ * the look reads them with: the one chosen (Renderer), else the one the names tell. */
+static int source_layers(const look_inst *li, plate_chan *ch, const char **names, int *n)
+{
+    plate_planes pp;
+    *n = plate_channels(li, li->look->d.node[li->look->d.source], ch, 64, &pp);
+    for (int i = 0; i < *n; i++)
+        names[i] = ch[i].name;
+    return li->profile > 0 ? li->profile - 1 : nprfx_aov_detect(names, *n, NULL, NULL, 0);
 }
 
 static OfxRectI to_pixels(OfxRectD r, double s)
@@ -459,6 +472,17 @@ static nprfx_result look_read(nprfx_context *ctx, const char *path, const nprfx_
         ofx_free(scratch);
         ofx_img_release(&img);
     }
+    /* The read's other clips at this frame, though the graph takes no channel of them: OpenFX
+     * has no way to declare a connected clip unneeded (the host prepares it at the frame), and
+     * what a host prepared is fetched, as the frames needed said. */
+    for (int i = 0; i < li->look->d.desc.num_inputs; i++) {
+        int fetched = 0;
+        for (int c = 0; c < np; c++)
+            fetched |= all[pick[c]].clip == i;
+        if (fetched || li->look->d.node[i] != node || !ofx_clip_connected(li->clips[i])) continue;
+        ofx_img img;
+        if (ofx_img_fetch(li->clips[i], frame, 0, &img) == kOfxStatOK) ofx_img_release(&img);
+    }
     /* A render's own motion vectors among the layers are in pixels at full resolution: at a
      * render scale, the channels the read's convention takes them from are scaled with the
      * plate (the AOV clips' motion is, above). */
@@ -572,11 +596,14 @@ static char *settings_at(const look_inst *li, double time, double scale)
             for (const char *c = pp.plane[i]; *c; c++)
                 more = (more ^ (unsigned char)*c) * 1099511628211ull;
     }
-    char *analysis = NULL;
-    if (li->analysis && ofx_g.param->paramGetValue(li->analysis, &analysis) == kOfxStatOK &&
-        analysis)
-        for (const char *c = analysis; *c; c++)
-            more = (more ^ (unsigned char)*c) * 1099511628211ull;
+    OfxParamHandle texts[2] = {li->analysis, li->aov_layers};
+    for (int t = 0; t < 2; t++) {
+        char *text = NULL;
+        if (texts[t] && ofx_g.param->paramGetValue(texts[t], &text) == kOfxStatOK && text)
+            for (const char *c = text; *c; c++)
+                more = (more ^ (unsigned char)*c) * 1099511628211ull;
+        more = (more ^ 0xff) * 1099511628211ull;
+    }
     snprintf(line, sizeof line,
              "#output %d\n#design %.17g\n#scale %.17g\n#shot %d %d\n#clips %llx\n#renderer "
              "%d\n#layers %llx",
@@ -616,31 +643,47 @@ static void seed_analysis(look_inst *li)
     }
 }
 
+/* A button's action (Analyze Shot, Find AOV Layers) begins: the graph for the settings now, at the
+ * action's time and full size, the instance locked (the caller unlocks). Else the failure,
+ * posted. */
+static OfxStatus button_begin(look_inst *li, OfxPropertySetHandle in_args, double *time)
+{
+    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, time);
+    OfxRectD rod;
+    char msg[2048];
+    if (frame_rod(li, *time, &rod) != kOfxStatOK) {
+        snprintf(msg, sizeof msg, "%s: the Source clip is not connected", li->look->d.label);
+        return fail(li, msg);
+    }
+    char *settings = settings_at(li, *time, 1);
+    if (!settings) return kOfxStatErrMemory;
+    pthread_mutex_lock(&li->lock);
+    nprfx_result r = ensure_graph(li, settings, msg, sizeof msg);
+    free(settings);
+    if (r) {
+        pthread_mutex_unlock(&li->lock);
+        return fail(li, msg);
+    }
+    li->time = *time;
+    li->scale = 1;
+    li->frame = to_pixels(rod, 1);
+    return kOfxStatOK;
+}
+
 /* Analyze Shot: the look's measuring nodes rendered once at the shot's first frame (each reads
  * the frames it measures), and what they measured kept in the hidden param. */
 static OfxStatus analyze(look_inst *li, OfxPropertySetHandle in_args)
 {
     double time = 0;
-    (void)ofx_g.prop->propGetDouble(in_args, kOfxPropTime, 0, &time);
     /* measured afresh: what the param held goes first */
     if (ofx_g.param->paramSetValue(li->analysis, "") != kOfxStatOK) return kOfxStatFailed;
-    OfxRectD rod;
+    OfxStatus st = button_begin(li, in_args, &time);
+    if (st != kOfxStatOK) return st;
     char msg[2048];
-    if (frame_rod(li, time, &rod) != kOfxStatOK) {
-        snprintf(msg, sizeof msg, "%s: the Source clip is not connected", li->look->d.label);
-        return fail(li, msg);
-    }
-    char *settings = settings_at(li, time, 1);
-    if (!settings) return kOfxStatErrMemory;
-    pthread_mutex_lock(&li->lock);
-    nprfx_result r = ensure_graph(li, settings, msg, sizeof msg);
-    free(settings);
     char *text = NULL;
     size_t len = 0, cap = 0;
-    if (!r) {
-        li->time = time;
-        li->scale = 1;
-        li->frame = to_pixels(rod, 1);
+    nprfx_result r = NPRFX_OK;
+    {
         int measured = 0;
         if ((r = nprfx_graph_analyze(li->g, &measured))) {
             char e[1500];
@@ -664,9 +707,137 @@ static OfxStatus analyze(look_inst *li, OfxPropertySetHandle in_args)
     }
     pthread_mutex_unlock(&li->lock);
     if (r) return fail(li, msg);
-    OfxStatus st = ofx_g.param->paramSetValue(li->analysis, text ? text : "");
+    st = ofx_g.param->paramSetValue(li->analysis, text ? text : "");
     free(text);
     /* the graph reloads with the measurement on the next render (the settings changed) */
+    return st == kOfxStatOK ? kOfxStatOK : kOfxStatFailed;
+}
+
+/* AOV Layers as the read's "aovs" mapping (engine/aov_map.h, inline): the renderer's profile
+ * (chosen, or found from Source's layer names) for what the lines leave alone, and each line's
+ * AOV = CHANNELS. *json NULL when the param is empty; an error (in err) names a bad line. */
+static nprfx_result layers_map(look_inst *li, char **json, char *err, size_t errn)
+{
+    *json = NULL;
+    err[0] = 0;
+    char *text = NULL;
+    if (!li->aov_layers || ofx_g.param->paramGetValue(li->aov_layers, &text) != kOfxStatOK || !text)
+        return NPRFX_OK;
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    int lines = 0, lineno = 0;
+    for (const char *s = text; s && *s;) {
+        const char *e = strchr(s, '\n');
+        size_t n = e ? (size_t)(e - s) : strlen(s);
+        char line[1024], aov[64], sel[900];
+        snprintf(line, sizeof line, "%.*s", (int)(n < sizeof line - 1 ? n : sizeof line - 1), s);
+        s = e ? e + 1 : NULL;
+        lineno++;
+        char *eq = strchr(line, '=');
+        int blank = strspn(line, " \t\r") == strlen(line);
+        if (blank) continue;
+        if (!eq || sscanf(line, " %63[a-z_]", aov) != 1 || nprfx_aov_find(aov) < 0 ||
+            sscanf(eq + 1, " %899[^\r]", sel) != 1) {
+            snprintf(err, errn,
+                     "%s: AOV Layers, line %d ('%s'): expected AOV = CHANNELS with one of the "
+                     "AOVs beauty, albedo, diffuse_light, depth, normal, position, rest, uv, id, "
+                     "coverage",
+                     li->look->d.label, lineno, line);
+            free(buf);
+            return NPRFX_ERR_PARSE;
+        }
+        for (size_t k = strlen(sel); k > 0 && (sel[k - 1] == ' ' || sel[k - 1] == '\t'); k--)
+            sel[k - 1] = 0;
+        char item[1100];
+        snprintf(item, sizeof item, "%s\"%s\": \"", lines ? ", " : "", aov);
+        size_t at = strlen(item);
+        for (const char *c = sel; *c && at + 3 < sizeof item; c++) {
+            if (*c == '"' || *c == '\\') item[at++] = '\\';
+            item[at++] = *c;
+        }
+        snprintf(item + at, sizeof item - at, "\"");
+        /* append without the newline append() adds */
+        if (!buf && !(buf = calloc(1, cap = 4096))) return NPRFX_ERR_OUT_OF_MEMORY;
+        if (len + strlen(item) + 1 > cap) {
+            char *g = realloc(buf, cap = (len + strlen(item) + 1) * 2);
+            if (!g) {
+                free(buf);
+                return NPRFX_ERR_OUT_OF_MEMORY;
+            }
+            buf = g;
+        }
+        memcpy(buf + len, item, strlen(item) + 1);
+        len += strlen(item);
+        lines++;
+    }
+    if (!lines) {
+        free(buf);
+        return NPRFX_OK;
+    }
+    /* the profile for the rest: the chosen one, else the one the layer names tell */
+    plate_chan ch[64];
+    const char *names[64];
+    int n, profile = source_layers(li, ch, names, &n);
+    size_t jn = len + 256;
+    char *j = malloc(jn);
+    if (j)
+        snprintf(j, jn, "{\"profile\": \"%s\", \"aovs\": {%s}}", nprfx_aov_profile_name(profile),
+                 buf);
+    free(buf);
+    if (!j) return NPRFX_ERR_OUT_OF_MEMORY;
+    *json = j;
+    return NPRFX_OK;
+}
+
+/* Find AOV Layers: the channels the look reads each of its AOVs from among Source's layers now,
+ * written into AOV Layers (a line each), for the user to check or change. */
+static OfxStatus find_layers(look_inst *li, OfxPropertySetHandle in_args)
+{
+    double time = 0;
+    OfxStatus st = button_begin(li, in_args, &time);
+    if (st != kOfxStatOK) return st;
+    char msg[2048];
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    const look_desc *d = &li->look->d;
+    int node = d->node[d->source];
+    nprfx_result r = NPRFX_OK;
+    {
+        if ((r = nprfx_graph_settle(li->g, (int)floor(time + 0.5)))) {
+            char e[1500];
+            nprfx_context_last_error(li->ctx, e, sizeof e);
+            snprintf(msg, sizeof msg, "%s: Find AOV Layers: %s", d->label, e);
+        }
+    }
+    plate_chan ch[64];
+    plate_planes pp;
+    int n = r ? 0 : plate_channels(li, node, ch, 64, &pp);
+    const char *names[64];
+    for (int i = 0; i < n; i++)
+        names[i] = ch[i].name;
+    for (int k = 0; !r && k < d->desc.num_inputs; k++) {
+        int aov = d->aov[k];
+        if (!d->main[k] || aov < 0 || aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT)
+            continue;
+        int idx[256], count = 0;
+        char line[1200];
+        if (nprfx_graph_aov_channels(li->g, node, aov, names, n, idx, &count) || count < 1) {
+            snprintf(line, sizeof line, "# %s: not among the layers", nprfx_aov_name(aov));
+        } else {
+            snprintf(line, sizeof line, "%s = ", nprfx_aov_name(aov));
+            for (int c = 0; c < count && idx[c] < n; c++)
+                snprintf(line + strlen(line), sizeof line - strlen(line), "%s%s", c ? "," : "",
+                         names[idx[c]]);
+        }
+        append(&text, &len, &cap, line);
+    }
+    pthread_mutex_unlock(&li->lock);
+    if (r) {
+        free(text);
+        return fail(li, msg);
+    }
+    st = ofx_g.param->paramSetValue(li->aov_layers, text ? text : "");
+    free(text);
     return st == kOfxStatOK ? kOfxStatOK : kOfxStatFailed;
 }
 
@@ -674,6 +845,7 @@ static OfxStatus analyze(look_inst *li, OfxPropertySetHandle in_args)
  * the look's file (a change of any knob forgets every cached frame and state). */
 static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err, size_t errn)
 {
+    err[0] = 0;
     if (li->g && li->settings && !strcmp(li->settings, settings)) return NPRFX_OK;
     drop_graph(li);
     const ofx_look *lk = li->look;
@@ -689,9 +861,9 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
     nprfx_graph_options opt;
     memset(&opt, 0, sizeof opt);
     opt.size = sizeof opt;
-    opt.cache_bytes = (size_t)1 << 30;
+    opt.cache_bytes = (size_t)2 << 30;
     opt.strip_rows = -1; /* whole frames: the clips come whole */
-    opt.no_pool = 1;
+    opt.no_pool = 0;
     opt.io = &look_io;
     nprfx_result r = nprfx_graph_load(li->ctx, lk->path, &opt, &li->g);
     char line[4400];
@@ -710,11 +882,25 @@ static nprfx_result ensure_graph(look_inst *li, const char *settings, char *err,
         if (!r) r = nprfx_graph_set(li->g, line);
         if (li->planar && lk->d.main[i]) {
             /* the render's own layers: its profile as detected (or as the user names it), and
-             * the graph's motion convention */
-            if (!r && li->profile > 0) {
+             * the graph's motion convention; AOV Layers maps an AOV to other channels */
+            char *map = NULL;
+            if (!r && (r = layers_map(li, &map, err, errn)) == NPRFX_OK && map) {
+                size_t n = strlen(name) + strlen(map) + 8;
+                char *set = malloc(n);
+                if (set) {
+                    snprintf(set, n, "%s.aovs=%s", name, map);
+                    r = nprfx_graph_set(li->g, set);
+                    free(set);
+                }
+                free(map);
+            } else if (!r && li->profile > 0) {
                 snprintf(line, sizeof line, "%s.aovs=%s", name,
                          nprfx_aov_profile_name(li->profile - 1));
                 r = nprfx_graph_set(li->g, line);
+            }
+            if (r && err[0]) {
+                drop_graph(li);
+                return r;
             }
         } else {
             snprintf(line, sizeof line, "%s.aovs=generic", name);
@@ -871,12 +1057,8 @@ static void set_clip_prop(OfxPropertySetHandle out, const char *prefix, const ch
 static unsigned planar_present(const look_inst *li)
 {
     plate_chan ch[64];
-    plate_planes pp;
-    int n = plate_channels(li, li->look->d.node[li->look->d.source], ch, 64, &pp);
     const char *names[64];
-    for (int i = 0; i < n; i++)
-        names[i] = ch[i].name;
-    int profile = li->profile > 0 ? li->profile - 1 : nprfx_aov_detect(names, n, NULL, NULL, 0);
+    int n, profile = source_layers(li, ch, names, &n);
     unsigned bits = 0;
     int idx[NPRFX_MAX_CHANNELS + 1];
     for (int aov = 0; aov < NPRFX_AOV_COUNT; aov++) {
@@ -1019,16 +1201,20 @@ static OfxStatus regions_of_interest(look_inst *li, OfxPropertySetHandle in_args
     return kOfxStatOK;
 }
 
-/* Whether an instance-changed action is the Analyze Shot button's. */
-static int is_analyze(const look_inst *li, OfxPropertySetHandle in_args)
+/* Whether an instance-changed action is that of the param the look calls `want` (the Analyze Shot
+ * and Find AOV Layers buttons). */
+static int is_param(const look_inst *li, OfxPropertySetHandle in_args, const char *want)
 {
-    char *type = NULL, *name = NULL, want[NPRFX_OFX_NAME_MAX];
+    char *type = NULL, *name = NULL, param[NPRFX_OFX_NAME_MAX];
     if (ofx_g.prop->propGetString(in_args, kOfxPropType, 0, &type) != kOfxStatOK ||
         ofx_g.prop->propGetString(in_args, kOfxPropName, 0, &name) != kOfxStatOK || !type ||
         !name || strcmp(type, kOfxTypeParameter))
         return 0;
-    ofx_names_extra_param(&li->look->d.desc, "analyze", want, sizeof want);
-    return !strcmp(name, want);
+    if (!strcmp(want, "analyze"))
+        ofx_names_extra_param(&li->look->d.desc, want, param, sizeof param);
+    else
+        snprintf(param, sizeof param, "%s", want);
+    return !strcmp(name, param);
 }
 
 OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
@@ -1071,8 +1257,12 @@ OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
         pthread_mutex_unlock(&li->lock);
         return kOfxStatOK;
     }
-    if (!strcmp(action, kOfxActionInstanceChanged) && li->analysis && is_analyze(li, in_args))
+    if (!strcmp(action, kOfxActionInstanceChanged) && li->analysis &&
+        is_param(li, in_args, "analyze"))
         return analyze(li, in_args);
+    if (!strcmp(action, kOfxActionInstanceChanged) && li->aov_layers &&
+        is_param(li, in_args, "findLayers"))
+        return find_layers(li, in_args);
     if (!strcmp(action, kOfxActionInstanceChanged) ||
         !strcmp(action, kOfxImageEffectActionBeginSequenceRender) ||
         !strcmp(action, kOfxImageEffectActionEndSequenceRender) ||

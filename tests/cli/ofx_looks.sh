@@ -20,6 +20,10 @@
 #  6. Analyze Shot (toon measures its light over the shot): pressed before the first render, the
 #     render of frame 3 declares what coherent-noise's recursion reads (1-3), not the shot, and
 #     frames 3-5 equal the runner's.
+#  7. natron, which layer feeds an AOV: Find AOV Layers shows them (depth = ViewLayer.Depth.Z);
+#     on plates whose depth layer is renamed (ViewLayer.Zdepth.Z) toon fails as the runner does,
+#     naming the input, and with AOV Layers "depth = ViewLayer.Zdepth.Z" equals the runner
+#     reading them with the same mapping (a read's "aovs" file).
 #
 # usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx_looks.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
@@ -124,6 +128,27 @@ if (export NPRFX_OFXTEST_FRAMES_LOG="$W/analyze.log"; look natron "$T" 3-5 "$W/a
   if same_frames "$pat" "$W/analyzed" toon 3 4 5; then pass
   else fail "toon after Analyze Shot differs from nprfx run"; fi
 else fail "toon with Analyze Shot: $(tail -n 2 "$W/analyzed.log" | tr '\n' ' ')"; fi
+
+# 7 -----------------------------------------------------------------------------------------------
+if look natron "$T" 1 "$W/find" --shot 1-2 --press findLayers &&
+   grep -q "^depth = ViewLayer.Depth.Z$" "$W/find.log" && grep -q "^param aovLayers = " "$W/find.log"; then pass
+else fail "Find AOV Layers: $(grep -A6 'param aovLayers' "$W/find.log" | head -n 6 | tr '\n' ' ')"; fi
+R="$W/renamed"
+mkdir -p "$R/plates" "$R/graphs"
+for f in 1 2; do
+  oiiotool "$SRC/samples/plates/crossing/crossing.000$f.exr" --chnames ",,,,ViewLayer.Zdepth.Z" \
+    -o "$R/plates/crossing.000$f.exr" || fail "oiiotool could not rename the depth layer"
+done
+sed 's|../plates/crossing/crossing.####.exr|../plates/crossing.####.exr|' "$T" > "$R/graphs/toon.json"
+echo '{"profile": "blender", "aovs": {"depth": "ViewLayer.Zdepth.Z"}}' > "$R/graphs/zmap.json"
+mkdir -p "$R/runner"
+pat=$(runner "$R/graphs/toon.json" 1-2 "$R/runner" --shot 1-2 --set plate.aovs=zmap.json) && pat="$R/runner/$pat"
+if look natron "$R/graphs/toon.json" 1-2 "$R/look" --shot 1-2 --param "aovLayers=depth = ViewLayer.Zdepth.Z" &&
+   same_frames "$pat" "$R/look" toon 1 2; then pass
+else fail "toon with AOV Layers on renamed plates differs from nprfx run with the mapping: $(tail -n 1 "$R/look.log")"; fi
+if look natron "$R/graphs/toon.json" 1 "$R/none" --shot 1-2; then fail "toon without its depth layer rendered"
+elif grep -q "input 'depth'" "$R/none.log"; then pass
+else fail "toon without its depth layer: no reason naming the input ($(tail -n 1 "$R/none.log"))"; fi
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ] && [ $passes -gt 0 ]

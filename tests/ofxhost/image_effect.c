@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "util/cli_util.h"
 #include "ofx_host_internal.h"
@@ -293,8 +294,29 @@ static OfxStatus fetch_allowed(node_inst *ni, const hclip *c, int k, double time
     return internal_frames_fetched(&ni->frames[k], time) ? kOfxStatOK : kOfxStatErrMemory;
 }
 
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static OfxStatus clip_get_image(OfxImageClipHandle clip, OfxTime time, const OfxRectD *region,
+                                OfxPropertySetHandle *out);
+
+/* Every image the host serves, timed: what the host spends, apart from the plug-in's own work
+ * (look.c reports both). */
 static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const OfxRectD *region,
                                    OfxPropertySetHandle *out)
+{
+    double t0 = now_seconds();
+    OfxStatus st = clip_get_image(clip, time, region, out);
+    if (internal_g_host) internal_g_host->serve_seconds += now_seconds() - t0;
+    return st;
+}
+
+static OfxStatus clip_get_image(OfxImageClipHandle clip, OfxTime time, const OfxRectD *region,
+                                OfxPropertySetHandle *out)
 {
     (void)region; /* inputs are served whole */
     hclip *c = clip_of(clip);
@@ -342,6 +364,7 @@ static OfxStatus fx_clip_get_image_plane(OfxImageClipHandle clip, OfxTime time, 
 {
     if (!plane || !out) return kOfxStatErrBadHandle;
     if (!strcmp(plane, kFnOfxImagePlaneColour)) return fx_clip_get_image(clip, time, region, out);
+    double t0 = now_seconds();
     hclip *c = clip_of(clip);
     if (!c) return kOfxStatErrBadHandle;
     node_inst *ni = c->fx->ni;
@@ -371,6 +394,7 @@ static OfxStatus fx_clip_get_image_plane(OfxImageClipHandle clip, OfxTime time, 
     snprintf(id, sizeof id, "plane %.200s@%g", plane, time);
     if (st == kOfxStatOK && !(im = pack_image(ni, ni->frame_flip, &view, view.channels, plane, id)))
         st = kOfxStatErrMemory;
+    h->serve_seconds += now_seconds() - t0;
     pthread_mutex_unlock(&h->lock);
     if (st != kOfxStatOK) return st;
     __atomic_add_fetch(&ni->images, 1, __ATOMIC_RELAXED);

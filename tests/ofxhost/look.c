@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "nprfx/aov.h"
 #include "look_desc.h"
@@ -168,8 +169,7 @@ static void usage(void)
 {
     fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
                     "SPEC] [--scramble] [--analyze-shot] [--shot SPEC] [--set NODE.PARAM=VALUE] "
-                    "[--channels R,G,B] "
-                    "[-o DIR]\n");
+                    "[--param NAME=VALUE] [--press NAME] [--channels R,G,B] [-o DIR]\n");
 }
 
 int internal_look_main(int argc, char **argv)
@@ -177,9 +177,10 @@ int internal_look_main(int argc, char **argv)
     const char *graph = NULL, *bundle = NULL, *profile = NULL, *frames = NULL, *dir = ".";
     const char *shot = NULL;
     const char *channels = "R,G,B,A";
-    const char *sets[16];
-    int nsets = 0;
+    const char *sets[16], *params[16], *presses[16];
+    int nsets = 0, nparams = 0, npresses = 0;
     int scramble = 0, analyze = 0;
+    double render_seconds = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *next = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--scramble"))
@@ -196,6 +197,10 @@ int internal_look_main(int argc, char **argv)
             shot = argv[++i];
         else if (next && !strcmp(a, "--set") && nsets < 16)
             sets[nsets++] = argv[++i];
+        else if (next && !strcmp(a, "--param") && nparams < 16)
+            params[nparams++] = argv[++i];
+        else if (next && !strcmp(a, "--press") && npresses < 16)
+            presses[npresses++] = argv[++i];
         else if (next && !strcmp(a, "--channels"))
             channels = argv[++i];
         else if (next && !strcmp(a, "-o"))
@@ -270,6 +275,10 @@ int internal_look_main(int argc, char **argv)
     if ((r = nprfx_ofx_host_open(lr.ctx, bundle, profile, &h))) goto done;
     lr.planar = h->profile->planes;
     nprfx_ofx_host_set_analyze(h, analyze); /* Analyze Shot pressed before the first render */
+    h->param_sets = params; /* the look's own params (AOV Layers), set as a project holds them */
+    h->nparam_sets = nparams;
+    h->presses = presses;
+    h->npresses = npresses;
     int first_seq = lr.look.node[lr.look.source], main_input = -1;
     for (int k = 0; k < lr.look.desc.num_inputs; k++) {
         if (!look_desc_has_clip(&lr.look, k, lr.planar)) continue;
@@ -333,7 +342,12 @@ int internal_look_main(int argc, char **argv)
             a.output = &out;
             a.fetch = look_fetch;
             a.fetch_user = &lr;
+            struct timespec t0, t1;
+            clock_gettime(CLOCK_MONOTONIC, &t0);
             r = internal_hook_render(h, &a, &slot);
+            clock_gettime(CLOCK_MONOTONIC, &t1);
+            render_seconds +=
+                (double)(t1.tv_sec - t0.tv_sec) + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-9;
         }
         if (!r) {
             char path[4400];
@@ -372,6 +386,11 @@ int internal_look_main(int argc, char **argv)
         if (r) goto done;
     }
     status = 0;
+    /* what the frames cost: the host's render calls, of which serving the clips (the host's own
+     * work: a real host's Read and Shuffles do it) */
+    fprintf(stderr,
+            "look %s: %d frames, %.2f s in render (%.1f ms a frame), %.2f s of it serving clips\n",
+            id, list.count, render_seconds, 1000.0 * render_seconds / list.count, h->serve_seconds);
 done:
     if (r) {
         char msg[2048];

@@ -215,6 +215,12 @@ struct nprfx_ofx_host {
     int nplanes;
     nprfx_result (*plane_fetch)(void *user, double time, const char *plane, nprfx_image *out);
     void *plane_user;
+    /* look.c's --param NAME=VALUE and --press NAME: set and pressed before the first render */
+    const char *const *param_sets;
+    int nparam_sets;
+    const char *const *presses;
+    int npresses;
+    double serve_seconds; /* spent serving clip images (image_effect.c) */
 };
 
 /* Suite functions get no user pointer: they reach the host through this, and one host per

@@ -257,10 +257,49 @@ static void set_change_args(hprops *in, const nprfx_render_args *a, const char *
 /* --analyze-shot: the Analyze Shot button pressed, when the plug-in has one; the clips serve
  * the render's frames meanwhile (ni->args is set). What it fetched does not count as the first
  * render's. */
+static nprfx_result press_button(node_inst *ni, const nprfx_render_args *a, const char *name);
+
 static nprfx_result press_analyze(node_inst *ni, const nprfx_render_args *a)
 {
     char name[NPRFX_OFX_NAME_MAX];
     ofx_names_extra_param(ni->desc, "analyze", name, sizeof name);
+    return press_button(ni, a, name);
+}
+
+/* Before the first render: the params look.c was given (NAME=VALUE, as a project would hold
+ * them), then its buttons pressed, each param's value printed after ("param NAME = VALUE"). */
+static nprfx_result first_settings(node_inst *ni, const nprfx_render_args *a)
+{
+    nprfx_ofx_host *h = ni->h;
+    for (int i = 0; i < h->nparam_sets; i++) {
+        const char *eq = strchr(h->param_sets[i], '=');
+        char name[NPRFX_OFX_NAME_MAX];
+        snprintf(name, sizeof name, "%.*s", eq ? (int)(eq - h->param_sets[i]) : 0,
+                 h->param_sets[i]);
+        hparam *p = internal_effect_param(ni->fx, name);
+        if (!eq || !p)
+            return nprfx_error(a->ctx, NPRFX_ERR_UNKNOWN_PARAM, "%s: no param '%s'",
+                               ni->pl->p->pluginIdentifier, name);
+        free(p->s);
+        p->s = strdup(eq + 1);
+        /* a text's \n is a line break */
+        for (char *c = p->s; c && (c = strstr(c, "\\n"));)
+            c[0] = '\n', memmove(c + 1, c + 2, strlen(c + 2) + 1);
+    }
+    for (int i = 0; i < h->npresses; i++) {
+        nprfx_result r = press_button(ni, a, h->presses[i]);
+        if (r) return r;
+        for (int k = 0; k < ni->fx->nparams; k++)
+            if (internal_type_is(ni->fx->params[k], kOfxParamTypeString))
+                fprintf(stderr, "param %s = %s\n", ni->fx->params[k]->name,
+                        ni->fx->params[k]->s ? ni->fx->params[k]->s : "");
+    }
+    return NPRFX_OK;
+}
+
+/* A push button pressed, as a user does: the instance-changed actions of an edit. */
+static nprfx_result press_button(node_inst *ni, const nprfx_render_args *a, const char *name)
+{
     if (!internal_effect_param(ni->fx, name)) return NPRFX_OK;
     hprops in;
     internal_props_init(&in, K_PLAIN);
@@ -716,8 +755,9 @@ static nprfx_result hook_render(nprfx_ofx_host *h, const nprfx_render_args *a, v
     internal_messages_reset(ni);
     for (int k = 0; k < ni->desc->num_inputs; k++)
         ni->frames[k].nfetched = 0;
-    if ((r = sync_params(ni, a, first)) || (first && h->analyze && (r = press_analyze(ni, a))) ||
-        (r = check_clip_components(ni, a)) || (r = query_regions(ni, a)))
+    if ((r = sync_params(ni, a, first)) || (first && (r = first_settings(ni, a))) ||
+        (first && h->analyze && (r = press_analyze(ni, a))) || (r = check_clip_components(ni, a)) ||
+        (r = query_regions(ni, a)))
         goto done;
     double s = internal_host_scale(a);
     if (s != 1.0 && !h->profile->multires) {
