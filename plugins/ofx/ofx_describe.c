@@ -47,25 +47,33 @@ static int has_temporal_input(const nprfx_node_desc *d)
     return 0;
 }
 
+OfxStatus ofx_describe_refuse(OfxImageEffectHandle fx, const char *who, const char *reads)
+{
+    char why[512];
+    snprintf(why, sizeof why,
+             "nprfx: %s is not available in this host: %s, and the host offers no temporal clip "
+             "access (kOfxImageEffectPropTemporalClipAccess = 0)",
+             who, reads);
+    ofx_post(fx, kOfxMessageLog, why);
+    return kOfxStatErrMissingHostFeature;
+}
+
+void ofx_describe_labels(OfxPropertySetHandle p, const char *label)
+{
+    ofx_set_str(p, kOfxPropLabel, 0, label);
+    ofx_set_str(p, kOfxPropShortLabel, 0, label);
+    ofx_set_str(p, kOfxPropLongLabel, 0, label);
+}
+
 OfxStatus ofx_describe(const nprfx_node_desc *d, OfxImageEffectHandle fx)
 {
     /* A node that only works with other frames is not offered where they cannot be had: a
      * missing plug-in with a logged reason beats one that silently shows the current frame. */
-    if (filter_only(d) && !filter_derives(d)) {
-        char why[512];
-        snprintf(why, sizeof why,
-                 "nprfx: %s is not available in this host: it reads its inputs at other frames, "
-                 "and the host offers no temporal clip access "
-                 "(kOfxImageEffectPropTemporalClipAccess = 0)",
-                 d->id);
-        ofx_post(fx, kOfxMessageLog, why);
-        return kOfxStatErrMissingHostFeature;
-    }
+    if (filter_only(d) && !filter_derives(d))
+        return ofx_describe_refuse(fx, d->id, "it reads its inputs at other frames");
     OfxPropertySetHandle p;
     if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
-    ofx_set_str(p, kOfxPropLabel, 0, d->label);
-    ofx_set_str(p, kOfxPropShortLabel, 0, d->label);
-    ofx_set_str(p, kOfxPropLongLabel, 0, d->label);
+    ofx_describe_labels(p, d->label);
     /* The host's help: the node's, and on footage what the Filter context does with Source. */
     static const char footage[] =
         "\n\nIn the Filter context the Source clip is footage: the plug-in computes the motion "

@@ -28,4 +28,11 @@ OfxStatus ofx_define_param(OfxParamSetHandle ps, const nprfx_param_desc *p, cons
 OfxStatus ofx_define_analyze(OfxParamSetHandle ps, const nprfx_node_desc *d, const char *what,
                              char *name, size_t n);
 
+/* A plug-in that needs other frames, in a host without temporal clip access: not offered, with
+ * the reason logged ("nprfx: WHO is not available in this host: READS, and ..."). Returns
+ * kOfxStatErrMissingHostFeature. */
+OfxStatus ofx_describe_refuse(OfxImageEffectHandle fx, const char *who, const char *reads);
+/* The effect's label, short and long alike. */
+void ofx_describe_labels(OfxPropertySetHandle p, const char *label);
+
 #endif

@@ -9,7 +9,6 @@
 #include "nprfx/aov.h"
 #include "ofx_describe.h"
 #include "ofx_look.h"
-#include "ofx_messages.h"
 #include "ofx_suites.h"
 
 static ofx_look **looks;
@@ -115,20 +114,13 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
 {
     const look_desc *d = &lk->d;
     if (d->temporal && !ofx_g.temporal) {
-        char why[512];
-        snprintf(why, sizeof why,
-                 "nprfx: the look %s is not available in this host: its nodes read other frames "
-                 "of the plates, and the host offers no temporal clip access "
-                 "(kOfxImageEffectPropTemporalClipAccess = 0)",
-                 d->label);
-        ofx_post(fx, kOfxMessageLog, why);
-        return kOfxStatErrMissingHostFeature;
+        char who[NPRFX_OFX_NAME_MAX + 16];
+        snprintf(who, sizeof who, "the look %s", d->label);
+        return ofx_describe_refuse(fx, who, "its nodes read other frames of the plates");
     }
     OfxPropertySetHandle p;
     if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
-    ofx_set_str(p, kOfxPropLabel, 0, d->label);
-    ofx_set_str(p, kOfxPropShortLabel, 0, d->label);
-    ofx_set_str(p, kOfxPropLongLabel, 0, d->label);
+    ofx_describe_labels(p, d->label);
     static const char how[] =
         "\n\nA look: the graph file %s evaluated as `nprfx run` evaluates it, on the clips: "
         "Source is the render's picture (its alpha the coverage), each other clip one AOV in "

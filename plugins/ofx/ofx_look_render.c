@@ -960,15 +960,10 @@ static OfxStatus fail(look_inst *li, const char *msg)
 
 static OfxStatus render(look_inst *li, OfxPropertySetHandle in_args)
 {
-    const OfxPropertySuiteV1 *ps = ofx_g.prop;
-    double time = 0, scale[2] = {1, 1};
-    int win[4] = {0, 0, 0, 0};
-    if (ps->propGetDouble(in_args, kOfxPropTime, 0, &time) != kOfxStatOK ||
-        ps->propGetIntN(in_args, kOfxImageEffectPropRenderWindow, 4, win) != kOfxStatOK)
-        return kOfxStatErrBadHandle;
-    if (ps->propGetDoubleN(in_args, kOfxImageEffectPropRenderScale, 2, scale) != kOfxStatOK ||
-        !(scale[0] > 0))
-        scale[0] = 1;
+    double time, scale[2];
+    int win[4];
+    OfxStatus rq = ofx_render_request(in_args, &time, scale, win);
+    if (rq != kOfxStatOK) return rq;
     char msg[2048];
     OfxRectD rod;
     if (frame_rod(li, time, &rod) != kOfxStatOK) {

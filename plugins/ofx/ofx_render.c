@@ -59,17 +59,10 @@ int ofx_is_analyze(const ofx_instance *inst, OfxPropertySetHandle in_args)
 
 OfxStatus ofx_render(ofx_instance *inst, OfxPropertySetHandle in_args)
 {
-    const OfxPropertySuiteV1 *ps = ofx_g.prop;
-    double time = 0, scale[2] = {1, 1};
-    int win[4] = {0, 0, 0, 0};
-    if (ps->propGetDouble(in_args, kOfxPropTime, 0, &time) != kOfxStatOK ||
-        ps->propGetIntN(in_args, kOfxImageEffectPropRenderWindow, 4, win) != kOfxStatOK)
-        return kOfxStatErrBadHandle;
-    if (ps->propGetDoubleN(in_args, kOfxImageEffectPropRenderScale, 2, scale) != kOfxStatOK ||
-        !(scale[0] > 0))
-        scale[0] = scale[1] = 1;
-    if (!(scale[1] > 0)) scale[1] = scale[0];
-    return render_at(inst, time, scale, win, 0);
+    double time, scale[2];
+    int win[4];
+    OfxStatus st = ofx_render_request(in_args, &time, scale, win);
+    return st == kOfxStatOK ? render_at(inst, time, scale, win, 0) : st;
 }
 
 OfxStatus ofx_analyze(ofx_instance *inst)

@@ -118,3 +118,19 @@ int ofx_clip_connected(OfxImageClipHandle clip)
     if (p && ofx_g.prop->propGetInt(p, kOfxImageClipPropConnected, 0, &v) != kOfxStatOK) v = 0;
     return v;
 }
+
+OfxStatus ofx_render_request(OfxPropertySetHandle in_args, double *time, double scale[2],
+                             int win[4])
+{
+    const OfxPropertySuiteV1 *ps = ofx_g.prop;
+    *time = 0;
+    scale[0] = scale[1] = 1;
+    if (ps->propGetDouble(in_args, kOfxPropTime, 0, time) != kOfxStatOK ||
+        ps->propGetIntN(in_args, kOfxImageEffectPropRenderWindow, 4, win) != kOfxStatOK)
+        return kOfxStatErrBadHandle;
+    if (ps->propGetDoubleN(in_args, kOfxImageEffectPropRenderScale, 2, scale) != kOfxStatOK ||
+        !(scale[0] > 0))
+        scale[0] = scale[1] = 1;
+    if (!(scale[1] > 0)) scale[1] = scale[0];
+    return kOfxStatOK;
+}

@@ -62,4 +62,9 @@ void ofx_set_dbl(OfxPropertySetHandle p, const char *name, int i, double v);
 OfxPropertySetHandle ofx_clip_props(OfxImageClipHandle clip);
 int ofx_clip_connected(OfxImageClipHandle clip);
 
+/* A render action's request: its time, render scale (1 where the host gives none that makes
+ * sense) and window. kOfxStatErrBadHandle without a time or window. */
+OfxStatus ofx_render_request(OfxPropertySetHandle in_args, double *time, double scale[2],
+                             int win[4]);
+
 #endif
