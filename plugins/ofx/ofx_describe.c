@@ -47,15 +47,22 @@ static int has_temporal_input(const nprfx_node_desc *d)
     return 0;
 }
 
+OfxStatus ofx_describe_unavailable(OfxImageEffectHandle fx, const char *who, const char *why)
+{
+    char text[1024];
+    snprintf(text, sizeof text, "nprfx: %s is not available in this host: %s", who, why);
+    ofx_post(fx, kOfxMessageLog, text);
+    return kOfxStatErrMissingHostFeature;
+}
+
 OfxStatus ofx_describe_refuse(OfxImageEffectHandle fx, const char *who, const char *reads)
 {
     char why[512];
     snprintf(why, sizeof why,
-             "nprfx: %s is not available in this host: %s, and the host offers no temporal clip "
-             "access (kOfxImageEffectPropTemporalClipAccess = 0)",
-             who, reads);
-    ofx_post(fx, kOfxMessageLog, why);
-    return kOfxStatErrMissingHostFeature;
+             "%s, and the host offers no temporal clip access "
+             "(kOfxImageEffectPropTemporalClipAccess = 0)",
+             reads);
+    return ofx_describe_unavailable(fx, who, why);
 }
 
 void ofx_describe_labels(OfxPropertySetHandle p, const char *label)

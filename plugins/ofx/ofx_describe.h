@@ -32,6 +32,9 @@ OfxStatus ofx_define_analyze(OfxParamSetHandle ps, const nprfx_node_desc *d, con
  * the reason logged ("nprfx: WHO is not available in this host: READS, and ..."). Returns
  * kOfxStatErrMissingHostFeature. */
 OfxStatus ofx_describe_refuse(OfxImageEffectHandle fx, const char *who, const char *reads);
+/* A plug-in this host cannot run, for the reason why: logged as "nprfx: WHO is not available in
+ * this host: WHY". Returns kOfxStatErrMissingHostFeature. */
+OfxStatus ofx_describe_unavailable(OfxImageEffectHandle fx, const char *who, const char *why);
 /* The effect's label, short and long alike. */
 void ofx_describe_labels(OfxPropertySetHandle p, const char *label);
 

@@ -118,6 +118,21 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
         snprintf(who, sizeof who, "the look %s", d->label);
         return ofx_describe_refuse(fx, who, "its nodes read other frames of the plates");
     }
+    /* Integer images clip at 0 and 1: depth, positions, normals, ids and motion would arrive
+     * as other numbers, and the look be wrong without a word. */
+    for (int k = 0; k < d->desc.num_inputs && !ofx_g.float_images; k++) {
+        int aov = d->aov[k];
+        if (aov < 0 || aov == NPRFX_AOV_BEAUTY || aov == NPRFX_AOV_ALBEDO ||
+            aov == NPRFX_AOV_DIFFUSE_LIGHT || aov == NPRFX_AOV_COVERAGE)
+            continue;
+        char who[NPRFX_OFX_NAME_MAX + 16], why[256];
+        snprintf(who, sizeof who, "the look %s", d->label);
+        snprintf(why, sizeof why,
+                 "its clip %s carries %s, numbers outside 0-1 that this host's 8- and 16-bit "
+                 "images cannot hold (a host with float images can)",
+                 d->clip[k], nprfx_aov_name(aov));
+        return ofx_describe_unavailable(fx, who, why);
+    }
     OfxPropertySetHandle p;
     if (ofx_g.fx->getPropertySet(fx, &p) != kOfxStatOK) return kOfxStatErrBadHandle;
     ofx_describe_labels(p, d->label);

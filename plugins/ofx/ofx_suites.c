@@ -50,6 +50,20 @@ OfxStatus ofx_suites_load(void)
         kOfxStatOK)
         temporal = 1;
     ofx_g.temporal = temporal != 0;
+    int ndepths = 0;
+    ofx_g.float_images = 1;
+    if (ofx_g.prop->propGetDimension(h->host, kOfxImageEffectPropSupportedPixelDepths, &ndepths) ==
+            kOfxStatOK &&
+        ndepths > 0) {
+        ofx_g.float_images = 0;
+        for (int i = 0; i < ndepths; i++) {
+            char *depth = NULL;
+            if (ofx_g.prop->propGetString(h->host, kOfxImageEffectPropSupportedPixelDepths, i,
+                                          &depth) == kOfxStatOK &&
+                depth && !strcmp(depth, kOfxBitDepthFloat))
+                ofx_g.float_images = 1;
+        }
+    }
     /* Multi-plane (Nuke, Natron): a look then reads the render's layers from Source. */
     int planar = 0;
     ofx_g.planes = h->fetchSuite(h->host, kFnOfxImageEffectPlaneSuite, 1);

@@ -25,6 +25,10 @@ typedef struct ofx_suites {
     /* The host's kOfxImageEffectPropTemporalClipAccess: 0 means images at other times cannot be
      * had (MLT gives the current frame instead), so nodes get no fetch and say so. */
     int temporal;
+    /* Whether the host has float images (kOfxImageEffectPropSupportedPixelDepths lists float;
+     * a host that does not say is taken to): 8- and 16-bit images hold 0-1 only, so a look whose
+     * clips carry depth, positions or motion is not offered without them. */
+    int float_images;
     /* The Foundry's plane suite where the host says it is multi-planar (kFnOfxImageEffectProp-
      * MultiPlanar): a clip then carries a render's layers (ofx_look_render.c); else NULL, 0. */
     const FnOfxImageEffectPlaneSuiteV1 *planes;

@@ -4,11 +4,14 @@
 # picture, one clip per AOV). `nprfx-ofxtest look GRAPH` drives a look as a host does, its clips
 # fed with the graph's own plates' AOVs in nprfx's conventions, and every render checks that the
 # first render fetches exactly the frames getFramesNeeded declared.
-#  1. every look the bundle ships (the sample graphs that name their knobs) renders frames 1-2 of
-#     a 3-frame shot bit-identically to `nprfx run` of its graph, from separate clips (strict: one
-#     clip per AOV, fed in nprfx's conventions) and from one multilayer Source (natron: a
+#  1. every look the bundle ships (the sample graphs that name their knobs) renders frames 1-3 of
+#     a 4-frame shot bit-identically to `nprfx run` of its graph: from separate clips (strict: one
+#     clip per AOV, fed in nprfx's conventions) in order; from one multilayer Source (natron: a
 #     multi-plane host whose Source carries every layer of the plate file, which the look reads
-#     under the renderer's own names).
+#     under the renderer's own names) frame by frame out of order (1, 3, 2); and as a proxy
+#     (strict at render scale 0.5: the plates are the half-size images of a project twice their
+#     size, motion in the project's pixels as hosts carry it, and the look draws as the runner
+#     does on those plates at the graph's design width).
 #  2. natron: toon and watercolor over 1-6 of an 8-frame shot in order, and toon frame by frame
 #     out of order (odd frames, then even), bit-identical; strict: toon out of order.
 #  3. knobs: toon with two knobs turned (ink.width, bands.bands) equals `nprfx run --set` of the
@@ -16,7 +19,10 @@
 #  4. frames declared: rendered in order, after its first frames toon declares its clips at t-1
 #     and t only (tone's range kept from the first frame, coherent-noise stepping on), not the
 #     shot.
-#  5. mlt (no temporal clip access): the looks are unavailable, with the reason.
+#  5. mlt (no temporal clip access): the looks are unavailable, with the reason. strict8 (8-bit
+#     images, temporal access): a look with a data AOV clip (depth, ...) is unavailable, naming
+#     the clip; the footage looks (Source only) render, within the host's 8-bit steps of the
+#     runner (mean error at most 0.01).
 #  6. Analyze Shot (toon measures its light over the shot): pressed before the first render, the
 #     render of frame 3 declares what coherent-noise's recursion reads (1-3), not the shot, and
 #     frames 3-5 equal the runner's.
@@ -83,8 +89,9 @@ check() { # PROFILE GRAPH FRAMES SHOT [look options]
 
 # 1 -----------------------------------------------------------------------------------------------
 for g in $(grep -l '"knobs"' "$SRC"/samples/graphs/*.json); do
-  check strict "$g" 1-2 1-3
-  check natron "$g" 1-2 1-3
+  check strict "$g" 1-3 1-4
+  check natron "$g" 1-3 1-4 --scramble
+  check strict "$g" 1-3 1-4 --render-scale 0.5
 done
 
 # 2 -----------------------------------------------------------------------------------------------
@@ -116,6 +123,28 @@ else fail "toon under natron 1-8: $(tail -n 2 "$W/inorder.log" 2>/dev/null | tr 
 if look mlt "$T" 1 "$W/mlt"; then fail "toon rendered in a host without temporal clip access"
 elif grep -q "not available in this host.*temporal clip access" "$W/mlt.log"; then pass
 else fail "toon under mlt: no reason given ($(tail -n 1 "$W/mlt.log"))"; fi
+for g in $(grep -l '"knobs"' "$SRC"/samples/graphs/*.json); do
+  s=$(basename "$g" .json)
+  case $s in
+  footage_*)
+    r="$W/runner/$s.1-3.1-4"
+    if [ ! -f "$r.pattern" ]; then fail "$s: no runner frames from section 1"; continue; fi
+    pat="$r/$(cat "$r.pattern")"
+    ch=$(channels_of "${pat//####/0001}")
+    if ! look strict8 "$g" 1-3 "$W/byte/$s" --shot 1-4 --channels "$ch"; then
+      fail "$s at 8 bits: $(tail -n 1 "$W/byte/$s.log")"; continue; fi
+    for f in 1 2 3; do
+      n=$(printf %04d $f)
+      m=$("$NPRFX" diff "${pat//####/$n}" "$W/byte/$s/$s.$n.exr" 2>&1 | sed -n 's/^ *Mean error = //p')
+      if awk -v m="$m" 'BEGIN { exit !(m != "" && m <= 0.01) }'; then pass
+      else fail "$s at 8 bits, frame $f: mean error '$m' from nprfx run"; fi
+    done ;;
+  *)
+    if look strict8 "$g" 1 "$W/byte/$s" --shot 1-2; then fail "$s rendered in an 8-bit host"
+    elif grep -q "not available in this host: its clip .* carries .*8- and 16-bit" "$W/byte/$s.log"; then pass
+    else fail "$s at 8 bits: no reason naming the clip ($(tail -n 1 "$W/byte/$s.log"))"; fi ;;
+  esac
+done
 
 # 6 -----------------------------------------------------------------------------------------------
 rm -f "$W/analyze.log"

@@ -1,13 +1,13 @@
 /* nprfx OpenFX test host — a look plug-in driven as a host drives it:
  * `nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames SPEC] [--scramble]
- * [--shot SPEC] [--set KNOB=VALUE] [--channels R,G,B] [-o DIR]` renders the look plug-in of GRAPH
- * (found through NPRFX_LOOK_PATH, set to the graph's folder) frame by frame, its clips fed with the
- * AOVs of the graph's own plates as the engine reads them (nprfx_graph_eval_aov: nprfx's
- * conventions, what a compositor's shuffles would give), and writes its Output as DIR/STEM.####.exr
- * (RGBA float). tests/cli/ofx_looks.sh compares them with `nprfx run GRAPH`. The look stands as a
- * node of the render hook (render.c) whose inputs are the look's clips, so every check of the hook
- * holds: frames declared equal frames fetched on the first render, images released, messages not
- * empty. */
+ * [--shot SPEC] [--set KNOB=VALUE] [--render-scale S] [--channels R,G,B] [-o DIR]` renders the look
+ * plug-in of GRAPH (found through NPRFX_LOOK_PATH, set to the graph's folder) frame by frame, its
+ * clips fed with the AOVs of the graph's own plates as the engine reads them (nprfx_graph_eval_aov:
+ * nprfx's conventions, what a compositor's shuffles would give), and writes its Output as
+ * DIR/STEM.####.exr (RGBA float). tests/cli/ofx_looks.sh compares them with `nprfx run GRAPH`. The
+ * look stands as a node of the render hook (render.c) whose inputs are the look's clips, so every
+ * check of the hook holds: frames declared equal frames fetched on the first render, images
+ * released, messages not empty. */
 #define _POSIX_C_SOURCE 200809L /* setenv, strdup */
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +21,7 @@
 
 #define LOOK_INPUTS 32
 #define LOOK_RING 16
+#define LOOK_PARAMS LOOK_MAX_KNOBS
 
 typedef struct look_run {
     nprfx_context *ctx;
@@ -38,6 +39,9 @@ typedef struct look_run {
     int nplanes;
     nprfx_plate plate; /* the last frame read, and which */
     int plate_frame, have_plate;
+    /* --render-scale: the plates are a proxy at this scale of the project's size; the host's
+     * images carry motion vectors in pixels at full resolution, as a host's proxy does */
+    double scale;
 } look_run;
 
 /* The main read's file at frame, every channel (a multi-plane host's Read gives them all). */
@@ -117,6 +121,16 @@ static nprfx_result look_plane(void *user, double time, const char *plane, nprfx
         !(r = nprfx_image_alloc(lr->ctx, lr->plate.bounds, nch[found], &lr->ring[lr->nring]))) {
         /* the plate's channels interleaved, rows of its width (more than a view may have) */
         const nprfx_plate *pl = &lr->plate;
+        double k[4] = {1, 1, 1, 1};
+        int mv[4];
+        double sign[4];
+        if (lr->scale != 1.0 && nprfx_graph_read_vectors(lr->g, lr->main_node) &&
+            nprfx_graph_motion_sources(lr->g, lr->main_node, "the plate",
+                                       (const char *const *)pl->names, pl->nchannels, mv,
+                                       sign) == NPRFX_OK)
+            for (int c = 0; c < nch[found]; c++)
+                for (int m = 0; m < 4; m++)
+                    if (mv[m] == chan[found][c]) k[c] = 1.0 / lr->scale;
         size_t w = (size_t)nprfx_rect_width(pl->bounds), nc = (size_t)pl->nchannels;
         nprfx_image *im = &lr->ring[lr->nring++];
         for (int y = im->bounds.y0; y < im->bounds.y1; y++)
@@ -124,8 +138,8 @@ static nprfx_result look_plane(void *user, double time, const char *plane, nprfx
                 const float *s =
                     pl->pixels +
                     ((size_t)(y - pl->bounds.y0) * w + (size_t)(x - pl->bounds.x0)) * nc;
-                for (int k = 0; k < nch[found]; k++)
-                    nprfx_image_at(im, x, y)[k] = s[chan[found][k]];
+                for (int c = 0; c < nch[found]; c++)
+                    nprfx_image_at(im, x, y)[c] = (float)(s[chan[found][c]] * k[c]);
             }
         *out = *im;
     }
@@ -139,7 +153,18 @@ static nprfx_result look_plane(void *user, double time, const char *plane, nprfx
 static nprfx_result look_image(look_run *lr, int k, int frame, nprfx_image *out)
 {
     memset(out, 0, sizeof *out);
-    if (lr->aov[k] >= 0) return nprfx_graph_eval_aov(lr->g, lr->node[k], lr->aov[k], frame, out);
+    if (lr->aov[k] >= 0) {
+        nprfx_result r = nprfx_graph_eval_aov(lr->g, lr->node[k], lr->aov[k], frame, out);
+        /* a proxy's motion clip: in pixels at full resolution */
+        if (!r && lr->scale != 1.0 &&
+            (lr->aov[k] == NPRFX_AOV_MOTION_PREV || lr->aov[k] == NPRFX_AOV_MOTION_NEXT))
+            for (int y = out->bounds.y0; y < out->bounds.y1; y++)
+                for (int x = out->bounds.x0; x < out->bounds.x1; x++)
+                    for (int c = 0; c < out->channels; c++)
+                        nprfx_image_at(out, x, y)[c] =
+                            (float)(nprfx_image_at(out, x, y)[c] / lr->scale);
+        return r;
+    }
     nprfx_graph_node_info ni = {sizeof ni};
     nprfx_image v;
     nprfx_result r = nprfx_graph_node(lr->g, lr->node[k], &ni);
@@ -169,7 +194,8 @@ static void usage(void)
 {
     fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
                     "SPEC] [--scramble] [--analyze-shot] [--shot SPEC] [--set NODE.PARAM=VALUE] "
-                    "[--param NAME=VALUE] [--press NAME] [--channels R,G,B] [-o DIR]\n");
+                    "[--param NAME=VALUE] [--press NAME] [--render-scale S] [--channels R,G,B] "
+                    "[-o DIR]\n");
 }
 
 int internal_look_main(int argc, char **argv)
@@ -180,7 +206,7 @@ int internal_look_main(int argc, char **argv)
     const char *sets[16], *params[16], *presses[16];
     int nsets = 0, nparams = 0, npresses = 0;
     int scramble = 0, analyze = 0;
-    double render_seconds = 0;
+    double render_seconds = 0, scale = 1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *next = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--scramble"))
@@ -201,6 +227,8 @@ int internal_look_main(int argc, char **argv)
             params[nparams++] = argv[++i];
         else if (next && !strcmp(a, "--press") && npresses < 16)
             presses[npresses++] = argv[++i];
+        else if (next && !strcmp(a, "--render-scale"))
+            scale = atof(argv[++i]);
         else if (next && !strcmp(a, "--channels"))
             channels = argv[++i];
         else if (next && !strcmp(a, "-o"))
@@ -212,7 +240,7 @@ int internal_look_main(int argc, char **argv)
             return 2;
         }
     }
-    if (!graph || !bundle) {
+    if (!graph || !bundle || !(scale > 0 && scale <= 1)) {
         usage();
         return 2;
     }
@@ -231,6 +259,7 @@ int internal_look_main(int argc, char **argv)
 
     look_run lr;
     memset(&lr, 0, sizeof lr);
+    lr.scale = scale;
     nprfx_pool *pool = NULL;
     nprfx_ofx_host *h = NULL;
     nprfx_frame_list list = {0};
@@ -327,18 +356,30 @@ int internal_look_main(int argc, char **argv)
         }
         nprfx_render_args a;
         memset(&a, 0, sizeof a);
+        nprfx_value scaled[LOOK_PARAMS];
+        if (desc.num_params > LOOK_PARAMS)
+            r = nprfx_error(lr.ctx, NPRFX_ERR_UNSUPPORTED, "more than %d params", LOOK_PARAMS);
+        else
+            memcpy(scaled, lr.look.values, (size_t)desc.num_params * sizeof *scaled);
         if (!r) r = nprfx_image_alloc(lr.ctx, inputs[main_input].bounds, 4, &out);
         if (!r) {
             a.size = sizeof a;
             a.ctx = lr.ctx;
             a.node = &desc;
             a.time = frame;
-            a.render_scale = a.vector_scale = 1;
+            /* the host's render scale; the look's knobs are the graph's (design pixels): the
+             * hook takes the runner's values, with the render scale applied */
+            a.render_scale = a.vector_scale = scale;
+            if (scale != 1.0)
+                for (int i = 0; i < desc.num_params; i++) {
+                    if (desc.params[i].flags & NPRFX_PARAM_PIXELS) scaled[i].v[0] *= scale;
+                    if (desc.params[i].flags & NPRFX_PARAM_AREA) scaled[i].v[0] *= scale * scale;
+                }
             a.frame = a.window = inputs[main_input].bounds;
             a.first_frame = first;
             a.last_frame = last;
             a.inputs = inputs;
-            a.params = lr.look.values;
+            a.params = scaled;
             a.output = &out;
             a.fetch = look_fetch;
             a.fetch_user = &lr;

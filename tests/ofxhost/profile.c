@@ -4,6 +4,8 @@
  *   strict  the default: both contexts (Filter where only the main input is connected), float
  *           RGBA and Alpha images, temporal clip access, render scales, message suites 1 and 2
  *           formatting their arguments; the strict checks of ofx_host_internal.h.
+ *   strict8 strict with 8-bit images only (no profile of a real host: an integer host with
+ *           temporal access, to show what a look needs beyond it).
  *   natron  Natron 2.5: the General context always (named clips even where Filter would fit),
  *           float images, render scale 1, temporal clip access, message suites 1 and 2 whose
  *           formatting loses the variadic arguments (Natron forwards its va_list into a second
@@ -28,6 +30,7 @@ static const hprofile profiles[] = {
      * instance_per_frame */
     {"strict", "the strict test host", 1, 1, 1, 1, 1, HD_FLOAT, 1, 0, 0, 0},
     {"natron", "Natron 2.5", 1, 0, 1, 0, 1, HD_FLOAT, 1, 1, 1, 0},
+    {"strict8", "the strict test host at 8 bits", 1, 1, 1, 1, 1, HD_BYTE, 1, 0, 0, 0},
     {"mlt", "MLT 7 (8-bit)", 0, 1, 0, 0, 0, HD_BYTE, 0, 0, 0, 1},
     {"mlt16", "MLT 7 (16-bit)", 0, 1, 0, 0, 0, HD_SHORT, 0, 0, 0, 1},
 };
@@ -41,7 +44,7 @@ const hprofile *internal_profile_find(const char *name)
 
 const char *internal_profile_names(void)
 {
-    return "strict, natron, mlt, mlt16";
+    return "strict, strict8, natron, mlt, mlt16";
 }
 
 void internal_profile_host_props(const hprofile *pf, OfxPropertySetHandle p)
