@@ -102,7 +102,7 @@ static void init_plugins(void)
         p->apiVersion = kOfxImageEffectPluginApiVersion;
         p->pluginIdentifier = plugin_ids[n + i];
         p->pluginVersionMajor = 1;
-        p->pluginVersionMinor = 0;
+        p->pluginVersionMinor = ofx_look_at(i)->version;
         p->setHost = set_host;
         p->mainEntry = entries[n + i];
     }

@@ -2,6 +2,7 @@
  * exists (declared in ofx_look.h). */
 #define _DEFAULT_SOURCE /* scandir, alphasort */
 #include <dirent.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,6 +24,17 @@ static int json_file(const struct dirent *e)
 {
     size_t n = strlen(e->d_name);
     return n > 5 && !strcmp(e->d_name + n - 5, ".json") && e->d_name[0] != '.';
+}
+
+/* FNV-1a of the file's bytes, folded to 16 bits (a version number hosts keep as an int). */
+static unsigned file_version(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    uint32_t h = 2166136261u;
+    for (int c; f && (c = fgetc(f)) != EOF;)
+        h = (h ^ (uint32_t)c) * 16777619u;
+    if (f) fclose(f);
+    return (unsigned)((h >> 16) ^ (h & 0xffffu));
 }
 
 static void scan_folder(const char *dir, int max)
@@ -55,6 +67,7 @@ static void scan_folder(const char *dir, int max)
                  nprfx_graph_load(ctx, lk->path, &opt, &g) == NPRFX_OK;
         if (!ok && ctx) nprfx_context_last_error(ctx, why, sizeof why);
         if (ok) ok = look_desc_build(g, stem, &lk->d, why, sizeof why) == NPRFX_OK;
+        if (ok) lk->version = file_version(lk->path);
         if (ok) {
             looks[nlooks++] = lk;
         } else {
@@ -153,7 +166,10 @@ static OfxStatus look_describe(const ofx_look *lk, OfxImageEffectHandle fx)
     free(text);
     ofx_set_str(p, kOfxImageEffectPluginPropGrouping, 0, "NPR/Looks");
     ofx_set_int(p, kOfxPropVersion, 0, 1);
-    ofx_set_int(p, kOfxPropVersion, 1, 0);
+    ofx_set_int(p, kOfxPropVersion, 1, (int)lk->version);
+    char label[32];
+    snprintf(label, sizeof label, "1.%u", lk->version);
+    ofx_set_str(p, kOfxPropVersionLabel, 0, label);
     int nctx = 0;
     ofx_set_str(p, kOfxImageEffectPropSupportedContexts, nctx++, kOfxImageEffectContextGeneral);
     if (ofx_look_filter(lk, ofx_g.multiplanar))

@@ -16,6 +16,10 @@
 typedef struct ofx_look {
     char path[4096];
     look_desc d;
+    /* The minor version: a 16-bit hash of the graph file's bytes, so that a host that keys its
+     * cached frames or saved projects on the plug-in's version sees an edited look as another
+     * version (the major stays 1). */
+    unsigned version;
 } ofx_look;
 
 /* Whether the look reads nothing but its Source picture: offered in the Filter context. */

@@ -30,6 +30,7 @@
 #     on plates whose depth layer is renamed (ViewLayer.Zdepth.Z) toon fails as the runner does,
 #     naming the input, and with AOV Layers "depth = ViewLayer.Zdepth.Z" equals the runner
 #     reading them with the same mapping (a read's "aovs" file).
+#  8. the look's version (the minor hosts key cached frames on) changes when its graph file does.
 #
 # usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx_looks.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
@@ -178,6 +179,20 @@ else fail "toon with AOV Layers on renamed plates differs from nprfx run with th
 if look natron "$R/graphs/toon.json" 1 "$R/none" --shot 1-2; then fail "toon without its depth layer rendered"
 elif grep -q "input 'depth'" "$R/none.log"; then pass
 else fail "toon without its depth layer: no reason naming the input ($(tail -n 1 "$R/none.log"))"; fi
+
+# 8 -----------------------------------------------------------------------------------------------
+# the version hosts key plug-ins on changes with the graph file (its minor: a hash of the bytes)
+V="$W/version"
+mkdir -p "$V/a"
+cp "$T" "$V/a/toon.json"
+sed -i 's|"../plates/|"'"$SRC"'/samples/plates/|' "$V/a/toon.json"
+version_of() { grep -o 'version [0-9]*\.[0-9]*' "$1" | head -n 1; }
+if look strict "$V/a/toon.json" 1 "$V/one" --shot 1-2; then
+  sed -i 's/"knobs"/ "knobs"/' "$V/a/toon.json"
+  if look strict "$V/a/toon.json" 1 "$V/two" --shot 1-2 && [ -n "$(version_of "$V/one.log")" ] &&
+     [ "$(version_of "$V/one.log")" != "$(version_of "$V/two.log")" ]; then pass
+  else fail "the look's version did not change with its graph file: $(version_of "$V/one.log"), $(version_of "$V/two.log")"; fi
+else fail "toon from another folder: $(tail -n 1 "$V/one.log")"; fi
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ] && [ $passes -gt 0 ]

@@ -195,6 +195,14 @@ static nprfx_result load_plugin(nprfx_ofx_host *h, hplugin *pl)
     if (st != kOfxStatOK)
         return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: describe failed (%d)", id, st);
     hprops *dp = &pl->descriptor->props;
+    /* The version a host lists plug-ins by and the one it shows must agree. */
+    if (internal_pint(dp, kOfxPropVersion, 0, -1) != (int)pl->p->pluginVersionMajor ||
+        internal_pint(dp, kOfxPropVersion, 1, -1) != (int)pl->p->pluginVersionMinor)
+        return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL,
+                           "%s: the descriptor's kOfxPropVersion %d.%d is not the plug-in's %u.%u",
+                           id, internal_pint(dp, kOfxPropVersion, 0, -1),
+                           internal_pint(dp, kOfxPropVersion, 1, -1), pl->p->pluginVersionMajor,
+                           pl->p->pluginVersionMinor);
     if (pl->desc && strcmp(internal_pstr(dp, kOfxPropLabel, 0, ""), pl->desc->label))
         return nprfx_error(h->ctx, NPRFX_ERR_INTERNAL, "%s: label differs from the node's", id);
     nprfx_result r;

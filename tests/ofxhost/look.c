@@ -338,6 +338,10 @@ int internal_look_main(int argc, char **argv)
     desc.num_inputs = lr.n;
     desc.inputs = lr.in;
     desc.flags = NPRFX_NODE_TEMPORAL;
+    for (int i = 0; i < h->nplugins; i++)
+        if (h->plugins[i].p->pluginIdentifier && !strcmp(h->plugins[i].p->pluginIdentifier, id))
+            fprintf(stderr, "look %s: version %u.%u\n", id, h->plugins[i].p->pluginVersionMajor,
+                    h->plugins[i].p->pluginVersionMinor);
     int first = list.frames[0], last = list.frames[list.count - 1];
     (void)nprfx_graph_shot(lr.g, &first, &last);
     for (int fi = 0; fi < list.count; fi++) {
