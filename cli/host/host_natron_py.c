@@ -129,10 +129,29 @@ nprfx_result host_write_natron_py(const host_project *hp, FILE *f, const char *o
             hp->graph_path);
     fprintf(f,
             "# Builds the graph in Natron 2 from the nprfx OpenFX plug-ins:\n"
-            "#   OFX_PLUGIN_PATH=build/plugins/ofx Natron -t %s\n"
-            "# OpenFX clips carry RGBA only: each set of plate channels a node reads is "
-            "shuffled\n# into RGBA and the node's <input>Channels selector picks them.\n\n",
+            "#   OFX_PLUGIN_PATH=build/plugins/ofx Natron -t %s\n",
             out_file);
+    if (!hp->look_nodes)
+        fprintf(f, "# OpenFX clips carry RGBA only: each set of plate channels a node reads is "
+                   "shuffled\n# into RGBA and the node's <input>Channels selector picks them.\n");
+    else if (hp->nsets)
+        fprintf(f, "# Each AOV a look reads comes through its own clip, shuffled from the Read "
+                   "into RGBA.\n");
+    else
+        fprintf(f, "# Each look takes the Read whole on its Source and finds the layers it "
+                   "reads (its layer\n# menus show which, after Find AOV Layers).\n");
+    fprintf(f, "\n");
+    /* Natron 2.5's renderer can stall at 0 % CPU with several writers at once, its threads in
+     * waitForImageBeingRenderedElsewhere (the host's own: seen with stock nodes alone, Natron
+     * issues 248 and 811); each writer alone renders. */
+    if (hp->nwrites > 1) {
+        fprintf(f, "# Render one writer at a time (NatronRenderer 2.5 can stall with several at "
+                   "once):\n");
+        for (int i = 0; i < hp->nwrites; i++)
+            fprintf(f, "#   NatronRenderer -w %s %d-%d PROJECT.ntp\n", hp->writes[i].name,
+                    hp->first_frame, hp->last_frame);
+        fprintf(f, "\n");
+    }
     fprintf(f, "SAMPLES_DIR = ");
     py_string(f, parent);
     fprintf(f, "\nSCRIPT_DIR = ");

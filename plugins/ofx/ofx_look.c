@@ -296,6 +296,27 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
         ofx_set_str(pp, kOfxParamPropStringMode, 0, kOfxParamStringIsMultiLine);
         ofx_set_str(pp, kOfxParamPropDefault, 0, "");
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
+        for (int k = 0; k < d->desc.num_inputs; k++) {
+            int aov = ofx_look_layer_aov(d, k);
+            if (aov < 0) continue;
+            char name[64], label[64], hint[300];
+            ofx_look_layer_name(aov, name, sizeof name);
+            ofx_look_layer_label(aov, label, sizeof label);
+            if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, name, &pp)) != kOfxStatOK)
+                return st;
+            ofx_set_str(pp, kOfxPropLabel, 0, label);
+            snprintf(hint, sizeof hint,
+                     "The layer of Source the look reads %s from: auto finds it by the "
+                     "renderer's names; Find AOV Layers lists Source's layers here and shows the "
+                     "one in use. A choice is a line of AOV Layers.",
+                     nprfx_aov_name(aov));
+            ofx_set_str(pp, kOfxParamPropHint, 0, hint);
+            ofx_set_str(pp, kOfxParamPropChoiceOption, 0, "auto");
+            ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
+            ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
+            /* the menu changes no pixels itself: the text it writes does */
+            ofx_set_int(pp, kOfxParamPropEvaluateOnChange, 0, 0);
+        }
         if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "renderer", &pp)) != kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Renderer");

@@ -38,6 +38,7 @@ typedef struct look_inst {
     OfxParamHandle renderer;
     OfxParamHandle analysis;   /* what Analyze Shot measured (NULL: the look measures nothing) */
     OfxParamHandle aov_layers; /* multi-plane: the user's layer for an AOV, lines AOV = CHANNELS */
+    OfxParamHandle layer_menu[LOOK_MAX_INPUTS]; /* and a menu of them per AOV input */
     int persistent;
     /* the render in flight: its time, render scale and the frame in host pixels */
     double time, scale;
@@ -79,6 +80,13 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
         (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
         if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "renderer", &li->renderer, NULL);
         if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "aovLayers", &li->aov_layers, NULL);
+        for (int k = 0; li->planar && k < look->d.desc.num_inputs; k++) {
+            int aov = ofx_look_layer_aov(&look->d, k);
+            char name[64];
+            if (aov < 0) continue;
+            ofx_look_layer_name(aov, name, sizeof name);
+            (void)ofx_g.param->paramGetHandle(ps, name, &li->layer_menu[k], NULL);
+        }
         char name[NPRFX_OFX_NAME_MAX];
         ofx_names_extra_param(&look->d.desc, "analysis", name, sizeof name);
         if (look->d.measures) (void)ofx_g.param->paramGetHandle(ps, name, &li->analysis, NULL);
@@ -735,7 +743,7 @@ static nprfx_result layers_map(look_inst *li, char **json, char *err, size_t err
         lineno++;
         char *eq = strchr(line, '=');
         int blank = strspn(line, " \t\r") == strlen(line);
-        if (blank) continue;
+        if (blank || line[strspn(line, " \t")] == '#') continue; /* Find's "# depth: not ..." */
         if (!eq || sscanf(line, " %63[a-z_]", aov) != 1 || nprfx_aov_find(aov) < 0 ||
             sscanf(eq + 1, " %899[^\r]", sel) != 1) {
             snprintf(err, errn,
@@ -816,20 +824,23 @@ static OfxStatus find_layers(look_inst *li, OfxPropertySetHandle in_args)
     for (int i = 0; i < n; i++)
         names[i] = ch[i].name;
     for (int k = 0; !r && k < d->desc.num_inputs; k++) {
-        int aov = d->aov[k];
-        if (!d->main[k] || aov < 0 || aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT)
-            continue;
+        int aov = ofx_look_layer_aov(d, k);
+        if (aov < 0) continue;
         int idx[256], count = 0;
         char line[1200];
+        const char *eq = NULL;
         if (nprfx_graph_aov_channels(li->g, node, aov, names, n, idx, &count) || count < 1) {
             snprintf(line, sizeof line, "# %s: not among the layers", nprfx_aov_name(aov));
         } else {
             snprintf(line, sizeof line, "%s = ", nprfx_aov_name(aov));
+            eq = line + strlen(line);
             for (int c = 0; c < count && idx[c] < n; c++)
                 snprintf(line + strlen(line), sizeof line - strlen(line), "%s%s", c ? "," : "",
                          names[idx[c]]);
         }
         append(&text, &len, &cap, line);
+        /* the menu: Source's layers, showing the one found */
+        if (li->layer_menu[k]) (void)ofx_look_layer_options(li->layer_menu[k], aov, names, n, eq);
     }
     pthread_mutex_unlock(&li->lock);
     if (r) {
@@ -1212,6 +1223,32 @@ static int is_param(const look_inst *li, OfxPropertySetHandle in_args, const cha
     return !strcmp(name, param);
 }
 
+/* A layer menu turned: its AOV's line of AOV Layers becomes the option (auto: no line). The
+ * plug-in's own setting of it (Find AOV Layers showing the layer) changes nothing. */
+static OfxStatus layer_chosen(look_inst *li, int k, OfxPropertySetHandle in_args)
+{
+    char *reason = NULL;
+    if (ofx_g.prop->propGetString(in_args, kOfxPropChangeReason, 0, &reason) == kOfxStatOK &&
+        reason && !strcmp(reason, kOfxChangePluginEdited))
+        return kOfxStatOK;
+    int pick = 0;
+    char *option = NULL, *text = NULL;
+    OfxPropertySetHandle p;
+    if (ofx_g.param->paramGetValue(li->layer_menu[k], &pick) != kOfxStatOK ||
+        ofx_g.param->paramGetPropertySet(li->layer_menu[k], &p) != kOfxStatOK)
+        return kOfxStatFailed;
+    if (pick > 0 &&
+        (ofx_g.prop->propGetString(p, kOfxParamPropChoiceOption, pick, &option) != kOfxStatOK ||
+         !option))
+        return kOfxStatOK; /* a saved choice whose options are not listed yet: the text holds */
+    if (ofx_g.param->paramGetValue(li->aov_layers, &text) != kOfxStatOK) text = NULL;
+    char *edited = ofx_look_layer_edit(text, li->look->d.aov[k], pick > 0 ? option : NULL);
+    if (!edited) return kOfxStatErrMemory;
+    OfxStatus st = ofx_g.param->paramSetValue(li->aov_layers, edited);
+    free(edited);
+    return st == kOfxStatOK ? kOfxStatOK : kOfxStatFailed;
+}
+
 OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
                                    OfxImageEffectHandle fx, OfxPropertySetHandle in_args,
                                    OfxPropertySetHandle out_args)
@@ -1258,6 +1295,12 @@ OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
     if (!strcmp(action, kOfxActionInstanceChanged) && li->aov_layers &&
         is_param(li, in_args, "findLayers"))
         return find_layers(li, in_args);
+    for (int k = 0; !strcmp(action, kOfxActionInstanceChanged) && k < LOOK_MAX_INPUTS; k++) {
+        char name[64];
+        if (!li->layer_menu[k]) continue;
+        ofx_look_layer_name(li->look->d.aov[k], name, sizeof name);
+        if (is_param(li, in_args, name)) return layer_chosen(li, k, in_args);
+    }
     if (!strcmp(action, kOfxActionInstanceChanged) ||
         !strcmp(action, kOfxImageEffectActionBeginSequenceRender) ||
         !strcmp(action, kOfxImageEffectActionEndSequenceRender) ||

@@ -4,6 +4,10 @@
 # OpenFX clips carry RGBA only: each set of plate channels a node reads is shuffled
 # into RGBA and the node's <input>Channels selector picks them.
 
+# Render one writer at a time (NatronRenderer 2.5 can stall with several at once):
+#   NatronRenderer -w w_pencil 1-24 PROJECT.ntp
+#   NatronRenderer -w w_noise 1-24 PROJECT.ntp
+
 SAMPLES_DIR = "samples"
 SCRIPT_DIR = "hosts"
 SCRIPT_FILE = "nprfx_crossing_natron.py"

@@ -4,7 +4,8 @@
 # params, connections, format and frames, the Natron script sets the same params and does not
 # need __file__, and graphs hosts cannot express fail with the node's name. With --look the
 # graph is one look node per output on a Read (samples/hosts/*_look.*, no drift either); with
-# --look-clips each AOV the look reads is a Shuffle into its own clip.
+# --look-clips each AOV the look reads is a Shuffle into its own clip. A script of several
+# writers lists the commands that render each alone.
 set -u
 NPRFX=$1; SRC=$2; W=$3
 rm -rf "$W"; mkdir -p "$W/samples/graphs" "$W/samples/hosts"; cd "$W"
@@ -32,6 +33,18 @@ for f in nprfx_crossing_look.ntp nprfx_crossing_look_natron.py nprfx_crossing_lo
     cmp -s "samples/hosts/$f" "$SRC/samples/hosts/$f" ||
         fail "samples/hosts/$f differs from what the graph gives; regenerate from the source folder: $REGEN_LOOK"
 done
+# several writers: the script says to render them one at a time (NatronRenderer 2.5 can stall
+# with several at once); a graph with one writer gets no such lines
+for w in w_pencil w_noise; do
+    grep -q "^#   NatronRenderer -w $w 1-24 " samples/hosts/nprfx_crossing_natron.py ||
+        fail "the Natron script of two writers does not say how to render $w alone"
+done
+cp "$SRC/samples/graphs/toon.json" samples/graphs/
+"$NPRFX" host-project samples/graphs/toon.json --natron-script toon_natron.py >/dev/null 2>&1 ||
+    fail "host-project toon.json exited $?"
+if [ ! -s toon_natron.py ] || grep -q "NatronRenderer -w" toon_natron.py; then
+    fail "the Natron script of one writer lists per-writer renders (or was not written)"
+fi
 NTP=${NTP:-samples/hosts/nprfx_crossing.ntp}
 PY=${PY:-samples/hosts/nprfx_crossing_natron.py}
 

@@ -29,7 +29,9 @@
 #  7. natron, which layer feeds an AOV: Find AOV Layers shows them (depth = ViewLayer.Depth.Z);
 #     on plates whose depth layer is renamed (ViewLayer.Zdepth.Z) toon fails as the runner does,
 #     naming the input, and with AOV Layers "depth = ViewLayer.Zdepth.Z" equals the runner
-#     reading them with the same mapping (a read's "aovs" file).
+#     reading them with the same mapping (a read's "aovs" file); the layer menus show the layer
+#     feeding each AOV after Find AOV Layers, and choosing ViewLayer.Zdepth.Z in the Depth layer
+#     menu equals that mapping; Find on those plates, depth not found, still fails naming it.
 #  8. the look's version (the minor hosts key cached frames on) changes when its graph file does.
 #
 # usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx_looks.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
@@ -163,6 +165,9 @@ else fail "toon with Analyze Shot: $(tail -n 2 "$W/analyzed.log" | tr '\n' ' ')"
 if look natron "$T" 1 "$W/find" --shot 1-2 --press findLayers &&
    grep -q "^depth = ViewLayer.Depth.Z$" "$W/find.log" && grep -q "^param aovLayers = " "$W/find.log"; then pass
 else fail "Find AOV Layers: $(grep -A6 'param aovLayers' "$W/find.log" | head -n 6 | tr '\n' ' ')"; fi
+if grep -q "^choice layer_depth = ViewLayer.Depth.Z (" "$W/find.log" &&
+   grep -q "^choice layer_normal = ViewLayer.Normal.X,ViewLayer.Normal.Y,ViewLayer.Normal.Z (" "$W/find.log"; then pass
+else fail "Find AOV Layers: the layer menus do not show the layers in use: $(grep '^choice layer_' "$W/find.log" | tr '\n' ' ')"; fi
 R="$W/renamed"
 mkdir -p "$R/plates" "$R/graphs"
 for f in 1 2; do
@@ -176,9 +181,15 @@ pat=$(runner "$R/graphs/toon.json" 1-2 "$R/runner" --shot 1-2 --set plate.aovs=z
 if look natron "$R/graphs/toon.json" 1-2 "$R/look" --shot 1-2 --param "aovLayers=depth = ViewLayer.Zdepth.Z" &&
    same_frames "$pat" "$R/look" toon 1 2; then pass
 else fail "toon with AOV Layers on renamed plates differs from nprfx run with the mapping: $(tail -n 1 "$R/look.log")"; fi
-if look natron "$R/graphs/toon.json" 1 "$R/none" --shot 1-2; then fail "toon without its depth layer rendered"
-elif grep -q "input 'depth'" "$R/none.log"; then pass
-else fail "toon without its depth layer: no reason naming the input ($(tail -n 1 "$R/none.log"))"; fi
+if look natron "$R/graphs/toon.json" 1-2 "$R/menu" --shot 1-2 --press findLayers --choose "layer_depth=ViewLayer.Zdepth.Z" &&
+   grep -q "^depth = ViewLayer.Zdepth.Z$" "$R/menu.log" && same_frames "$pat" "$R/menu" toon 1 2; then pass
+else fail "toon with the Depth layer menu set to ViewLayer.Zdepth.Z differs from nprfx run with the mapping: $(tail -n 1 "$R/menu.log")"; fi
+for how in plain find; do
+  opt=(); [ $how = find ] && opt=(--press findLayers)
+  if look natron "$R/graphs/toon.json" 1 "$R/none$how" --shot 1-2 "${opt[@]}"; then fail "toon without its depth layer rendered ($how)"
+  elif grep -q "input 'depth'" "$R/none$how.log"; then pass
+  else fail "toon without its depth layer ($how): no reason naming the input ($(tail -n 1 "$R/none$how.log"))"; fi
+done
 
 # 8 -----------------------------------------------------------------------------------------------
 # the version hosts key plug-ins on changes with the graph file (its minor: a hash of the bytes)

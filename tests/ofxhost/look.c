@@ -194,7 +194,8 @@ static void usage(void)
 {
     fprintf(stderr, "usage: nprfx-ofxtest look GRAPH.json --ofx BUNDLE [--profile NAME] [--frames "
                     "SPEC] [--scramble] [--analyze-shot] [--shot SPEC] [--set NODE.PARAM=VALUE] "
-                    "[--param NAME=VALUE] [--press NAME] [--render-scale S] [--channels R,G,B] "
+                    "[--param NAME=VALUE] [--press NAME] [--choose NAME=OPTION] [--render-scale S] "
+                    "[--channels R,G,B] "
                     "[-o DIR]\n");
 }
 
@@ -203,8 +204,8 @@ int internal_look_main(int argc, char **argv)
     const char *graph = NULL, *bundle = NULL, *profile = NULL, *frames = NULL, *dir = ".";
     const char *shot = NULL;
     const char *channels = "R,G,B,A";
-    const char *sets[16], *params[16], *presses[16];
-    int nsets = 0, nparams = 0, npresses = 0;
+    const char *sets[16], *params[16], *presses[16], *chooses[16];
+    int nsets = 0, nparams = 0, npresses = 0, nchooses = 0;
     int scramble = 0, analyze = 0;
     double render_seconds = 0, scale = 1;
     for (int i = 1; i < argc; i++) {
@@ -227,6 +228,8 @@ int internal_look_main(int argc, char **argv)
             params[nparams++] = argv[++i];
         else if (next && !strcmp(a, "--press") && npresses < 16)
             presses[npresses++] = argv[++i];
+        else if (next && !strcmp(a, "--choose") && nchooses < 16)
+            chooses[nchooses++] = argv[++i];
         else if (next && !strcmp(a, "--render-scale"))
             scale = atof(argv[++i]);
         else if (next && !strcmp(a, "--channels"))
@@ -308,6 +311,8 @@ int internal_look_main(int argc, char **argv)
     h->nparam_sets = nparams;
     h->presses = presses;
     h->npresses = npresses;
+    h->chooses = chooses;
+    h->nchooses = nchooses;
     int first_seq = lr.look.node[lr.look.source], main_input = -1;
     for (int k = 0; k < lr.look.desc.num_inputs; k++) {
         if (!look_desc_has_clip(&lr.look, k, lr.planar)) continue;

@@ -220,6 +220,9 @@ struct nprfx_ofx_host {
     int nparam_sets;
     const char *const *presses;
     int npresses;
+    /* look.c --choose NAME=OPTION: a choice set to an option by its text after the presses */
+    const char *const *chooses;
+    int nchooses;
     double serve_seconds; /* spent serving clip images (image_effect.c) */
 };
 

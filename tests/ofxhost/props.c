@@ -233,7 +233,13 @@ static OfxStatus prop_reset(OfxPropertySetHandle h, const char *name)
     if (!p) return kOfxStatErrBadHandle;
     prop *q = prop_find(p, name);
     if (!q) return kOfxStatErrUnknown;
-    return kOfxStatOK; /* no defaults are tracked: values stay as they are */
+    /* a choice's options default to none (a plug-in resets them to list others) */
+    if (!strcmp(name, kOfxParamPropChoiceOption) && q->type == PT_STRING) {
+        for (int i = 0; i < q->dim; i++)
+            free(q->v.s[i]);
+        q->dim = 0;
+    }
+    return kOfxStatOK; /* no other defaults are tracked: values stay as they are */
 }
 
 static OfxStatus prop_dimension(OfxPropertySetHandle h, const char *name, int *count)

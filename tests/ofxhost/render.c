@@ -266,6 +266,28 @@ static nprfx_result press_analyze(node_inst *ni, const nprfx_render_args *a)
     return press_button(ni, a, name);
 }
 
+/* --choose NAME=OPTION: the choice set to the option of that text among those it lists now, with
+ * the instance-changed actions of a user's edit. */
+static nprfx_result choose(node_inst *ni, const nprfx_render_args *a, const char *what)
+{
+    const char *eq = strchr(what, '=');
+    char name[NPRFX_OFX_NAME_MAX];
+    snprintf(name, sizeof name, "%.*s", eq ? (int)(eq - what) : 0, what);
+    hparam *p = internal_effect_param(ni->fx, name);
+    if (!eq || !p || !internal_type_is(p, kOfxParamTypeChoice))
+        return nprfx_error(a->ctx, NPRFX_ERR_UNKNOWN_PARAM, "%s: no choice param '%s'",
+                           ni->pl->p->pluginIdentifier, name);
+    int n = internal_pdim(&p->props, kOfxParamPropChoiceOption), pick = -1;
+    for (int i = 0; i < n && pick < 0; i++)
+        if (!strcmp(internal_pstr(&p->props, kOfxParamPropChoiceOption, i, ""), eq + 1)) pick = i;
+    if (pick < 0)
+        return nprfx_error(a->ctx, NPRFX_ERR_INVALID_ARGUMENT,
+                           "%s: %s lists no option '%s' (%d options)", ni->pl->p->pluginIdentifier,
+                           name, eq + 1, n);
+    p->i = pick;
+    return press_button(ni, a, name);
+}
+
 /* Before the first render: the params look.c was given (NAME=VALUE, as a project would hold
  * them), then its buttons pressed, each param's value printed after ("param NAME = VALUE"). */
 static nprfx_result first_settings(node_inst *ni, const nprfx_render_args *a)
@@ -286,13 +308,19 @@ static nprfx_result first_settings(node_inst *ni, const nprfx_render_args *a)
         for (char *c = p->s; c && (c = strstr(c, "\\n"));)
             c[0] = '\n', memmove(c + 1, c + 2, strlen(c + 2) + 1);
     }
-    for (int i = 0; i < h->npresses; i++) {
-        nprfx_result r = press_button(ni, a, h->presses[i]);
+    for (int i = 0; i < h->npresses + h->nchooses; i++) {
+        nprfx_result r = i < h->npresses ? press_button(ni, a, h->presses[i])
+                                         : choose(ni, a, h->chooses[i - h->npresses]);
         if (r) return r;
-        for (int k = 0; k < ni->fx->nparams; k++)
-            if (internal_type_is(ni->fx->params[k], kOfxParamTypeString))
-                fprintf(stderr, "param %s = %s\n", ni->fx->params[k]->name,
-                        ni->fx->params[k]->s ? ni->fx->params[k]->s : "");
+        for (int k = 0; k < ni->fx->nparams; k++) {
+            hparam *p = ni->fx->params[k];
+            if (internal_type_is(p, kOfxParamTypeString))
+                fprintf(stderr, "param %s = %s\n", p->name, p->s ? p->s : "");
+            int n = internal_pdim(&p->props, kOfxParamPropChoiceOption);
+            if (internal_type_is(p, kOfxParamTypeChoice) && p->i >= 0 && p->i < n)
+                fprintf(stderr, "choice %s = %s (%d of %d)\n", p->name,
+                        internal_pstr(&p->props, kOfxParamPropChoiceOption, p->i, ""), p->i, n);
+        }
     }
     return NPRFX_OK;
 }
