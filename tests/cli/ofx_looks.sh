@@ -33,6 +33,10 @@
 #     feeding each AOV after Find AOV Layers, and choosing ViewLayer.Zdepth.Z in the Depth layer
 #     menu equals that mapping; Find on those plates, depth not found, still fails naming it.
 #  8. the look's version (the minor hosts key cached frames on) changes when its graph file does.
+#  9. two writers at once (natron): main.json's look project is one look node per write node on
+#     one Read; both nodes, each an instance of its own, render frames 1-4 in order on two
+#     threads at the same time, as a host renders two writers, and each equals its write node's
+#     frames from the runner.
 #
 # usage: NPRFX_OFXTEST=TEST_HOST_BINARY bash ofx_looks.sh NPRFX_BINARY SOURCE_DIR WORK_DIR
 set -u
@@ -204,6 +208,21 @@ if look strict "$V/a/toon.json" 1 "$V/one" --shot 1-2; then
      [ "$(version_of "$V/one.log")" != "$(version_of "$V/two.log")" ]; then pass
   else fail "the look's version did not change with its graph file: $(version_of "$V/one.log"), $(version_of "$V/two.log")"; fi
 else fail "toon from another folder: $(tail -n 1 "$V/one.log")"; fi
+
+# 9 -----------------------------------------------------------------------------------------------
+M="$SRC/samples/graphs/main.json"
+mkdir -p "$W/writers/runner"
+if "$NPRFX" run "$M" --frames 1-4 --shot 1-5 --output-dir "$W/writers/runner" --quiet --threads 2 >/dev/null 2>"$W/writers/runner.log" &&
+   look natron "$M" 1-4 "$W/writers/look" --shot 1-5 --outputs all --channels "R,G,B,A;Y"; then
+  bad=""
+  for f in 1 2 3 4; do
+    for w in pencil noise; do
+      "$NPRFX" diff "$W/writers/runner/out/main/$w.000$f.exr" "$W/writers/look/main.w_$w.000$f.exr" \
+        --fail 0 --hardfail 0 --warn 0 -q >/dev/null 2>&1 || bad="$bad $w.$f"
+    done
+  done
+  if [ -z "$bad" ]; then pass; else fail "two looks at once differ from nprfx run:$bad"; fi
+else fail "main.json's two outputs at once: $(tail -n 2 "$W/writers/look.log" "$W/writers/runner.log" | tr '\n' ' ')"; fi
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ] && [ $passes -gt 0 ]

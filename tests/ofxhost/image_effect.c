@@ -380,11 +380,13 @@ static OfxStatus fx_clip_get_image_plane(OfxImageClipHandle clip, OfxTime time, 
                  c->name, plane);
         return kOfxStatFailed;
     }
+    /* each render's own server (look.c: the look node's) */
+    void *plane_user = ni->args->fetch_user;
     pthread_mutex_lock(&h->lock);
     OfxStatus st = fetch_allowed(ni, c, k, time);
     nprfx_image view;
     memset(&view, 0, sizeof view);
-    if (st == kOfxStatOK && h->plane_fetch(h->plane_user, time, plane, &view) != NPRFX_OK) {
+    if (st == kOfxStatOK && h->plane_fetch(plane_user, time, plane, &view) != NPRFX_OK) {
         snprintf(ni->host_error, sizeof ni->host_error, "clip %s: no plane '%s' at frame %g",
                  c->name, plane, time);
         st = kOfxStatFailed;

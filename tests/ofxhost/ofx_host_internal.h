@@ -210,11 +210,11 @@ struct nprfx_ofx_host {
     int analyze; /* --analyze-shot (render.c) */
     /* Multi-plane (profile planes): the layers a main input carries, as the plane strings a
      * clip lists (kFnOfxImageEffectPropComponentsPresent), and how to serve one at a time
-     * (look.c sets both; NULL: the clip carries its colour plane only). */
+     * (look.c sets both; NULL: the clip carries its colour plane only), user being the render's
+     * fetch_user (each look node serves its own). */
     char **planes;
     int nplanes;
     nprfx_result (*plane_fetch)(void *user, double time, const char *plane, nprfx_image *out);
-    void *plane_user;
     /* look.c's --param NAME=VALUE and --press NAME: set and pressed before the first render */
     const char *const *param_sets;
     int nparam_sets;
