@@ -311,7 +311,12 @@ static OfxStatus fx_clip_get_image(OfxImageClipHandle clip, OfxTime time, const 
 {
     double t0 = now_seconds();
     OfxStatus st = clip_get_image(clip, time, region, out);
-    if (internal_g_host) internal_g_host->serve_seconds += now_seconds() - t0;
+    nprfx_ofx_host *h = internal_g_host;
+    if (h) { /* several look nodes render at once (look.c --outputs all) */
+        pthread_mutex_lock(&h->lock);
+        h->serve_seconds += now_seconds() - t0;
+        pthread_mutex_unlock(&h->lock);
+    }
     return st;
 }
 

@@ -209,7 +209,9 @@ static nprfx_result inst_create(nprfx_ofx_host *h, const nprfx_render_args *a, i
         inst_free(ni);
         return r;
     }
+    pthread_mutex_lock(&h->lock); /* look.c --outputs all makes instances on several threads */
     h->instances++;
+    pthread_mutex_unlock(&h->lock);
     *out = ni;
     return NPRFX_OK;
 }
@@ -886,6 +888,8 @@ void internal_hook_release(void *user, const nprfx_node_desc *node, void *instan
         internal_props_free(&in);
     }
     (void)internal_call(ni->pl, kOfxActionDestroyInstance, ni->fx, NULL, NULL);
+    pthread_mutex_lock(&h->lock);
     h->instances--;
+    pthread_mutex_unlock(&h->lock);
     inst_free(ni);
 }
