@@ -159,3 +159,24 @@ nprfx_result look_desc_build(nprfx_graph *g, const char *stem, look_desc *l, cha
     l->desc.params = l->params;
     return NPRFX_OK;
 }
+
+int look_desc_layer_aov(const look_desc *l, int k)
+{
+    int aov = l->aov[k];
+    if (!l->main[k] || aov < 0 || aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT)
+        return -1;
+    return aov;
+}
+
+void look_desc_layer_name(int aov, char *buf, size_t n)
+{
+    snprintf(buf, n, "layer_%s", nprfx_aov_name(aov));
+}
+
+void look_desc_layer_label(int aov, char *buf, size_t n)
+{
+    snprintf(buf, n, "%s layer", nprfx_aov_name(aov));
+    if (buf[0] >= 'a' && buf[0] <= 'z') buf[0] = (char)(buf[0] - 'a' + 'A');
+    for (char *c = buf; *c; c++)
+        if (*c == '_') *c = ' ';
+}

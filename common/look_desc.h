@@ -57,6 +57,19 @@ void look_desc_free(look_desc *l);
  * defaults at what the graph file says. g is the graph l was built from. */
 void look_desc_values(look_desc *l, const nprfx_graph *g);
 
+/* The params a look has in multi-plane hosts beside its knobs: whose names it finds the AOVs
+ * under, the button that lists Source's layers, the text of the user's layer for an AOV, and a
+ * menu per AOV read from Source (look_desc_layer_name). */
+#define LOOK_PARAM_RENDERER "renderer"
+#define LOOK_PARAM_FIND_LAYERS "findLayers"
+#define LOOK_PARAM_AOV_LAYERS "aovLayers"
+/* The AOV input k reads from Source with a layer menu of its own; -1 when none (motion follows
+ * the renderer's convention, a map is its own clip). */
+int look_desc_layer_aov(const look_desc *l, int k);
+/* The layer menu's param name ("layer_depth") and label ("Depth layer"). */
+void look_desc_layer_name(int aov, char *buf, size_t n);
+void look_desc_layer_label(int aov, char *buf, size_t n);
+
 /* Whether input k is a clip in a host of that kind: a multi-plane host carries the main read's
  * AOVs as layers of Source, so only Source and the maps are clips there. */
 static inline int look_desc_has_clip(const look_desc *l, int k, int planar)

@@ -263,6 +263,15 @@ static int print_graph(const char *path)
                "    params:");
         for (int p = 0; p < ld->desc.num_params; p++)
             printf(" %s", ld->params[p].name);
+        /* what multi-plane hosts add: which layer feeds each AOV */
+        printf("\n    with layers also: %s %s %s", LOOK_PARAM_RENDERER, LOOK_PARAM_FIND_LAYERS,
+               LOOK_PARAM_AOV_LAYERS);
+        for (int k = 0; k < ld->desc.num_inputs; k++) {
+            char name[64];
+            if (look_desc_layer_aov(ld, k) < 0) continue;
+            look_desc_layer_name(look_desc_layer_aov(ld, k), name, sizeof name);
+            printf(" %s", name);
+        }
         printf("\n");
     } else if (ld) {
         printf("\nNot a look for compositing hosts: %s\n", why);

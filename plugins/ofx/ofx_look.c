@@ -276,14 +276,14 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     OfxPropertySetHandle pp;
     if (ofx_g.multiplanar) {
         /* which layer feeds each AOV: found on request, shown, and the user's to change */
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, "findLayers", &pp)) !=
-            kOfxStatOK)
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, LOOK_PARAM_FIND_LAYERS,
+                                           &pp)) != kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Find AOV Layers");
         ofx_set_str(pp, kOfxParamPropHint, 0,
                     "Fill AOV Layers with the layers the look reads each AOV from, as it finds "
                     "them among Source's layers now, to check them or change one.");
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeString, "aovLayers", &pp)) !=
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeString, LOOK_PARAM_AOV_LAYERS, &pp)) !=
             kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "AOV Layers");
@@ -297,11 +297,11 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
         ofx_set_str(pp, kOfxParamPropDefault, 0, "");
         ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
         for (int k = 0; k < d->desc.num_inputs; k++) {
-            int aov = ofx_look_layer_aov(d, k);
+            int aov = look_desc_layer_aov(d, k);
             if (aov < 0) continue;
             char name[64], label[64], hint[300];
-            ofx_look_layer_name(aov, name, sizeof name);
-            ofx_look_layer_label(aov, label, sizeof label);
+            look_desc_layer_name(aov, name, sizeof name);
+            look_desc_layer_label(aov, label, sizeof label);
             if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, name, &pp)) != kOfxStatOK)
                 return st;
             ofx_set_str(pp, kOfxPropLabel, 0, label);
@@ -317,7 +317,8 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
             /* the menu changes no pixels itself: the text it writes does */
             ofx_set_int(pp, kOfxParamPropEvaluateOnChange, 0, 0);
         }
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, "renderer", &pp)) != kOfxStatOK)
+        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, LOOK_PARAM_RENDERER, &pp)) !=
+            kOfxStatOK)
             return st;
         ofx_set_str(pp, kOfxPropLabel, 0, "Renderer");
         ofx_set_str(pp, kOfxParamPropHint, 0,

@@ -42,12 +42,7 @@ const ofx_look *ofx_look_at(int i);
 OfxStatus ofx_look_main(int i, const char *action, const void *handle, OfxPropertySetHandle in_args,
                         OfxPropertySetHandle out_args);
 
-/* ofx_look_layers.c: the layer menus of multi-plane hosts. The AOV input k of look d reads from
- * Source, with a menu of its own; -1 when none (motion, a map). */
-int ofx_look_layer_aov(const look_desc *d, int k);
-/* The menu's param name ("layer_depth") and label ("Depth layer"). */
-void ofx_look_layer_name(int aov, char *buf, size_t n);
-void ofx_look_layer_label(int aov, char *buf, size_t n);
+/* ofx_look_layers.c: the layer menus of multi-plane hosts (look_desc_layer_aov says which). */
 /* Reset the menu's options to "auto" and the channels of Source (names, n) that could feed the
  * AOV: each channel for a one-channel AOV, else each layer's first channels, comma-separated;
  * its value the option equal to resolved (0: none is). */

@@ -10,27 +10,6 @@
 #include "ofx_look.h"
 #include "ofx_suites.h"
 
-int ofx_look_layer_aov(const look_desc *d, int k)
-{
-    int aov = d->aov[k];
-    if (!d->main[k] || aov < 0 || aov == NPRFX_AOV_MOTION_PREV || aov == NPRFX_AOV_MOTION_NEXT)
-        return -1; /* motion follows the renderer's convention; a map is its own clip */
-    return aov;
-}
-
-void ofx_look_layer_name(int aov, char *buf, size_t n)
-{
-    snprintf(buf, n, "layer_%s", nprfx_aov_name(aov));
-}
-
-void ofx_look_layer_label(int aov, char *buf, size_t n)
-{
-    snprintf(buf, n, "%s layer", nprfx_aov_name(aov));
-    if (buf[0] >= 'a' && buf[0] <= 'z') buf[0] = (char)(buf[0] - 'a' + 'A');
-    for (char *c = buf; *c; c++)
-        if (*c == '_') *c = ' ';
-}
-
 /* Channel name c's layer: all before its last '.' ("" for R, G, B, A). */
 static size_t layer_len(const char *c)
 {

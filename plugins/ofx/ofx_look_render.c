@@ -76,15 +76,18 @@ OfxStatus ofx_look_create(const ofx_look *look, OfxImageEffectHandle fx)
         for (int i = 0; i < look->d.desc.num_params; i++)
             (void)ofx_g.param->paramGetHandle(ps, look->d.param_name[i], &li->knobs[i], NULL);
         if (look->d.noutputs > 1)
-            (void)ofx_g.param->paramGetHandle(ps, "output", &li->output_choice, NULL);
+            (void)ofx_g.param->paramGetHandle(ps, look->d.param_name[look->d.output_param],
+                                              &li->output_choice, NULL);
         (void)ofx_g.param->paramGetHandle(ps, "designWidth", &li->design, NULL);
-        if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "renderer", &li->renderer, NULL);
-        if (li->planar) (void)ofx_g.param->paramGetHandle(ps, "aovLayers", &li->aov_layers, NULL);
+        if (li->planar)
+            (void)ofx_g.param->paramGetHandle(ps, LOOK_PARAM_RENDERER, &li->renderer, NULL);
+        if (li->planar)
+            (void)ofx_g.param->paramGetHandle(ps, LOOK_PARAM_AOV_LAYERS, &li->aov_layers, NULL);
         for (int k = 0; li->planar && k < look->d.desc.num_inputs; k++) {
-            int aov = ofx_look_layer_aov(&look->d, k);
+            int aov = look_desc_layer_aov(&look->d, k);
             char name[64];
             if (aov < 0) continue;
-            ofx_look_layer_name(aov, name, sizeof name);
+            look_desc_layer_name(aov, name, sizeof name);
             (void)ofx_g.param->paramGetHandle(ps, name, &li->layer_menu[k], NULL);
         }
         char name[NPRFX_OFX_NAME_MAX];
@@ -824,7 +827,7 @@ static OfxStatus find_layers(look_inst *li, OfxPropertySetHandle in_args)
     for (int i = 0; i < n; i++)
         names[i] = ch[i].name;
     for (int k = 0; !r && k < d->desc.num_inputs; k++) {
-        int aov = ofx_look_layer_aov(d, k);
+        int aov = look_desc_layer_aov(d, k);
         if (aov < 0) continue;
         int idx[256], count = 0;
         char line[1200];
@@ -1293,12 +1296,12 @@ OfxStatus ofx_look_instance_action(const ofx_look *look, const char *action,
         is_param(li, in_args, "analyze"))
         return analyze(li, in_args);
     if (!strcmp(action, kOfxActionInstanceChanged) && li->aov_layers &&
-        is_param(li, in_args, "findLayers"))
+        is_param(li, in_args, LOOK_PARAM_FIND_LAYERS))
         return find_layers(li, in_args);
     for (int k = 0; !strcmp(action, kOfxActionInstanceChanged) && k < LOOK_MAX_INPUTS; k++) {
         char name[64];
         if (!li->layer_menu[k]) continue;
-        ofx_look_layer_name(li->look->d.aov[k], name, sizeof name);
+        look_desc_layer_name(li->look->d.aov[k], name, sizeof name);
         if (is_param(li, in_args, name)) return layer_chosen(li, k, in_args);
     }
     if (!strcmp(action, kOfxActionInstanceChanged) ||

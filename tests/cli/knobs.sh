@@ -29,6 +29,8 @@ has last.out "Shot: frames 1-24; params set for plates 1280 pixels wide"
 has last.out "In compositing hosts: NPR/Looks > Cross hatching (org.nprfx.look.CrossHatching)"
 has last.out "clips: Source"
 has last.out " strokes_frequency"
+# in hosts with layers: the renderer choice, Find AOV Layers, AOV Layers and a menu per AOV
+has last.out "with layers also: renderer findLayers aovLayers layer_beauty layer_albedo layer_depth layer_normal layer_position layer_rest layer_uv layer_id"
 
 # Refusals, each with its reason.
 graph() { # KNOBS_JSON: a two-layer gabor graph with those knobs
