@@ -32,7 +32,7 @@ OfxStatus ofx_look_layer_options(OfxParamHandle h, int aov, const char *const *n
         int first = 1, have = 0;
         for (int j = 0; j < i && first; j++)
             first = layer_len(names[j]) != len || strncmp(names[j], names[i], len);
-        if (want > 1 && (!first || !len)) continue;
+        if (want > 1 && !first) continue; /* the channels without a layer are one too: R,G,B,A */
         for (int j = i; j < n && have < want; j++) {
             if (want > 1 && (layer_len(names[j]) != len || strncmp(names[j], names[i], len)))
                 continue;

@@ -32,6 +32,8 @@
 #     reading them with the same mapping (a read's "aovs" file); the layer menus show the layer
 #     feeding each AOV after Find AOV Layers, and choosing ViewLayer.Zdepth.Z in the Depth layer
 #     menu equals that mapping; Find on those plates, depth not found, still fails naming it.
+#     On Arnold's plates (a bare Z, which the host puts on a depth plane as Nuke does) the menus
+#     show depth.Z and R,G,B,A, and toon from one Source equals the runner.
 #  8. the look's version (the minor hosts key cached frames on) changes when its graph file does.
 #  9. two writers at once (natron): main.json's look project is one look node per write node on
 #     one Read; both nodes, each an instance of its own, render frames 1-4 in order on two
@@ -193,6 +195,19 @@ for how in plain find; do
   elif grep -q "input 'depth'" "$R/none$how.log"; then pass
   else fail "toon without its depth layer ($how): no reason naming the input ($(tail -n 1 "$R/none$how.log"))"; fi
 done
+
+# another renderer's names: Arnold's plates (R,G,B,A and a bare Z beside N, P, crypto_object...),
+# Z coming on the depth plane as Nuke names it
+A="$W/arnold"
+mkdir -p "$A/plates" "$A/graphs" "$A/runner"
+"$NPRFX" synth orbit --layout arnold --size 320x180 --frames 1-2 -o "$A/plates/orbit.####.exr" >/dev/null 2>&1 ||
+  fail "synth --layout arnold"
+sed 's|../plates/crossing/crossing.####.exr|../plates/orbit.####.exr|' "$T" > "$A/graphs/toon.json"
+pat=$(runner "$A/graphs/toon.json" 1-2 "$A/runner" --shot 1-2) && pat="$A/runner/$pat"
+if look natron "$A/graphs/toon.json" 1-2 "$A/look" --shot 1-2 --press findLayers &&
+   grep -q "^choice layer_depth = depth.Z (" "$A/look.log" && grep -q "^choice layer_beauty = R,G,B,A (" "$A/look.log" &&
+   same_frames "$pat" "$A/look" toon 1 2; then pass
+else fail "toon on Arnold plates from one Source: $(grep -E '^choice layer_(depth|beauty)' "$A/look.log" | tr '\n' ' ') $(tail -n 1 "$A/look.log")"; fi
 
 # 8 -----------------------------------------------------------------------------------------------
 # the version hosts key plug-ins on changes with the graph file (its minor: a hash of the bytes)

@@ -63,23 +63,29 @@ static nprfx_result main_plate(look_run *lr, int frame)
 }
 
 /* The layers of a plate as a multi-plane host names them: LAYER.CHANNEL channels grouped by
- * LAYER, up to 4 a plane; channels without a layer are the colour plane's. plane[i] gets the
- * plane string, chan[i] its channels' indices. Returns how many. */
+ * LAYER, up to 4 a plane; R, G, B, A without a layer are the colour plane's, and other channels
+ * without one are put where Nuke puts them: Z in "depth", the rest in "other" (an Arnold render's
+ * depth is a bare Z). plane[i] gets the plane string, chan[i] its channels' indices. Returns how
+ * many. */
 static int plate_layers(const nprfx_plate *p, char **plane, int (*chan)[4], int *nch, int max)
 {
     int n = 0;
     for (int c = 0; c < p->nchannels; c++) {
-        const char *dot = strrchr(p->names[c], '.');
-        if (!dot) continue;
-        size_t len = (size_t)(dot - p->names[c]);
+        const char *name = p->names[c], *dot = strrchr(name, '.');
+        const char *layer = name, *channel = dot ? dot + 1 : name;
+        size_t len = dot ? (size_t)(dot - name) : 0;
+        if (!dot && strlen(name) == 1 && strchr("RGBA", name[0])) continue;
+        if (!dot) {
+            layer = strcmp(name, "Z") ? "other" : "depth";
+            len = strlen(layer);
+        }
         int found = -1;
-        for (int i = 0; i < n && found < 0; i++) {
-            size_t pl = strlen(kNatronOfxImageComponentsPlane);
-            if (nch[i] < 4 && !strncmp(plane[i] + pl, p->names[c], len) &&
+        size_t pl = strlen(kNatronOfxImageComponentsPlane);
+        for (int i = 0; i < n && found < 0; i++)
+            if (nch[i] < 4 && !strncmp(plane[i] + pl, layer, len) &&
                 !strncmp(plane[i] + pl + len, kNatronOfxImageComponentsPlaneChannel,
                          strlen(kNatronOfxImageComponentsPlaneChannel)))
                 found = i;
-        }
         if (found < 0) {
             if (n == max) break;
             found = n++;
@@ -88,13 +94,13 @@ static int plate_layers(const nprfx_plate *p, char **plane, int (*chan)[4], int 
                 plane[found] = calloc(1, 1024);
                 if (!plane[found]) return -1;
                 snprintf(plane[found], 1024, "%s%.*s", kNatronOfxImageComponentsPlane, (int)len,
-                         p->names[c]);
+                         layer);
             }
         }
         chan[found][nch[found]++] = c;
         size_t at = strlen(plane[found]);
         snprintf(plane[found] + at, 1024 - at, "%s%s", kNatronOfxImageComponentsPlaneChannel,
-                 dot + 1);
+                 channel);
     }
     return n;
 }
