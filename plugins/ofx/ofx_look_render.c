@@ -239,8 +239,13 @@ static int plate_channels(const look_inst *li, int node, plate_chan *out, int ma
                 continue;
             }
             count = natron_layer(pp->plane[p], layer, sizeof layer, ch);
+            /* A file's channels without a layer but R, G, B, A (RenderMan's z and id, Karma's
+             * and V-Ray's depth) are kept in a layer "other" (Nuke's name for it, other.depth):
+             * they go by their own names again, as the renderer's profile looks for them. */
+            int bare = !strcmp(layer, "other");
             for (int k = 0; k < count && n < max; k++, n++) {
-                snprintf(out[n].name, sizeof out[n].name, "%s.%s", layer, ch[k]);
+                snprintf(out[n].name, sizeof out[n].name, "%s%s%s", bare ? "" : layer,
+                         bare ? "" : ".", ch[k]);
                 out[n].clip = lk->d.source, out[n].comp = k, out[n].plane = p;
             }
         }
@@ -823,16 +828,27 @@ static OfxStatus find_layers(look_inst *li, OfxPropertySetHandle in_args)
     plate_chan ch[64];
     plate_planes pp;
     int n = r ? 0 : plate_channels(li, node, ch, 64, &pp);
-    const char *names[64];
+    /* Source's channels, then those the read makes from them (ids from Cryptomatte, depth from
+     * 1/z): an AOV found among the latter is the read's work, not a layer to pick */
+    const char *names[96];
     for (int i = 0; i < n; i++)
         names[i] = ch[i].name;
+    int all = n + (r ? 0 : nprfx_graph_read_extras(li->g, node, names + n, 96 - n));
+    if (all > 96) all = 96;
     for (int k = 0; !r && k < d->desc.num_inputs; k++) {
         int aov = look_desc_layer_aov(d, k);
         if (aov < 0) continue;
-        int idx[256], count = 0;
+        int idx[256], count = 0, made = 0;
         char line[1200];
         const char *eq = NULL;
-        if (nprfx_graph_aov_channels(li->g, node, aov, names, n, idx, &count) || count < 1) {
+        int found =
+            !nprfx_graph_aov_channels(li->g, node, aov, names, all, idx, &count) && count > 0;
+        for (int c = 0; found && c < count; c++)
+            made |= idx[c] >= n;
+        if (made) {
+            snprintf(line, sizeof line, "# %s: made by the read from Source's layers (%s)",
+                     nprfx_aov_name(aov), names[idx[0]]);
+        } else if (!found) {
             snprintf(line, sizeof line, "# %s: not among the layers", nprfx_aov_name(aov));
         } else {
             snprintf(line, sizeof line, "%s = ", nprfx_aov_name(aov));

@@ -32,8 +32,8 @@
 #     reading them with the same mapping (a read's "aovs" file); the layer menus show the layer
 #     feeding each AOV after Find AOV Layers, and choosing ViewLayer.Zdepth.Z in the Depth layer
 #     menu equals that mapping; Find on those plates, depth not found, still fails naming it.
-#     On Arnold's plates (a bare Z, which the host puts on a depth plane as Nuke does) the menus
-#     show depth.Z and R,G,B,A, and toon from one Source equals the runner.
+#     On every renderer layout of `nprfx synth` (bare channels put on the planes Nuke uses) toon
+#     from one Source equals the runner, and the menus show the channels each profile reads.
 #  8. the look's version (the minor hosts key cached frames on) changes when its graph file does.
 #  9. two writers at once (natron): main.json's look project is one look node per write node on
 #     one Read; both nodes, each an instance of its own, render frames 1-4 in order on two
@@ -196,18 +196,27 @@ for how in plain find; do
   else fail "toon without its depth layer ($how): no reason naming the input ($(tail -n 1 "$R/none$how.log"))"; fi
 done
 
-# another renderer's names: Arnold's plates (R,G,B,A and a bare Z beside N, P, crypto_object...),
-# Z coming on the depth plane as Nuke names it
-A="$W/arnold"
-mkdir -p "$A/plates" "$A/graphs" "$A/runner"
-"$NPRFX" synth orbit --layout arnold --size 320x180 --frames 1-2 -o "$A/plates/orbit.####.exr" >/dev/null 2>&1 ||
-  fail "synth --layout arnold"
-sed 's|../plates/crossing/crossing.####.exr|../plates/orbit.####.exr|' "$T" > "$A/graphs/toon.json"
-pat=$(runner "$A/graphs/toon.json" 1-2 "$A/runner" --shot 1-2) && pat="$A/runner/$pat"
-if look natron "$A/graphs/toon.json" 1-2 "$A/look" --shot 1-2 --press findLayers &&
-   grep -q "^choice layer_depth = depth.Z (" "$A/look.log" && grep -q "^choice layer_beauty = R,G,B,A (" "$A/look.log" &&
-   same_frames "$pat" "$A/look" toon 1 2; then pass
-else fail "toon on Arnold plates from one Source: $(grep -E '^choice layer_(depth|beauty)' "$A/look.log" | tr '\n' ' ') $(tail -n 1 "$A/look.log")"; fi
+# other renderers' names: each renderer layout of `nprfx synth` (Arnold's R,G,B,A and a bare Z,
+# RenderMan's bare z and id, Karma's and V-Ray's bare depth, ...), the bare channels coming on
+# the planes Nuke puts them on (Z on depth, the rest on other): toon from one Source equals the
+# runner, and the Depth layer menu shows the channel the profile reads it from
+for lay in arnold:depth.Z renderman:z karma:depth vray:depth redshift:depth.Z nuke:; do
+  L=${lay%%:*} want=${lay#*:}
+  A="$W/renderers/$L"
+  mkdir -p "$A/plates" "$A/graphs" "$A/runner"
+  "$NPRFX" synth orbit --layout "$L" --size 320x180 --frames 1-2 -o "$A/plates/orbit.####.exr" >/dev/null 2>&1 ||
+    fail "synth --layout $L"
+  sed 's|../plates/crossing/crossing.####.exr|../plates/orbit.####.exr|' "$T" > "$A/graphs/toon.json"
+  pat=$(runner "$A/graphs/toon.json" 1-2 "$A/runner" --shot 1-2) && pat="$A/runner/$pat"
+  if look natron "$A/graphs/toon.json" 1-2 "$A/look" --shot 1-2 --press findLayers &&
+     same_frames "$pat" "$A/look" toon 1 2 &&
+     { [ -z "$want" ] || grep -q "^choice layer_depth = $want (" "$A/look.log"; }; then pass
+  else fail "toon on $L plates from one Source: $(grep '^choice layer_depth' "$A/look.log") $(tail -n 1 "$A/look.log")"; fi
+done
+if grep -q "^choice layer_beauty = R,G,B,A (" "$W/renderers/arnold/look.log"; then pass
+else fail "Arnold's beauty (R,G,B,A without a layer) is not in the Beauty layer menu"; fi
+if grep -q "^# depth: made by the read from Source's layers" "$W/renderers/nuke/look.log"; then pass
+else fail "Nuke's 1/z depth: Find AOV Layers does not say the read makes it"; fi
 
 # 8 -----------------------------------------------------------------------------------------------
 # the version hosts key plug-ins on changes with the graph file (its minor: a hash of the bytes)
