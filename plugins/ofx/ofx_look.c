@@ -226,6 +226,19 @@ static const char *aov_help(int aov)
     }
 }
 
+/* A param of the look's own (not a knob): defined with its label and hint, not animated (a
+ * button has no value to animate). */
+static OfxStatus own_param(OfxParamSetHandle ps, const char *type, const char *name,
+                           const char *label, const char *hint, OfxPropertySetHandle *pp)
+{
+    OfxStatus st = ofx_g.param->paramDefine(ps, type, name, pp);
+    if (st != kOfxStatOK) return st;
+    ofx_set_str(*pp, kOfxPropLabel, 0, label);
+    ofx_set_str(*pp, kOfxParamPropHint, 0, hint);
+    if (strcmp(type, kOfxParamTypePushButton)) ofx_set_int(*pp, kOfxParamPropAnimates, 0, 0);
+    return kOfxStatOK;
+}
+
 static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHandle fx,
                                           OfxPropertySetHandle in_args)
 {
@@ -276,59 +289,50 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
     OfxPropertySetHandle pp;
     if (ofx_g.multiplanar) {
         /* which layer feeds each AOV: found on request, shown, and the user's to change */
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypePushButton, LOOK_PARAM_FIND_LAYERS,
-                                           &pp)) != kOfxStatOK)
+        if ((st = own_param(ps, kOfxParamTypePushButton, LOOK_PARAM_FIND_LAYERS, "Find AOV Layers",
+                            "List Source's layers in the layer menus and fill AOV Layers with the "
+                            "layers the look reads each AOV from, as it finds them now, to check "
+                            "them or change one.",
+                            &pp)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Find AOV Layers");
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "Fill AOV Layers with the layers the look reads each AOV from, as it finds "
-                    "them among Source's layers now, to check them or change one.");
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeString, LOOK_PARAM_AOV_LAYERS, &pp)) !=
-            kOfxStatOK)
+        if ((st = own_param(ps, kOfxParamTypeString, LOOK_PARAM_AOV_LAYERS, "AOV Layers",
+                            "One line per AOV the look reads from another layer than it would "
+                            "find: AOV = CHANNELS, e.g. depth = ViewLayer.Depth.Z or normal = "
+                            "N.X,N.Y,N.Z (AOVs: beauty, albedo, diffuse_light, depth, normal, "
+                            "position, rest, uv, id, coverage). Empty: each AOV by the renderer's "
+                            "names (Renderer). Motion vectors follow the renderer's convention.",
+                            &pp)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "AOV Layers");
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "One line per AOV the look reads from another layer than it would find: "
-                    "AOV = CHANNELS, e.g. depth = ViewLayer.Depth.Z or normal = N.X,N.Y,N.Z "
-                    "(AOVs: beauty, albedo, diffuse_light, depth, normal, position, rest, uv, id, "
-                    "coverage). Empty: each AOV by the renderer's names (Renderer). Motion "
-                    "vectors follow the renderer's convention.");
         ofx_set_str(pp, kOfxParamPropStringMode, 0, kOfxParamStringIsMultiLine);
         ofx_set_str(pp, kOfxParamPropDefault, 0, "");
-        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
         for (int k = 0; k < d->desc.num_inputs; k++) {
             int aov = look_desc_layer_aov(d, k);
             if (aov < 0) continue;
             char name[64], label[64], hint[300];
             look_desc_layer_name(aov, name, sizeof name);
             look_desc_layer_label(aov, label, sizeof label);
-            if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, name, &pp)) != kOfxStatOK)
-                return st;
-            ofx_set_str(pp, kOfxPropLabel, 0, label);
             snprintf(hint, sizeof hint,
                      "The layer of Source the look reads %s from: auto finds it by the "
                      "renderer's names; Find AOV Layers lists Source's layers here and shows the "
                      "one in use. A choice is a line of AOV Layers.",
                      nprfx_aov_name(aov));
-            ofx_set_str(pp, kOfxParamPropHint, 0, hint);
+            if ((st = own_param(ps, kOfxParamTypeChoice, name, label, hint, &pp)) != kOfxStatOK)
+                return st;
             ofx_set_str(pp, kOfxParamPropChoiceOption, 0, "auto");
             ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
-            ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
             /* the menu changes no pixels itself: the text it writes does */
             ofx_set_int(pp, kOfxParamPropEvaluateOnChange, 0, 0);
         }
-        if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeChoice, LOOK_PARAM_RENDERER, &pp)) !=
-            kOfxStatOK)
+        if ((st = own_param(ps, kOfxParamTypeChoice, LOOK_PARAM_RENDERER, "Renderer",
+                            "Whose names the look finds its AOVs under among Source's layers "
+                            "(nprfx info --aovs FILE shows them for a file): auto tells from the "
+                            "layer names.",
+                            &pp)) != kOfxStatOK)
             return st;
-        ofx_set_str(pp, kOfxPropLabel, 0, "Renderer");
-        ofx_set_str(pp, kOfxParamPropHint, 0,
-                    "Whose names the look finds its AOVs under among Source's layers (nprfx info "
-                    "--aovs FILE shows them for a file): auto tells from the layer names.");
         ofx_set_str(pp, kOfxParamPropChoiceOption, 0, "auto");
         for (int i = 0; i < NPRFX_PROFILE_COUNT; i++)
             ofx_set_str(pp, kOfxParamPropChoiceOption, i + 1, nprfx_aov_profile_name(i));
         ofx_set_int(pp, kOfxParamPropDefault, 0, 0);
-        ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
     }
     if (d->measures) {
         char name[NPRFX_OFX_NAME_MAX];
@@ -337,19 +341,17 @@ static OfxStatus look_describe_in_context(const ofx_look *lk, OfxImageEffectHand
                                      name, sizeof name)) != kOfxStatOK)
             return st;
     }
-    if ((st = ofx_g.param->paramDefine(ps, kOfxParamTypeDouble, "designWidth", &pp)) != kOfxStatOK)
+    if ((st = own_param(ps, kOfxParamTypeDouble, "designWidth", "Design width",
+                        "The plate width in pixels the look's sizes were set for: on a plate W "
+                        "pixels wide every size in pixels is multiplied by W / this (0: sizes in "
+                        "the plate's own pixels). Proxy renders follow from it.",
+                        &pp)) != kOfxStatOK)
         return st;
-    ofx_set_str(pp, kOfxPropLabel, 0, "Design width");
-    ofx_set_str(pp, kOfxParamPropHint, 0,
-                "The plate width in pixels the look's sizes were set for: on a plate W pixels "
-                "wide every size in pixels is multiplied by W / this (0: sizes in the plate's "
-                "own pixels). Proxy renders follow from it.");
     ofx_set_dbl(pp, kOfxParamPropDefault, 0, d->design_width);
     ofx_set_dbl(pp, kOfxParamPropMin, 0, 0);
     ofx_set_dbl(pp, kOfxParamPropMax, 0, 1000000);
     ofx_set_dbl(pp, kOfxParamPropDisplayMin, 0, 0);
     ofx_set_dbl(pp, kOfxParamPropDisplayMax, 0, 4096);
-    ofx_set_int(pp, kOfxParamPropAnimates, 0, 0);
     return kOfxStatOK;
 }
 

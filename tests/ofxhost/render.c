@@ -327,7 +327,8 @@ static nprfx_result first_settings(node_inst *ni, const nprfx_render_args *a)
     return NPRFX_OK;
 }
 
-/* A push button pressed, as a user does: the instance-changed actions of an edit. */
+/* A push button pressed, or a param the caller has set, as a user edits it: the instance-changed
+ * actions of an edit. */
 static nprfx_result press_button(node_inst *ni, const nprfx_render_args *a, const char *name)
 {
     if (!internal_effect_param(ni->fx, name)) return NPRFX_OK;
@@ -350,8 +351,11 @@ static nprfx_result press_button(node_inst *ni, const nprfx_render_args *a, cons
     internal_props_free(&in);
     for (int k = 0; k < ni->desc->num_inputs; k++)
         ni->frames[k].nfetched = 0;
-    if (st != kOfxStatOK && st != kOfxStatReplyDefault)
-        return internal_failure(ni, a->ctx, "Analyze Shot failed");
+    if (st != kOfxStatOK && st != kOfxStatReplyDefault) {
+        char what[NPRFX_OFX_NAME_MAX + 48];
+        snprintf(what, sizeof what, "instanceChanged of %s failed", name);
+        return internal_failure(ni, a->ctx, what);
+    }
     return NPRFX_OK;
 }
 
